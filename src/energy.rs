@@ -188,7 +188,7 @@ pub enum FitError {
     /// A sample lies at or after the fixed halt time.
     #[error(
         "sample {index} at t = {t} s is not before the halt t0 = {t0} s; the power law holds \
-         only before the halt (fit_window drops later samples)"
+         only before the halt (a fit window drops later samples)"
     )]
     SampleAtOrAfterHalt { index: usize, t: f64, t0: f64 },
     /// The fit window is not a positive duration.
@@ -207,7 +207,7 @@ pub enum FitError {
         "with t0 free, the best fit puts the halt at or before the last sample \
          (t = {t_last} s; n ≈ {n}), where the power law cannot follow: the final samples \
          fall faster than any power law that ends after them. Fix t0 at the observed stop \
-         (HaltTime::Fixed) or end the window earlier"
+         instead of fitting it, or end the window earlier"
     )]
     HaltAtLastSample { t_last: f64, n: f64 },
     /// The data cannot determine the parameters.
@@ -397,7 +397,8 @@ fn fit_with_limit(
     let t_last = t.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let t_first = t.iter().copied().fold(f64::INFINITY, f64::min);
     let span = t_last - t_first;
-    if !(span > 0.0) {
+    // The samples are finite here, so the span is too.
+    if span <= 0.0 {
         return Err(FitError::degenerate(
             "all samples are at the same time, so there is no decay to fit",
         ));
@@ -521,7 +522,7 @@ fn inverse_normal_matrix(jac: &DMatrix<f64>) -> Result<DMatrix<f64>, FitError> {
         .ok_or_else(|| FitError::degenerate("the singular-value decomposition failed"))?;
     let sigma = &svd.singular_values;
     let (lo, hi) = (sigma.min(), sigma.max());
-    if !(lo > 1e-13 * hi) {
+    if lo.is_nan() || lo <= 1e-13 * hi {
         return Err(FitError::degenerate(
             "A_e, n and t0 are not separately determined by these samples (singular \
              covariance); fix t0 or use a longer window",
@@ -551,7 +552,7 @@ enum Offset {
 
 /// The variable-projection form of y ≈ a u^n, u = tail + d: for given nonlinear
 /// parameters p = (n) or (n, s = ln d), the linear amplitude a is eliminated by its
-/// least-squares value a = fᵀy / fᵀf, f = u^n.
+/// least-squares value a = fᵀy / fᵀf, f ∝ u^n.
 struct Projection<'a> {
     tail: &'a [f64],
     y: &'a DVector<f64>,
@@ -592,7 +593,7 @@ impl Projection<'_> {
     /// ∂r/∂p_j = −a (g − f fᵀg/fᵀf) − f (gᵀr)/fᵀf.
     ///
     /// r depends on f only through its direction, so f is taken as (u/u_max)^n with
-    /// u_max = 1 + d (≤ 1, no overflow when t0 wanders far); then ∂f/∂n = f ln(u/u_max)
+    /// u_max = 1 + d (so f ≤ 1: no overflow when t0 wanders far); then ∂f/∂n = f ln(u/u_max)
     /// and ∂f/∂s = n f (d/u − d/u_max). The returned `amp` refers to this f.
     fn evaluate(&self, p: &DVector<f64>) -> Option<Evaluation> {
         let m = self.tail.len();
@@ -604,7 +605,7 @@ impl Projection<'_> {
         let mut df = DMatrix::zeros(m, k);
         for (i, &tail) in self.tail.iter().enumerate() {
             let u = tail + d;
-            if !(u > 0.0) {
+            if u.is_nan() || u <= 0.0 {
                 return None;
             }
             let fi = (u / u_max).powf(n);
@@ -999,23 +1000,28 @@ mod tests {
     }
 
     /// Thesis eq. (4.96): on the stationary-rolling manifold, ψ̇² from eq. (4.40), the
-    /// scaled energy E/(mgR) → (c h² + 3a)/(2a) φ as φ → 0.
+    /// scaled energy E/(mgR) → (c h² + 3a)/(2a) φ as φ → 0. Eq. (4.40) prints
+    /// `a sin φ cos φ + c h sin² φ` in the denominator; model::dynamics derives `−`. The
+    /// term is O(φ) relative, so the limit holds with either sign; both are checked.
     #[test]
     fn small_angle_energy_matches_eq_4_96() {
         for preset in PRESETS {
             let p = preset.params();
             let (a, c, h) = (p.a(), p.c(), p.h());
             let slope = (c * h * h + 3.0 * a) / (2.0 * a);
-            for phi in [1e-4, 1e-5, 1e-6] {
-                let (s, co) = (f64::sin(phi), f64::cos(phi));
-                let psi_dot_scaled = ((co - h * s) / (a * s * co + c * h * s * s)).sqrt();
-                let psi_dot = psi_dot_scaled / p.time_unit();
-                let scaled = stationary_rolling_energy(&p, phi, psi_dot) / p.energy_unit();
-                // The next order is O(φ²): relative error O(φ) with an O(h, 1/a) factor.
-                assert!(
-                    relative_error(scaled, slope * phi) < 20.0 * phi,
-                    "{preset:?} φ = {phi}"
-                );
+            for sign in [1.0, -1.0] {
+                for phi in [1e-4, 1e-5, 1e-6] {
+                    let (s, co) = (f64::sin(phi), f64::cos(phi));
+                    let psi_dot_sq = (co - h * s) / (a * s * co + sign * c * h * s * s);
+                    let psi_dot = psi_dot_sq.sqrt() / p.time_unit();
+                    let scaled = stationary_rolling_energy(&p, phi, psi_dot) / p.energy_unit();
+                    // The next order is O(φ²): a relative error of O(φ), whose factor
+                    // is 1.9 at most (the food can, h = 1.47, printed sign).
+                    assert!(
+                        relative_error(scaled, slope * phi) < 3.0 * phi,
+                        "{preset:?} φ = {phi}, sign {sign}"
+                    );
+                }
             }
         }
     }
@@ -1252,11 +1258,9 @@ mod tests {
         let t: Vec<f64> = (0..200).map(|i| i as f64 * 0.01).collect();
         let e: Vec<f64> = t.iter().map(|ti| (-3.0 * ti).exp()).collect();
         let result = fit_power_law(&t, &e, HaltTime::Free);
+        // The search follows t0 → ∞ with n/t0 → 3 s⁻¹ until the iteration limit.
         assert!(
-            matches!(
-                result,
-                Err(FitError::NotConverged { .. }) | Err(FitError::Degenerate { .. })
-            ),
+            matches!(result, Err(FitError::NotConverged { n, t0, .. }) if t0 > 10.0 && (n / t0 - 3.0).abs() < 0.1),
             "{result:?}"
         );
     }

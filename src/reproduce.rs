@@ -359,31 +359,61 @@ fn table_4_1_rows() -> Vec<Row> {
 }
 
 fn closed_form_rows() -> Vec<Row> {
+    use post_flat::{
+        THESIS_CONCAVE_BETA_DOT0, THESIS_CONCAVE_STOP_TIME, THESIS_FLAT_BETA_DOT0,
+        THESIS_FLAT_STOP_TIME, THESIS_FRICTION_COEFFICIENT as MU,
+    };
     let params = Preset::EulerDisk.params();
+    let can = Preset::FoodCan.params();
+    let or_nan = |r: Result<f64, String>| r.unwrap_or(f64::NAN);
     vec![
         row(
             "Painlevé paradox (§4.3.2)",
             "critical μ_p, eq. 4.48",
-            Some(1.11),
-            f64::NAN,
+            Some(closed_form::THESIS_PAINLEVE_MU),
+            closed_form::painleve_critical_friction(&params),
             "1",
-            "λ = (h² + 1)/a",
+            "λ = (h² + 1)/a = 4.08; eq. 4.48 at λ = 4.08 gives 1.105: the printed 1.11 is a rounding slip",
         ),
         row(
-            "contact phase (§4.8.2)",
-            "stop time, flat plate, eq. 4.111",
-            Some(0.0050),
-            f64::NAN,
-            "s",
+            "rocking can (eqs. 2.14-2.15)",
+            "angle of turn, asymptotic eq. 2.97",
+            Some(closed_form::THESIS_ANGLE_OF_TURN_DEG),
+            closed_form::angle_of_turn_magnitude(&can).to_degrees(),
+            "deg",
+            "m = 0.0700 kg (ERRATA)",
+        ),
+        row(
+            "rocking can (eqs. 2.14-2.15)",
+            "friction bound, eq. 2.109",
+            Some(closed_form::THESIS_FRICTION_BOUND),
+            closed_form::required_friction_bounce(&can),
+            "1",
             "",
         ),
         row(
             "contact phase (§4.8.2)",
-            "stop time, concave plate, eq. 4.113",
-            Some(0.0033),
-            f64::NAN,
+            "stop time, flat plate, eq. 4.111",
+            Some(THESIS_FLAT_STOP_TIME),
+            or_nan(post_flat::flat_plate_stop_time(
+                &params,
+                MU,
+                THESIS_FLAT_BETA_DOT0,
+            )),
             "s",
-            "ERRATA: 0.0033 s needs β̇0 = −0.23 rad/s; the printed −0.19 gives 0.00275 s",
+            "μ = 0.134, β̇0 = −0.23 rad/s",
+        ),
+        row(
+            "contact phase (§4.8.2)",
+            "stop time, concave plate, eq. 4.113",
+            Some(THESIS_CONCAVE_STOP_TIME),
+            or_nan(post_flat::concave_plate_stop_time(
+                &params,
+                MU,
+                THESIS_CONCAVE_BETA_DOT0,
+            )),
+            "s",
+            "β̇0 = −0.19 rad/s as printed; ERRATA: 0.0033 s needs β̇0 = −0.23 rad/s",
         ),
     ]
 }

@@ -91,7 +91,7 @@ pub fn painleve_critical_friction(params: &DiskParams) -> f64 {
 // Steady and stationary motions (§2.3, §4.3)
 // ---------------------------------------------------------------------------
 
-/// Balancing angle φ* = arctan(1/h) [rad] of the static equilibrium S_static,
+/// Balancing angle φ* = arctan(1/h) \[rad\] of the static equilibrium S_static,
 /// eq. (2.16). Stationary motions (eq. 2.29) exist only for φ < φ*.
 pub fn balancing_angle(params: &DiskParams) -> f64 {
     (1.0 / params.h()).atan()
@@ -121,7 +121,7 @@ pub fn steady_motion_residual(params: &DiskParams, phi: f64, psi_dot: f64, theta
 }
 
 /// Spin rate θ̇ [rad/s] of the steady motion (eq. 2.24 = eq. 4.38, solved for Θ)
-/// at inclination `phi` [rad] with precession rate `psi_dot` [rad/s]:
+/// at inclination `phi` \[rad\] with precession rate `psi_dot` [rad/s]:
 ///
 /// Θ = [((a_P − c_P) sin φ cos φ − h cos 2φ) Ψ² + h sin φ − cos φ] / ((c_P sin φ + h cos φ) Ψ).
 ///
@@ -145,7 +145,7 @@ pub fn steady_theta_dot(params: &DiskParams, phi: f64, psi_dot: f64) -> Result<f
 }
 
 /// Stationary rolling (centre of mass at rest), eq. (2.29) = eq. (4.40) with the
-/// sign of the c h sin²φ term corrected, at inclination `phi` [rad]: returns
+/// sign of the c h sin²φ term corrected, at inclination `phi` \[rad\]: returns
 /// (ψ̇, θ̇) in rad/s on the branch ψ̇ ≥ 0,
 ///
 /// Ψ² = (cos φ − h sin φ)/(a sin φ cos φ − c h sin² φ),  Θ = −Ψ (cos φ − h sin φ).
@@ -188,14 +188,14 @@ pub fn stationary_rolling(params: &DiskParams, phi: f64) -> Result<(f64, f64), S
     Ok((psi / tu, -psi * lever / tu))
 }
 
-/// Inclination φ_d = arctan(a/(c h)) [rad] at which the stationary precession rate
+/// Inclination φ_d = arctan(a/(c h)) \[rad\] at which the stationary precession rate
 /// of [`stationary_rolling`] diverges (its denominator a sin φ cos φ − c h sin² φ
 /// vanishes).
 pub fn stationary_divergence_angle(params: &DiskParams) -> f64 {
     (params.a() / (params.c() * params.h())).atan()
 }
 
-/// Radius [m] of the circle described by the centre of mass on a steady motion,
+/// Radius \[m\] of the circle described by the centre of mass on a steady motion,
 /// eq. (2.27) times R: r = R |Ψ(cos φ − h sin φ) + Θ| / |Ψ|. Zero on stationary
 /// motions (eq. 2.29); infinite for ψ̇ = 0 (straight-line rolling).
 pub fn steady_circle_radius(params: &DiskParams, phi: f64, psi_dot: f64, theta_dot: f64) -> f64 {
@@ -218,7 +218,7 @@ pub struct RockingInitialConditions {
     pub psi_dot: f64,
     /// Spin rate θ̇(0) [rad/s].
     pub theta_dot: f64,
-    /// Inclination φ(0) [rad] (small: eqs. 2.55–2.56 are series in φ(0)).
+    /// Inclination φ(0) \[rad\] (small: eqs. 2.55–2.56 are series in φ(0)).
     pub phi: f64,
 }
 
@@ -326,7 +326,7 @@ fn nonzero_b_minus2(params: &DiskParams, ic: &RockingInitialConditions) -> Resul
     Ok(b)
 }
 
-/// Magnitude of the angle of turn [rad], eq. (2.97) = |eq. 2.96|:
+/// Magnitude of the angle of turn \[rad\], eq. (2.97) = |eq. 2.96|:
 ///
 /// |Δψ| = π √((A + mH² + mR²)/(A + mH²)) = π √((a_P + 1)/a_P).
 ///
@@ -340,7 +340,7 @@ pub fn angle_of_turn_magnitude(params: &DiskParams) -> f64 {
     PI * (total / ap_dim).sqrt()
 }
 
-/// Signed angle of turn [rad] over one bounce, eq. (2.96):
+/// Signed angle of turn \[rad\] over one bounce, eq. (2.96):
 /// Δψ = π √((a_P + 1)/a_P) sign(B₋₂), valid for small φ(0) and small ε. Fails on
 /// the dividing line B₋₂ = 0 (eq. 2.99).
 pub fn angle_of_turn(params: &DiskParams, ic: &RockingInitialConditions) -> Result<f64, String> {
@@ -369,7 +369,7 @@ pub fn max_precession_rate(
     Ok(i / (params.a_p() * b) / params.time_unit())
 }
 
-/// Minimum inclination over the bounce [rad], φ_min = √(ε a_P/I) with ε = B₋₂²
+/// Minimum inclination over the bounce \[rad\], φ_min = √(ε a_P/I) with ε = B₋₂²
 /// ([`epsilon`]) and I = 2φ(0) (§2.5.4, below eq. 2.95). For eq. (2.15) this is
 /// 4.12e-5 rad; the full equations give 4.22e-5 rad. (With the thesis's printed
 /// ε = 1.43e-10 the same formula would give 8.1e-5 rad.)

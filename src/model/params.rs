@@ -153,7 +153,9 @@ mod tests {
         assert!((p.a() - 0.727).abs() < 5e-4, "a = {}", p.a());
         assert!((p.c() - 0.615).abs() < 5e-4, "c = {}", p.c());
         assert!((p.a_p() - 2.897).abs() < 2e-3, "a_p = {}", p.a_p());
-        assert!((p.c_p() - 1.6156).abs() < 5e-4, "c_p = {}", p.c_p());
+        // The printed c_p = 1.6156 disagrees with its own c + 1 = 1.615 (c = 0.615):
+        // we check c_p = c + 1 against the printed c.
+        assert!((p.c_p() - 1.615).abs() < 5e-4, "c_p = {}", p.c_p());
         assert!((p.h() - 1.473).abs() < 5e-4, "h = {}", p.h());
         assert!((p.k() - 0.245).abs() < 5e-4, "k = {}", p.k());
     }

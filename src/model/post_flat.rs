@@ -121,15 +121,15 @@ where
 /// Inputs of the contactless (air-film) phase, eqs. (4.103)–(4.104), in SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AirFilm {
-    /// Disk mass m [kg].
+    /// Disk mass m \[kg\].
     pub mass: f64,
-    /// Disk radius R [m]; the film covers the whole face.
+    /// Disk radius R \[m\]; the film covers the whole face.
     pub radius: f64,
     /// Gravitational acceleration g [m/s²].
     pub gravity: f64,
     /// Viscosity of the film μ_air [kg m⁻¹ s⁻¹]. Zero is allowed (free fall).
     pub air_viscosity: f64,
-    /// Gap Z_b(0) between the bottom face and the plate at loss of contact [m].
+    /// Gap Z_b(0) between the bottom face and the plate at loss of contact \[m\].
     pub initial_gap: f64,
     /// Gap velocity Ż_b(0) [m/s] (negative when closing).
     pub initial_velocity: f64,
@@ -197,12 +197,12 @@ impl AirFilm {
         1.5 * std::f64::consts::PI * self.air_viscosity * self.radius.powi(4)
     }
 
-    /// Film force of eq. (4.103), F = −(3π μ_air R⁴/2) Ż_b / Z_b³ [N].
+    /// Film force of eq. (4.103), F = −(3π μ_air R⁴/2) Ż_b / Z_b³ \[N\].
     pub fn film_force(&self, gap: f64, velocity: f64) -> f64 {
         -self.squeeze_coefficient() * velocity / gap.powi(3)
     }
 
-    /// Relaxation time of the gap velocity, τ = m Z_b³ / k [s]: the inverse of the
+    /// Relaxation time of the gap velocity, τ = m Z_b³ / k \[s\]: the inverse of the
     /// damping rate in eq. (4.104). It sets the stiffness of the ODE.
     pub fn damping_time(&self, gap: f64) -> f64 {
         self.mass * gap.powi(3) / self.squeeze_coefficient()
@@ -240,14 +240,14 @@ pub fn air_film_first_integral(film: &AirFilm, t: f64, state: &[f64; 2]) -> f64 
 
 /// Time for the gap to fall from Z_b(0) to `gap` in the lubrication (inertia-free)
 /// limit of eq. (4.104), where the film force balances the weight:
-/// t = k (Z⁻² − Z₀⁻²) / (2 m g) [s]. Ignores the initial velocity and the
+/// t = k (Z⁻² − Z₀⁻²) / (2 m g) \[s\]. Ignores the initial velocity and the
 /// acceleration phase.
 pub fn air_film_lubrication_time(film: &AirFilm, gap: f64) -> f64 {
     film.squeeze_coefficient() * (gap.powi(-2) - film.initial_gap.powi(-2))
         / (2.0 * film.mass * film.gravity)
 }
 
-/// Asymptotic closing time of eq. (4.104) for small gaps [s].
+/// Asymptotic closing time of eq. (4.104) for small gaps \[s\].
 ///
 /// The first integral ([`air_film_first_integral`]) gives, exactly,
 /// t = k (Z⁻² − Z₀⁻²)/(2mg) + (Ż₀ − Ż(Z))/g. Once the disk has reached the slow
@@ -264,7 +264,7 @@ pub fn air_film_closing_time_asymptotic(film: &AirFilm, gap: f64) -> f64 {
 /// Result of [`air_film_closing_time`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AirFilmClosing {
-    /// Time at which the gap reaches the contact gap [s].
+    /// Time at which the gap reaches the contact gap \[s\].
     pub time: f64,
     /// Gap velocity Ż_b at that time [m/s].
     pub velocity: f64,
@@ -470,7 +470,7 @@ pub fn flat_plate_spin(
 }
 
 /// Stop time of the contact phase on a flat plate, eq. (4.111):
-/// t_stop = 3 C |β̇(0)| / (2 μ m g R) [s], with C = `params.inertia_c`.
+/// t_stop = 3 C |β̇(0)| / (2 μ m g R) \[s\], with C = `params.inertia_c`.
 ///
 /// Thesis: μ = 0.134 ([`THESIS_FRICTION_COEFFICIENT`]), β̇(0) = −0.23 rad/s
 /// ([`THESIS_FLAT_BETA_DOT0`]) and Euler's disk (eq. 4.42) give 0.0050 s
@@ -483,7 +483,7 @@ pub fn flat_plate_stop_time(params: &DiskParams, mu: f64, beta_dot0: f64) -> Res
 
 /// Stop time of the contact phase on a concave plate, where only the rim touches:
 /// C β̈ = −μ m g R sign(β̇(0)) (eq. 4.112 as corrected in ERRATA) gives
-/// t_stop = C |β̇(0)| / (μ m g R) [s], with C = `params.inertia_c`. For
+/// t_stop = C |β̇(0)| / (μ m g R) \[s\], with C = `params.inertia_c`. For
 /// C = mR²/2, as the thesis assumes, this is eq. (4.113): t_stop = R|β̇(0)|/(2μg).
 ///
 /// Thesis: μ = 0.134 and β̇(0) = −0.19 rad/s ([`THESIS_CONCAVE_BETA_DOT0`]) are

@@ -360,7 +360,10 @@ impl Solout<f64, StateVector> for PhaseRecorder<'_, '_> {
     where
         I: Interpolation<f64, StateVector> + ?Sized,
     {
-        let previous = self.out.previous.unwrap_or_else(|| self.events.values(y_prev));
+        let previous = self
+            .out
+            .previous
+            .unwrap_or_else(|| self.events.values(y_prev));
         let current = self.events.values(y_curr);
         self.out.previous = Some(current);
         self.out.last = (t_curr, *y_curr);
@@ -538,10 +541,10 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
             )
             .solout(recorder)
             .solve()
-        .map_err(|e| SimulationError::Integration {
-            t: tau * units.time,
-            reason: format!("{e:?}").chars().take(200).collect(),
-        })?;
+            .map_err(|e| SimulationError::Integration {
+                t: tau * units.time,
+                reason: format!("{e:?}").chars().take(200).collect(),
+            })?;
         stats.rhs_evaluations += solution.evals.function;
         stats.accepted_steps += solution.steps.accepted;
         stats.rejected_steps += solution.steps.rejected;
