@@ -342,6 +342,11 @@ struct PhaseOutput {
 }
 
 /// Records uniform output, watches the events and stops the integrator at the first.
+///
+/// States between step ends (output samples, event roots) are computed by a short
+/// DOP853 integration from the last accepted step (see [`advance`]) rather than by the
+/// solver's dense output, which was measured to lose up to 1e-7 relative energy on
+/// this system (tests/simulator.rs, energy conservation at the samples).
 struct PhaseRecorder<'a, 'b> {
     events: Events<'a>,
     out: &'b mut PhaseOutput,
@@ -354,7 +359,7 @@ impl Solout<f64, StateVector> for PhaseRecorder<'_, '_> {
         t_prev: f64,
         y_curr: &StateVector,
         y_prev: &StateVector,
-        interpolator: &mut I,
+        _interpolator: &mut I,
         _solution: &mut Solution<f64, StateVector>,
     ) -> ControlFlag<f64, StateVector>
     where
@@ -367,6 +372,16 @@ impl Solout<f64, StateVector> for PhaseRecorder<'_, '_> {
         let current = self.events.values(y_curr);
         self.out.previous = Some(current);
         self.out.last = (t_curr, *y_curr);
+        let (disk, mode) = (self.events.disk, self.events.mode);
+        let state_at = |t: f64| -> StateVector {
+            if t <= t_prev {
+                *y_prev
+            } else if t >= t_curr {
+                *y_curr
+            } else {
+                advance(disk, mode, t_prev, y_prev, t).unwrap_or(*y_curr)
+            }
+        };
 
         // The earliest event whose function crossed from positive to non-positive.
         let mut earliest: Option<(Trigger, f64)> = None;
@@ -376,13 +391,9 @@ impl Solout<f64, StateVector> for PhaseRecorder<'_, '_> {
             if !crossed {
                 continue;
             }
-            let g = |t: f64, interp: &mut I| {
-                interp
-                    .interpolate(t)
-                    .map(|y| self.events.values(&y)[k].1)
-                    .unwrap_or(f64::NAN)
-            };
-            let t_root = locate_root(t_prev, t_curr, g0, |t| g(t, interpolator));
+            let t_root = locate_root(t_prev, t_curr, g0, |t| {
+                self.events.values(&state_at(t))[k].1
+            });
             if earliest.is_none_or(|(_, t)| t_root < t) {
                 earliest = Some((trigger, t_root));
             }
@@ -391,26 +402,37 @@ impl Solout<f64, StateVector> for PhaseRecorder<'_, '_> {
         let t_stop = earliest.map_or(t_curr, |(_, t)| t);
         let out = &mut *self.out;
         while out.next_output <= t_stop {
-            // The dense output is used strictly inside the step; its ends are known.
             let t = out.next_output;
-            let y = if t <= t_prev {
-                Some(*y_prev)
-            } else if t >= t_curr {
-                Some(*y_curr)
-            } else {
-                interpolator.interpolate(t).ok()
-            };
-            out.states.extend(y.map(|y| (t, y)));
+            out.states.push((t, state_at(t)));
             out.next_output += out.output_step;
         }
         match earliest {
             Some((trigger, t)) => {
-                let y = interpolator.interpolate(t).unwrap_or(*y_curr);
-                out.hit = Some((trigger, t, y));
+                out.hit = Some((trigger, t, state_at(t)));
                 ControlFlag::Terminate
             }
             None => ControlFlag::Continue,
         }
+    }
+}
+
+/// Integrates one mode from (t0, y0) to t1 without events (DOP853, same tolerances);
+/// `None` if the integrator fails.
+fn advance(
+    disk: &ScaledDisk,
+    mode: Mode,
+    t0: f64,
+    y0: &StateVector,
+    t1: f64,
+) -> Option<StateVector> {
+    let field = PhaseField { disk, mode };
+    let solution = IVP::ode(&field, t0, t1, *y0)
+        .method(ExplicitRungeKutta::dop853().rtol(TOLERANCE).atol(TOLERANCE))
+        .solve()
+        .ok()?;
+    match (solution.t.last(), solution.y.last()) {
+        (Some(&t), Some(&y)) if (t - t1).abs() <= 1e-12 * t1.abs().max(1.0) => Some(y),
+        _ => None,
     }
 }
 
@@ -460,9 +482,9 @@ fn locate_root(a: f64, b: f64, ga: f64, mut g: impl FnMut(f64) -> f64) -> f64 {
 pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
     let p = &spec.params;
     p.validate().map_err(SimulationError::BadInput)?;
-    if !(spec.mu > 0.0) || !(spec.eta >= 0.0) || !spec.eta.is_finite() {
+    if !(spec.mu >= 0.0) || !(spec.eta >= 0.0) || !spec.eta.is_finite() {
         return Err(SimulationError::BadInput(format!(
-            "need μ > 0 and finite η ≥ 0, got μ = {}, η = {}",
+            "need μ ≥ 0 and finite η ≥ 0, got μ = {}, η = {}",
             spec.mu, spec.eta
         )));
     }
