@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
+use rayon::prelude::*;
 
 use eulerdisk::model::dissipation::{Dissipation, ModelKind};
 use eulerdisk::model::params::Preset;
@@ -40,6 +41,9 @@ enum Command {
         /// Output folder for the table (Markdown, CSV, JSON).
         #[arg(short, long, default_value = "out/reproduce")]
         out: PathBuf,
+        /// Leave out Table 4.1 (ten η tunings; minutes of computing).
+        #[arg(long)]
+        skip_table_4_1: bool,
     },
     /// Run the built-in demonstration: the reproduction table and simulator plots.
     Demo {
@@ -120,7 +124,10 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Simulate(args) => run_simulate(&args),
-        Command::Reproduce { out } => run_reproduce(&out),
+        Command::Reproduce {
+            out,
+            skip_table_4_1,
+        } => run_reproduce(&out, !skip_table_4_1),
         Command::Demo { out } => run_demo(&out),
     }
 }
@@ -178,8 +185,11 @@ fn run_simulate(args: &SimulateArgs) -> Result<()> {
     Ok(())
 }
 
-fn run_reproduce(out: &Path) -> Result<()> {
-    let table = reproduce::reproduce();
+fn run_reproduce(out: &Path, include_table_4_1: bool) -> Result<()> {
+    if include_table_4_1 {
+        eprintln!("reproducing the thesis's numbers, Table 4.1 included (a few minutes)…");
+    }
+    let table = reproduce::reproduce(include_table_4_1);
     println!("{}", table.to_markdown());
     for path in table.write(out)? {
         println!("wrote {}", path.display());
@@ -187,23 +197,36 @@ fn run_reproduce(out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The demo at this stage: the reproduction table plus the simulator panels of the
-/// thesis's contour and augmented-contour runs (figs. 4.12, 4.16).
+/// The demo at this stage: the reproduction table (without the slow Table 4.1, which
+/// `eulerdisk reproduce` computes) plus the simulator panels of the thesis's Coulomb,
+/// contour and augmented-contour runs (figs. 4.3, 4.12, 4.16).
 fn run_demo(out: &Path) -> Result<()> {
-    run_reproduce(&out.join("reproduce"))?;
+    run_reproduce(&out.join("reproduce"), false)?;
     let params = Preset::EulerDisk.params();
-    for (name, kind, eta) in [
+    let runs = [
         ("contour", ModelKind::Contour, 2.43e-4),
         ("augmented-contour", ModelKind::AugmentedContour, 1.1e-5),
         ("coulomb-only", ModelKind::None, 0.0),
-    ] {
-        let mut spec = SimulationSpec::thesis_default(params, Dissipation::new(kind), eta);
-        spec.t_end = 1.0;
-        let trajectory = simulate(&spec).with_context(|| format!("demo simulation `{name}`"))?;
-        let title = format!("Euler's disk, {name}, η = {eta:.3e}");
-        for path in write_simulation(&out.join(name), &title, &spec, &trajectory)? {
-            println!("wrote {}", path.display());
-        }
+    ];
+    eprintln!("simulating {} thesis runs in parallel…", runs.len());
+    let written: Vec<Vec<PathBuf>> = runs
+        .par_iter()
+        .map(|&(name, kind, eta)| -> Result<Vec<PathBuf>> {
+            let mut spec = SimulationSpec::thesis_default(params, Dissipation::new(kind), eta);
+            spec.t_end = 1.0;
+            let trajectory =
+                simulate(&spec).with_context(|| format!("demo simulation `{name}`"))?;
+            let title = format!("Euler's disk, {name}, η = {eta:.3e}");
+            Ok(write_simulation(
+                &out.join(name),
+                &title,
+                &spec,
+                &trajectory,
+            )?)
+        })
+        .collect::<Result<_>>()?;
+    for path in written.iter().flatten() {
+        println!("wrote {}", path.display());
     }
     println!("demo finished: see {}", out.display());
     Ok(())

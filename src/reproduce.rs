@@ -102,15 +102,19 @@ fn failed(
     )
 }
 
-/// Computes every row (the simulations run in parallel).
-pub fn reproduce() -> Reproduction {
-    let blocks: Vec<fn() -> Vec<Row>> = vec![
+/// Computes every row (the simulations run in parallel). Table 4.1 tunes η for ten
+/// models and dominates the cost (minutes, see BENCHMARKS.md); `include_table_4_1 =
+/// false` leaves it out.
+pub fn reproduce(include_table_4_1: bool) -> Reproduction {
+    let mut blocks: Vec<fn() -> Vec<Row>> = vec![
         rocking_can_rows,
         coulomb_rows,
         contour_rows,
-        table_4_1_rows,
         closed_form_rows,
     ];
+    if include_table_4_1 {
+        blocks.push(table_4_1_rows);
+    }
     let rows = blocks.par_iter().flat_map(|block| block()).collect();
     Reproduction {
         eulerdisk_version: env!("CARGO_PKG_VERSION"),
@@ -424,15 +428,30 @@ impl Reproduction {
         let mut out = String::from(
             "| section | quantity | thesis | ours | unit | rel. diff | flag | note |\n|---|---|---|---|---|---|---|---|\n",
         );
+        let number = |x: f64| {
+            if x != 0.0 && (x.abs() < 1e-2 || x.abs() >= 1e4) {
+                format!("{x:.4e}")
+            } else {
+                format!("{x:.4}")
+            }
+        };
+        let cell = |text: &str| text.replace('|', "\\|");
         for r in &self.rows {
-            let thesis = r.thesis.map_or("–".to_string(), |t| format!("{t:.4}"));
+            let thesis = r.thesis.map_or("–".to_string(), number);
             let diff = r
                 .relative_difference()
                 .map_or("–".to_string(), |d| format!("{:+.1} %", 100.0 * d));
             let flag = if r.flagged() { "⚠ >5 %" } else { "" };
             out.push_str(&format!(
-                "| {} | {} | {} | {:.4} | {} | {} | {} | {} |\n",
-                r.section, r.quantity, thesis, r.ours, r.unit, diff, flag, r.note
+                "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                cell(r.section),
+                cell(&r.quantity),
+                thesis,
+                number(r.ours),
+                r.unit,
+                diff,
+                flag,
+                cell(&r.note)
             ));
         }
         out
