@@ -122,8 +122,9 @@ pub fn reproduce(include_table_4_1: bool) -> Reproduction {
     }
 }
 
-/// The rocking can, eqs. (2.14)–(2.15), rolling without slip and η = 0 (§2.2, fig. 2.3).
-pub fn rocking_can_trajectory() -> Result<Trajectory, crate::model::simulate::SimulationError> {
+/// The rocking can, eqs. (2.14)–(2.15): rolling without slip (μ = ∞) and η = 0, run
+/// for `t_end` seconds (§2.2, fig. 2.3).
+pub fn rocking_can_spec(t_end: f64) -> SimulationSpec {
     let mut spec = SimulationSpec::thesis_default(
         Preset::FoodCan.params(),
         Dissipation::new(ModelKind::None),
@@ -132,8 +133,13 @@ pub fn rocking_can_trajectory() -> Result<Trajectory, crate::model::simulate::Si
     spec.mu = f64::INFINITY;
     spec.initial = InitialState::thesis_eq_2_15();
     spec.output_interval = 1e-5;
-    spec.t_end = 0.6;
-    simulate(&spec)
+    spec.t_end = t_end;
+    spec
+}
+
+/// The rocking-can run of [`rocking_can_spec`] over 0.6 s (one bounce and more).
+pub fn rocking_can_trajectory() -> Result<Trajectory, crate::model::simulate::SimulationError> {
+    simulate(&rocking_can_spec(0.6))
 }
 
 /// The angle of turn |Δψ| of the first bounce: the change of ψ between the start (a

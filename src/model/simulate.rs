@@ -387,7 +387,7 @@ impl Solout<f64, StateVector> for PhaseRecorder<'_, '_> {
         let mut earliest: Option<(Trigger, f64)> = None;
         for (k, &(trigger, g1)) in current.iter().enumerate() {
             let g0 = previous[k].1;
-            let crossed = g0 > 0.0 && !(g1 > 0.0);
+            let crossed = g0 > 0.0 && (g1 <= 0.0 || g1.is_nan());
             if !crossed {
                 continue;
             }
@@ -482,7 +482,8 @@ fn locate_root(a: f64, b: f64, ga: f64, mut g: impl FnMut(f64) -> f64) -> f64 {
 pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
     let p = &spec.params;
     p.validate().map_err(SimulationError::BadInput)?;
-    if !(spec.mu >= 0.0) || !(spec.eta >= 0.0) || !spec.eta.is_finite() {
+    let eta_ok = spec.eta.is_finite() && spec.eta >= 0.0;
+    if spec.mu.is_nan() || spec.mu < 0.0 || !eta_ok {
         return Err(SimulationError::BadInput(format!(
             "need μ ≥ 0 and finite η ≥ 0, got μ = {}, η = {}",
             spec.mu, spec.eta
