@@ -1,6 +1,6 @@
 //! The hybrid rolling/slipping simulation of thesis §4.3.1: integrate one mode with
-//! DOP853 (tolerances 1e-12) until an event, locate the event on the dense output,
-//! switch mode or stop, repeat.
+//! DOP853 (tolerances 1e-12) until an event, locate the event by re-integrating
+//! from the last accepted step, switch mode or stop, repeat.
 //!
 //! Events (each located to 1e-13 in scaled time, well inside the thesis's 1e-10):
 //! * rolling → slipping when |F|/N reaches μ (eq. 4.33); the slip is seeded with
