@@ -144,6 +144,16 @@ pub fn steady_theta_dot(params: &DiskParams, phi: f64, psi_dot: f64) -> Result<f
     Ok(theta / tu)
 }
 
+/// Scaled precession rate squared of stationary rolling at nutation φ, eqs. (2.29)
+/// and (4.40) with the corrected sign:
+/// Ψ² = (cos φ − h sin φ)/(a sin φ cos φ − c h sin² φ), time unit √(R/g). Negative or
+/// infinite where no stationary motion exists. The printed `+ c h sin² φ` is a typo:
+/// it violates the steady condition (2.24)/(4.38) (tested below).
+pub fn stationary_precession_squared(h: f64, a: f64, c: f64, phi: f64) -> f64 {
+    let (s, co) = phi.sin_cos();
+    (co - h * s) / (a * s * co - c * h * s * s)
+}
+
 /// Stationary rolling (centre of mass at rest), eq. (2.29) = eq. (4.40) with the
 /// sign of the c h sin²φ term corrected, at inclination `phi` \[rad\]: returns
 /// (ψ̇, θ̇) in rad/s on the branch ψ̇ ≥ 0,
@@ -173,8 +183,11 @@ pub fn stationary_rolling(params: &DiskParams, phi: f64) -> Result<(f64, f64), S
     } else {
         lever
     };
-    let denominator = a * s * co - c * h * s * s;
-    let psi_sq = lever / denominator;
+    let psi_sq = if lever == 0.0 {
+        0.0
+    } else {
+        stationary_precession_squared(h, a, c, phi)
+    };
     if !(psi_sq.is_finite() && psi_sq >= 0.0) {
         return Err(format!(
             "no stationary rolling at phi = {phi}: (cos φ − h sin φ)/(a sin φ cos φ − c h sin² φ) \

@@ -24,6 +24,7 @@
 
 use nalgebra::{Matrix3, Matrix6, SVector, Vector2, Vector3, Vector6};
 
+use super::closed_form::stationary_precession_squared;
 use super::dissipation::{Dissipation, Rates};
 
 /// Scaled state `(ψ, ψ̇, φ, φ̇, θ, θ̇, x, ẋ, y, ẏ)` of eq. (4.43); (ẋ, ẏ) is the slip
@@ -265,19 +266,11 @@ impl ScaledDisk {
         0.5 * v.norm_squared() + 0.5 * rotational + (s + self.h * c) - self.h
     }
 
-    /// Stationary rolling at nutation φ (eqs. 4.40 and 2.29): (ψ̇², θ̇/ψ̇).
-    ///
-    /// Erratum beyond ERRATA.md: eqs. (2.29) and (4.40) print the denominator
-    /// `a sin φ cos φ + c h sin² φ`; the steady condition (2.24)/(4.38) with
-    /// θ̇ = −ψ̇(cos φ − h sin φ), and the moment balance about G (gravity's torque
-    /// (cos φ − h sin φ) against the gyroscopic ψ̇² sin φ (a cos φ − c h sin φ)), both
-    /// give `a sin φ cos φ − c h sin² φ`. The test
-    /// `stationary_rolling_is_steady_and_force_free` fails with the printed sign.
+    /// Stationary rolling at nutation φ (eqs. 4.40 and 2.29, sign corrected, see
+    /// [`stationary_precession_squared`]): (ψ̇², θ̇/ψ̇) in scaled units.
     pub fn stationary_rolling(&self, phi: f64) -> (f64, f64) {
-        let (s, c) = phi.sin_cos();
-        let cbar = c - self.h * s;
-        let psi_dot_sq = cbar / (self.a * s * c - self.c * self.h * s * s);
-        (psi_dot_sq, -cbar)
+        let psi_dot_sq = stationary_precession_squared(self.h, self.a, self.c, phi);
+        (psi_dot_sq, -(phi.cos() - self.h * phi.sin()))
     }
 
     /// Distance from the stationary-rolling manifold (eqs. 4.39–4.40, fig. 4.14),
