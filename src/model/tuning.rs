@@ -53,24 +53,17 @@ pub fn tune_eta(
 ) -> Result<EtaTuning, TuningError> {
     let mut base = *spec;
     base.t_end = spec.t_end.max(2.0 * target);
-    let mut simulations = 0usize;
-    // Signed miss: end time minus target; runs that never end count as t_end.
-    let mut run = |eta: f64| -> Result<(f64, Trajectory), TuningError> {
-        let mut s = base;
-        s.eta = eta;
-        simulations += 1;
-        let trajectory = simulate(&s)?;
-        let end = match trajectory.end_reason {
-            EndReason::TimeLimit => base.t_end,
-            _ => trajectory.end_time(),
-        };
-        Ok((end - target, trajectory))
+    let mut search = Search {
+        base,
+        target,
+        simulations: 0,
+        best: None,
     };
 
     // Bracket: the end time falls as η grows.
     let (mut lo, mut hi) = (eta_guess, eta_guess);
-    let (mut f_lo, mut traj_lo) = run(lo)?;
-    let (mut f_hi, mut traj_hi) = (f_lo, traj_lo.clone());
+    let mut f_lo = search.miss(lo)?;
+    let mut f_hi = f_lo;
     let mut expansions = 0;
     while f_lo < 0.0 || f_hi > 0.0 {
         expansions += 1;
@@ -84,40 +77,28 @@ pub fn tune_eta(
             });
         }
         if f_lo < 0.0 {
-            hi = lo;
-            f_hi = f_lo;
-            traj_hi = traj_lo.clone();
+            (hi, f_hi) = (lo, f_lo);
             lo /= 4.0;
-            (f_lo, traj_lo) = run(lo)?;
+            f_lo = search.miss(lo)?;
         } else {
-            lo = hi;
-            f_lo = f_hi;
-            traj_lo = traj_hi.clone();
+            (lo, f_lo) = (hi, f_hi);
             hi *= 4.0;
-            (f_hi, traj_hi) = run(hi)?;
+            f_hi = search.miss(hi)?;
         }
     }
 
     // Illinois search in log η.
     let (mut x_lo, mut x_hi) = (lo.ln(), hi.ln());
-    let mut best = if f_lo.abs() < f_hi.abs() {
-        (lo, f_lo, traj_lo)
-    } else {
-        (hi, f_hi, traj_hi)
-    };
     let mut side = 0;
     for _ in 0..100 {
-        if best.1.abs() <= time_tolerance || (x_hi - x_lo).abs() < 1e-12 {
+        if search.best_miss() <= time_tolerance || (x_hi - x_lo).abs() < 1e-12 {
             break;
         }
         let mut x = (x_lo * f_hi - x_hi * f_lo) / (f_hi - f_lo);
         if !(x > x_lo.min(x_hi) && x < x_lo.max(x_hi)) {
             x = 0.5 * (x_lo + x_hi);
         }
-        let (f, traj) = run(x.exp())?;
-        if f.abs() < best.1.abs() {
-            best = (x.exp(), f, traj);
-        }
+        let f = search.miss(x.exp())?;
         if f > 0.0 {
             x_lo = x;
             f_lo = f;
@@ -134,9 +115,46 @@ pub fn tune_eta(
             side = 1;
         }
     }
+    let simulations = search.simulations;
+    let (eta, _, trajectory) = search.best.expect("at least one simulation ran");
     Ok(EtaTuning {
-        eta: best.0,
-        trajectory: best.2,
+        eta,
+        trajectory,
         simulations,
     })
+}
+
+/// The state of an η search: every run's miss is measured, and only the closest
+/// run's trajectory is kept.
+struct Search {
+    base: SimulationSpec,
+    target: f64,
+    simulations: usize,
+    /// (η, miss, trajectory) of the run ending closest to the target.
+    best: Option<(f64, f64, Trajectory)>,
+}
+
+impl Search {
+    /// Signed miss of the run with this η: end time minus target [s]; a run that
+    /// never ends counts as ending at t_end.
+    fn miss(&mut self, eta: f64) -> Result<f64, TuningError> {
+        let mut spec = self.base;
+        spec.eta = eta;
+        self.simulations += 1;
+        let trajectory = simulate(&spec)?;
+        let end = match trajectory.end_reason {
+            EndReason::TimeLimit => spec.t_end,
+            _ => trajectory.end_time(),
+        };
+        let miss = end - self.target;
+        if self.best.as_ref().is_none_or(|b| miss.abs() < b.1.abs()) {
+            self.best = Some((eta, miss, trajectory));
+        }
+        Ok(miss)
+    }
+
+    /// |miss| of the closest run so far.
+    fn best_miss(&self) -> f64 {
+        self.best.as_ref().map_or(f64::INFINITY, |b| b.1.abs())
+    }
 }
