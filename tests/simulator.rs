@@ -14,6 +14,15 @@ fn euler_disk(kind: ModelKind, eta: f64) -> SimulationSpec {
     spec
 }
 
+/// Asserts |value/expected − 1| < rel, naming the quantity.
+fn assert_relative(value: f64, expected: f64, rel: f64, what: &str) {
+    assert!(
+        (value / expected - 1.0).abs() < rel,
+        "{what} = {value}, expected {expected} ± {:.1} %",
+        100.0 * rel
+    );
+}
+
 fn max_relative_energy_drift(trajectory: &Trajectory) -> f64 {
     let e0 = trajectory.samples[0].energy;
     trajectory
@@ -197,22 +206,10 @@ fn contour_friction_ends_on_discontinuity_set() {
     assert_eq!(trajectory.end_reason, EndReason::DiscontinuitySet);
     assert!(trajectory.end.theta_dot.abs() < 1e-6);
     // The thesis prints two significant figures: ±5 % on φ and ψ̇.
-    assert!(
-        (trajectory.end.phi / 3.1e-5 - 1.0).abs() < 0.05,
-        "φ_end = {}",
-        trajectory.end.phi
-    );
-    assert!(
-        (trajectory.end.psi_dot / -0.051 - 1.0).abs() < 0.05,
-        "ψ̇_end = {}",
-        trajectory.end.psi_dot
-    );
+    assert_relative(trajectory.end.phi, 3.1e-5, 0.05, "phi at the end");
+    assert_relative(trajectory.end.psi_dot, -0.051, 0.05, "psi_dot at the end");
     // ERRATA's independent integration: 0.474 s; ±2 ms.
-    assert!(
-        (trajectory.end_time() - 0.474).abs() < 2e-3,
-        "end at {}",
-        trajectory.end_time()
-    );
+    assert_relative(trajectory.end_time(), 0.474, 2e-3 / 0.474, "end time");
     // Energy only decreases (dE/dt = F·V_P + Q·Ω ≤ 0).
     let rises = trajectory
         .samples
@@ -230,22 +227,10 @@ fn augmented_contour_friction_end_state() {
         simulate(&euler_disk(ModelKind::AugmentedContour, 1.1e-5)).expect("augmented run");
     assert_eq!(trajectory.end_reason, EndReason::DiscontinuitySet);
     // φ printed to three figures: ±1 %.
-    assert!(
-        (trajectory.end.phi / 4.65e-4 - 1.0).abs() < 0.01,
-        "φ_end = {}",
-        trajectory.end.phi
-    );
+    assert_relative(trajectory.end.phi, 4.65e-4, 0.01, "phi at the end");
     // −0.14 printed to two figures (ERRATA: −0.135): ±5 % of −0.14.
-    assert!(
-        (trajectory.end.psi_dot / -0.14 - 1.0).abs() < 0.05,
-        "ψ̇_end = {}",
-        trajectory.end.psi_dot
-    );
-    assert!(
-        (trajectory.end_time() - 0.474).abs() < 2e-3,
-        "end at {}",
-        trajectory.end_time()
-    );
+    assert_relative(trajectory.end.psi_dot, -0.14, 0.05, "psi_dot at the end");
+    assert_relative(trajectory.end_time(), 0.474, 2e-3 / 0.474, "end time");
 }
 
 /// Table 4.1, contour friction: with η tuned so the motion ends at 0.5 s, the energy
