@@ -12,9 +12,11 @@
 //! its frames are analysed. Failures are [`FootageError`]s that name the file.
 
 mod error;
+mod frame;
 mod info;
 
 pub use error::FootageError;
+pub use frame::{ChannelOrder, FrameView};
 pub use info::{
     ClipInfo, ClipKind, FRAME_EXTENSIONS, LOW_FPS_LIMIT, VIDEO_EXTENSIONS, frame_files,
     natural_cmp, probe,
