@@ -14,6 +14,7 @@ use opencv::{imgcodecs, videoio};
 use serde::{Deserialize, Serialize};
 
 use super::FootageError;
+use super::source::{open_capture, opencv_error};
 
 /// Video containers that [`probe`] hands to OpenCV (lower case, no dot).
 pub const VIDEO_EXTENSIONS: &[&str] = &["mp4", "m4v", "mov", "avi", "mkv"];
@@ -130,7 +131,7 @@ pub fn probe(path: &Path) -> Result<ClipInfo, FootageError> {
     }
 }
 
-fn lower_extension(path: &Path) -> Option<String> {
+pub(super) fn lower_extension(path: &Path) -> Option<String> {
     path.extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
 }
@@ -143,30 +144,8 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
             ext,
         });
     }
-    let cv = |e: opencv::Error| FootageError::unreadable(path, format!("OpenCV: {}", e.message));
-
-    // FFmpeg when this OpenCV has it: the same decoder (and the same frame count)
-    // on every machine, and no fall-through to GStreamer's noisy second attempt.
-    let has_ffmpeg = videoio::has_backend(videoio::VideoCaptureAPIs::CAP_FFMPEG).map_err(cv)?;
-    let api = if has_ffmpeg {
-        videoio::CAP_FFMPEG
-    } else {
-        videoio::CAP_ANY
-    };
-    let mut cap = videoio::VideoCapture::from_file(path, api).map_err(cv)?;
-    if !cap.is_opened().map_err(cv)? {
-        let backend = if has_ffmpeg {
-            "FFmpeg"
-        } else {
-            "no OpenCV video backend"
-        };
-        return Err(FootageError::unreadable(
-            path,
-            format!(
-                "{backend} could not open it (truncated, not a video, or an unsupported codec)"
-            ),
-        ));
-    }
+    let cv = |e| opencv_error(path, e);
+    let mut cap = open_capture(path)?;
     let mut first = Mat::default();
     if !cap.read(&mut first).map_err(cv)? || first.empty() {
         return Err(FootageError::unreadable(

@@ -14,6 +14,7 @@
 mod error;
 mod frame;
 mod info;
+mod source;
 
 pub use error::FootageError;
 pub use frame::{ChannelOrder, FrameView};
@@ -21,3 +22,4 @@ pub use info::{
     ClipInfo, ClipKind, FRAME_EXTENSIONS, LOW_FPS_LIMIT, VIDEO_EXTENSIONS, frame_files,
     natural_cmp, probe,
 };
+pub use source::{Frame, FrameSource};

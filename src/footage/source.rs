@@ -1,0 +1,372 @@
+//! Streaming frames off the disk, one at a time, in clip order.
+//!
+//! A [`FrameSource`] decodes a video through OpenCV's `VideoCapture` (FFmpeg when
+//! available) or reads a frame folder through the `image` crate, in natural name
+//! order. It holds one decoded frame at a time and lends it out as a
+//! [`FrameView`], so memory stays bounded whatever the clip length.
+
+use std::path::{Path, PathBuf};
+
+use opencv::core::Mat;
+use opencv::prelude::*;
+use opencv::videoio;
+
+use super::info::{VIDEO_EXTENSIONS, frame_files, lower_extension};
+use super::{ChannelOrder, FootageError, FrameView};
+
+/// One frame lent out by [`FrameSource::next_frame`].
+#[derive(Clone, Copy, Debug)]
+pub struct Frame<'a> {
+    /// 0-based position in the clip as stored (dropped frames leave no gap here).
+    pub index: usize,
+    /// The container's presentation time of this frame [s, playback clock], when
+    /// the container has per-frame timestamps (videos); `None` for frame folders.
+    pub container_time_s: Option<f64>,
+    pub view: FrameView<'a>,
+}
+
+/// The frames of one clip, decoded one at a time.
+pub struct FrameSource {
+    path: PathBuf,
+    next: usize,
+    /// Frames the container says it holds (a folder: its files).
+    expected: Option<usize>,
+    reader: Reader,
+}
+
+enum Reader {
+    Video {
+        capture: videoio::VideoCapture,
+        frame: Mat,
+    },
+    Folder {
+        files: Vec<PathBuf>,
+        frame: image::RgbImage,
+    },
+}
+
+impl FrameSource {
+    /// Open a video file or a frame folder for streaming.
+    ///
+    /// # Errors
+    /// `NotFound`, `UnknownExtension`, `EmptyFolder`, or `Unreadable` when OpenCV
+    /// cannot open the video.
+    pub fn open(path: &Path) -> Result<Self, FootageError> {
+        let meta = std::fs::metadata(path).map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => FootageError::NotFound {
+                path: path.to_path_buf(),
+            },
+            _ => FootageError::unreadable(path, e),
+        })?;
+        if meta.is_dir() {
+            let files = frame_files(path)?;
+            if files.is_empty() {
+                return Err(FootageError::EmptyFolder {
+                    path: path.to_path_buf(),
+                });
+            }
+            return Ok(Self {
+                path: path.to_path_buf(),
+                next: 0,
+                expected: Some(files.len()),
+                reader: Reader::Folder {
+                    files,
+                    frame: image::RgbImage::new(0, 0),
+                },
+            });
+        }
+        let ext = lower_extension(path).unwrap_or_default();
+        if !VIDEO_EXTENSIONS.contains(&ext.as_str()) {
+            return Err(FootageError::UnknownExtension {
+                path: path.to_path_buf(),
+                ext,
+            });
+        }
+        let capture = open_capture(path)?;
+        let count = capture
+            .get(videoio::CAP_PROP_FRAME_COUNT)
+            .map_err(|e| opencv_error(path, e))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            next: 0,
+            expected: (count.is_finite() && count >= 1.0).then_some(count.round() as usize),
+            reader: Reader::Video {
+                capture,
+                frame: Mat::default(),
+            },
+        })
+    }
+
+    /// The clip's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Frames the container says it holds (a folder: its frame files), if known.
+    pub fn expected_frames(&self) -> Option<usize> {
+        self.expected
+    }
+
+    /// Skip ahead so that the next frame returned is `index` (for a video, by
+    /// seeking; a codec may land on a nearby key frame, so the caller should
+    /// read [`Frame::index`] rather than assume it).
+    ///
+    /// # Errors
+    /// `Unreadable` when the container refuses the seek.
+    pub fn seek(&mut self, index: usize) -> Result<(), FootageError> {
+        if let Reader::Video { capture, .. } = &mut self.reader {
+            let ok = capture
+                .set(videoio::CAP_PROP_POS_FRAMES, index as f64)
+                .map_err(|e| opencv_error(&self.path, e))?;
+            if !ok {
+                return Err(FootageError::unreadable(
+                    &self.path,
+                    format!("cannot seek to frame {index}"),
+                ));
+            }
+        }
+        self.next = index;
+        Ok(())
+    }
+
+    /// Decode the next frame, or `None` at the end of the clip.
+    ///
+    /// # Errors
+    /// `Unreadable` naming the frame file (folders) or the frame number (videos)
+    /// when a frame cannot be decoded, when a folder's frames change size, or when
+    /// a video ends more than one frame before the count its container states (a
+    /// truncated file).
+    pub fn next_frame(&mut self) -> Result<Option<Frame<'_>>, FootageError> {
+        let index = self.next;
+        match &mut self.reader {
+            Reader::Folder { files, frame } => {
+                let Some(file) = files.get(index) else {
+                    return Ok(None);
+                };
+                let decoded = image::open(file)
+                    .map_err(|e| FootageError::unreadable(file, format!("frame {index}: {e}")))?
+                    .into_rgb8();
+                if index > 0 && decoded.dimensions() != frame.dimensions() {
+                    let (w, h) = decoded.dimensions();
+                    let (w0, h0) = frame.dimensions();
+                    return Err(FootageError::unreadable(
+                        file,
+                        format!("frame {index} is {w} x {h} px, earlier frames {w0} x {h0} px"),
+                    ));
+                }
+                *frame = decoded;
+                self.next += 1;
+                Ok(Some(Frame {
+                    index,
+                    container_time_s: None,
+                    view: FrameView::from_rgb(frame),
+                }))
+            }
+            Reader::Video { capture, frame } => {
+                let path = &self.path;
+                let read = capture.read(frame).map_err(|e| opencv_error(path, e))?;
+                if !read || frame.empty() {
+                    return match self.expected {
+                        Some(expected) if index + 1 < expected => Err(FootageError::unreadable(
+                            path,
+                            format!(
+                                "decoding stopped at frame {index} of the {expected} \
+                                     the container states (truncated or corrupt file)"
+                            ),
+                        )),
+                        _ => Ok(None),
+                    };
+                }
+                let time_ms = capture
+                    .get(videoio::CAP_PROP_POS_MSEC)
+                    .map_err(|e| opencv_error(path, e))?;
+                self.next += 1;
+                Ok(Some(Frame {
+                    index,
+                    container_time_s: (time_ms.is_finite() && time_ms >= 0.0)
+                        .then_some(time_ms / 1e3),
+                    view: mat_view(path, frame, index)?,
+                }))
+            }
+        }
+    }
+}
+
+/// Open a video with FFmpeg when this OpenCV has it (the same decoder and frame
+/// count on every machine), else with whatever backend OpenCV picks.
+pub(super) fn open_capture(path: &Path) -> Result<videoio::VideoCapture, FootageError> {
+    let cv = |e| opencv_error(path, e);
+    let has_ffmpeg = videoio::has_backend(videoio::VideoCaptureAPIs::CAP_FFMPEG).map_err(cv)?;
+    let api = if has_ffmpeg {
+        videoio::CAP_FFMPEG
+    } else {
+        videoio::CAP_ANY
+    };
+    let capture = videoio::VideoCapture::from_file(path, api).map_err(cv)?;
+    if !capture.is_opened().map_err(cv)? {
+        let backend = if has_ffmpeg {
+            "FFmpeg"
+        } else {
+            "no OpenCV video backend"
+        };
+        return Err(FootageError::unreadable(
+            path,
+            format!(
+                "{backend} could not open it (truncated, not a video, or an unsupported codec)"
+            ),
+        ));
+    }
+    Ok(capture)
+}
+
+pub(super) fn opencv_error(path: &Path, e: opencv::Error) -> FootageError {
+    FootageError::unreadable(path, format!("OpenCV: {}", e.message))
+}
+
+/// Borrow a decoded OpenCV frame (8-bit BGR, continuous) as a [`FrameView`].
+fn mat_view<'a>(path: &Path, mat: &'a Mat, index: usize) -> Result<FrameView<'a>, FootageError> {
+    let bad = |what: &str| FootageError::unreadable(path, format!("frame {index}: {what}"));
+    if mat.channels() != 3 || mat.depth() != opencv::core::CV_8U {
+        return Err(bad("not an 8-bit, 3-channel frame"));
+    }
+    if !mat.is_continuous() {
+        return Err(bad("OpenCV returned a non-contiguous frame buffer"));
+    }
+    let data = mat
+        .data_bytes()
+        .map_err(|e| FootageError::unreadable(path, format!("OpenCV: {}", e.message)))?;
+    let width = mat.cols().unsigned_abs() as usize;
+    Ok(FrameView {
+        width,
+        height: mat.rows().unsigned_abs() as usize,
+        stride: 3 * width,
+        order: ChannelOrder::Bgr,
+        data,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write_frames(dir: &Path, sizes: &[(u32, u32)]) {
+        for (i, &(w, h)) in sizes.iter().enumerate() {
+            let img = image::RgbImage::from_pixel(w, h, image::Rgb([i as u8 * 10, 0, 0]));
+            img.save(dir.join(format!("f{}.png", i + 1))).unwrap();
+        }
+    }
+
+    #[test]
+    fn folder_frames_stream_in_natural_order() {
+        let dir = tempfile::tempdir().unwrap();
+        write_frames(dir.path(), &[(4, 3); 12]);
+        let mut source = FrameSource::open(dir.path()).unwrap();
+        assert_eq!(source.expected_frames(), Some(12));
+        let mut reds = Vec::new();
+        while let Some(frame) = source.next_frame().unwrap() {
+            assert_eq!((frame.view.width, frame.view.height), (4, 3));
+            reds.push(frame.view.rgb(0, 0)[0]);
+        }
+        // f2.png (red 10) comes before f10.png (red 90): natural, not lexical, order.
+        assert_eq!(reds, (0..12).map(|i| i * 10).collect::<Vec<u8>>());
+    }
+
+    #[test]
+    fn a_frame_of_another_size_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        write_frames(dir.path(), &[(4, 3), (4, 3), (5, 3)]);
+        let mut source = FrameSource::open(dir.path()).unwrap();
+        source.next_frame().unwrap();
+        source.next_frame().unwrap();
+        let err = source.next_frame().unwrap_err().to_string();
+        assert!(err.contains("f3.png") && err.contains("frame 2"), "{err}");
+    }
+
+    #[test]
+    fn a_corrupt_frame_file_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        write_frames(dir.path(), &[(4, 3)]);
+        std::fs::write(dir.path().join("f2.png"), b"not a png").unwrap();
+        let mut source = FrameSource::open(dir.path()).unwrap();
+        source.next_frame().unwrap();
+        let err = source.next_frame().unwrap_err().to_string();
+        assert!(err.contains("f2.png"), "{err}");
+    }
+
+    /// An MJPG AVI of `n` frames whose blue channel encodes the frame number.
+    fn write_avi(path: &Path, n: usize) {
+        use opencv::core::{CV_8UC3, Scalar, Size};
+        let fourcc = videoio::VideoWriter::fourcc('M', 'J', 'P', 'G').unwrap();
+        let mut writer = videoio::VideoWriter::new(
+            path.to_str().unwrap(),
+            fourcc,
+            480.0,
+            Size::new(32, 24),
+            true,
+        )
+        .unwrap();
+        for i in 0..n {
+            let frame = Mat::new_rows_cols_with_default(
+                24,
+                32,
+                CV_8UC3,
+                Scalar::new(8.0 * i as f64, 0.0, 0.0, 0.0),
+            )
+            .unwrap();
+            writer.write(&frame).unwrap();
+        }
+        writer.release().unwrap();
+    }
+
+    #[test]
+    fn video_frames_stream_with_timestamps() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("clip.avi");
+        write_avi(&path, 20);
+        let mut source = FrameSource::open(&path).unwrap();
+        assert_eq!(source.expected_frames(), Some(20));
+        let mut count = 0;
+        while let Some(frame) = source.next_frame().unwrap() {
+            // MJPG is lossy: the blue level comes back within a few grey levels.
+            let blue = frame.view.rgb(16, 12)[2] as f64;
+            assert!(
+                (blue - 8.0 * frame.index as f64).abs() < 4.0,
+                "frame {}: {blue}",
+                frame.index
+            );
+            // The container clock runs at the stored 480 fps.
+            let t = frame.container_time_s.unwrap();
+            assert!(
+                (t - frame.index as f64 / 480.0).abs() < 1e-6,
+                "frame {}: {t}",
+                frame.index
+            );
+            count += 1;
+        }
+        assert_eq!(count, 20);
+    }
+
+    #[test]
+    fn a_truncated_video_is_an_error_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("cut.avi");
+        write_avi(&path, 40);
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
+        let result = FrameSource::open(&path).and_then(|mut source| {
+            while source.next_frame()?.is_some() {}
+            Ok(())
+        });
+        let err = result.unwrap_err().to_string();
+        assert!(err.contains("cut.avi"), "{err}");
+    }
+
+    #[test]
+    fn a_text_file_is_not_a_clip() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("notes.txt");
+        std::fs::write(&file, b"hello").unwrap();
+        let err = FrameSource::open(&file).err().unwrap();
+        assert!(matches!(err, FootageError::UnknownExtension { .. }));
+    }
+}
