@@ -14,6 +14,7 @@ use opencv::{imgcodecs, videoio};
 use serde::{Deserialize, Serialize};
 
 use super::FootageError;
+use super::capture_rate::{ContainerCaptureRate, container_capture_rate};
 use super::source::{open_capture, opencv_error};
 
 /// Video containers that [`probe`] hands to OpenCV (lower case, no dot).
@@ -60,6 +61,9 @@ pub struct ClipInfo {
     /// The fps stored in the container: often the playback rate, not the capture
     /// rate. `None` for a frame folder or a container without one.
     pub container_fps: Option<f64>,
+    /// A capture rate the container stores beside its playback fps (Android's
+    /// capture-fps tag, an iPhone's slowing edit list), when there is one.
+    pub capture_rate: Option<ContainerCaptureRate>,
     /// `frame_count / container_fps` [s]: the playback duration.
     pub duration_s: Option<f64>,
     /// FOURCC of a video (`MJPG`, `avc1`, `hvc1`, …); image format of a folder (`PNG`).
@@ -77,6 +81,10 @@ impl fmt::Display for ClipInfo {
             (None, ClipKind::FrameFolder) => "none (a frame folder stores no fps)".into(),
             (None, ClipKind::Video) => "none (the container stores no fps)".into(),
         };
+        let capture = self.capture_rate.as_ref().map_or_else(
+            || "not stored in the container".into(),
+            |r| format!("{} ({})", number(r.fps), r.source),
+        );
         let duration = self.duration_s.map_or_else(
             || "unknown".into(),
             |d| format!("{} s at the stored fps", number(d)),
@@ -87,6 +95,7 @@ impl fmt::Display for ClipInfo {
             ("size", format!("{} x {} px", self.width, self.height)),
             ("frames", self.frame_count.to_string()),
             ("fps", fps),
+            ("capture", capture),
             ("duration", duration),
             ("codec", self.codec.clone()),
             ("backend", self.backend.clone()),
@@ -174,15 +183,22 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
         n
     };
     let container_fps = (stored_fps.is_finite() && stored_fps > 0.0).then_some(stored_fps);
-    match container_fps {
-        Some(fps) if fps <= LOW_FPS_LIMIT => warnings.push(format!(
+    let capture_rate = container_capture_rate(path);
+    match (container_fps, &capture_rate) {
+        (_, Some(rate)) => warnings.push(format!(
+            "the container stores a capture rate of {} fps ({}); analyses time frames \
+             with it unless the experiment config sets `fps`",
+            number(rate.fps),
+            rate.source
+        )),
+        (Some(fps), None) if fps <= LOW_FPS_LIMIT => warnings.push(format!(
             "stored fps {} is probably the playback rate (phone slow-motion clips are \
              stored at 30 fps), not the capture rate: give the capture fps \
              (e.g. 240, 480, 960) in the experiment config",
             number(fps)
         )),
-        Some(_) => {}
-        None => warnings.push(
+        (Some(_), None) => {}
+        (None, None) => warnings.push(
             "the container stores no fps: give the capture fps in the experiment config".into(),
         ),
     }
@@ -193,6 +209,7 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
         height: first.rows().unsigned_abs(),
         frame_count,
         container_fps,
+        capture_rate,
         duration_s: container_fps.map(|fps| frame_count as f64 / fps),
         codec: fourcc_string(fourcc),
         backend,
@@ -261,6 +278,7 @@ fn probe_folder(dir: &Path) -> Result<ClipInfo, FootageError> {
         height,
         frame_count: frames.len() as u64,
         container_fps: None,
+        capture_rate: None,
         duration_s: None,
         codec: formats.join("+"),
         backend: "imgcodecs".into(),

@@ -11,11 +11,15 @@
 //! `eulerdisk info CLIP`), and [`frame_files`] lists a frame folder in the order
 //! its frames are analysed. Failures are [`FootageError`]s that name the file.
 
+mod capture_rate;
 mod error;
 mod frame;
 mod info;
 mod source;
 
+pub use capture_rate::{
+    CaptureFps, ContainerCaptureRate, FpsSource, container_capture_rate, resolve_capture_fps,
+};
 pub use error::FootageError;
 pub use frame::{ChannelOrder, FrameView};
 pub use info::{
