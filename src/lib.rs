@@ -1,4 +1,5 @@
 //! eulerdisk: slow-motion footage of spinning disks turned into physics.
+pub mod config;
 pub mod energy;
 pub mod footage;
 pub mod model;

@@ -1,0 +1,372 @@
+//! Experiment configuration: what a user writes in `experiment.toml`.
+//!
+//! Every field is optional; what is missing is found automatically (threshold,
+//! calibration, split row) or defaulted (the Euler's-disk preset, a dark plate, a
+//! 0.5 s fit window). Unknown keys are errors, so a typo (`fsp = 480`) is reported
+//! with its line instead of silently ignored.
+//!
+//! Configs are layered: a study folder's `eulerdisk.toml` applies to every clip
+//! below it, a deeper folder's file overrides it key by key, and a clip's own
+//! `CLIP.toml` (beside `CLIP.mp4`) comes last. [`ExperimentConfig::load_layered`]
+//! merges the TOML tables in that order before checking them.
+//!
+//! ```toml
+//! fps = 480                      # capture frame rate [1/s]
+//! plate = "dark"                 # dark (reflective) | light (shadow contrast)
+//! two_view = false               # mirror side view above, plan view below
+//! material = "stainless-steel"   # base plate, thesis Table 3.1 name
+//!
+//! [disk]
+//! preset = "euler-disk"          # euler-disk | brass-disk | food-can
+//! radius_m = 0.0381              # optional overrides of the preset
+//! half_thickness_m = 0.00635
+//!
+//! [vision]
+//! gamma = 128                    # threshold on mean RGB intensity, 0–255; default Otsu
+//! band_half_width_px = 3         # columns each side of the centre line
+//! split_row = 640                # two-view: first row of the plan view [px]
+//! roi = [0, 0, 720, 1280]        # x, y, width, height [px]
+//!
+//! [calibration]                  # rest-frame points [px]; default: found automatically
+//! x_l = 112.0
+//! x_r = 608.0
+//! z_t = 700.0
+//! z_base = 742.0
+//!
+//! [fit]
+//! window_s = 0.5                 # fit the last 0.5 s before the halt
+//! halt = "measured"              # measured (t0 fixed at the halt) | free
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::model::params::{DiskParams, Preset};
+
+/// The name of a folder-level config file, inherited by every clip below it.
+pub const FOLDER_CONFIG: &str = "eulerdisk.toml";
+
+/// A config that could not be read or does not make sense, naming the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("{}: {reason}", path.display())]
+    Unreadable { path: PathBuf, reason: String },
+    #[error("{}: {reason}", path.display())]
+    Invalid { path: PathBuf, reason: String },
+}
+
+/// Base plate appearance in the side view (thesis §3.2.4, figs. 3.7 and 3.9).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Plate {
+    /// Dark, reflective: the white disk above its mirror image.
+    #[default]
+    Dark,
+    /// Light: a dark shadow under the disk gives the contrast.
+    Light,
+}
+
+/// How the halt time t0 of the power law is treated in the fit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum HaltChoice {
+    /// t0 fixed at the measured halt t_φ = 0 (the thesis's choice).
+    #[default]
+    Measured,
+    /// t0 a free parameter of the fit.
+    Free,
+}
+
+/// The disk: a preset, optionally with measured values overriding it.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiskConfig {
+    pub preset: Option<Preset>,
+    pub mass_kg: Option<f64>,
+    pub radius_m: Option<f64>,
+    pub half_thickness_m: Option<f64>,
+    /// Moment of inertia about a diameter [kg m²].
+    pub inertia_a_kg_m2: Option<f64>,
+    /// Moment of inertia about the symmetry axis [kg m²].
+    pub inertia_c_kg_m2: Option<f64>,
+}
+
+/// Image-stage settings.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VisionConfig {
+    /// Threshold γ on the mean RGB intensity, 0–255 (thesis §3.2.4).
+    pub gamma: Option<f64>,
+    /// Columns each side of the centre line searched for the rim edge [px].
+    pub band_half_width_px: Option<u32>,
+    /// Two-view clips: the first row of the plan view [px].
+    pub split_row: Option<u32>,
+    /// Region of interest `[x, y, width, height]` [px].
+    pub roi: Option<[u32; 4]>,
+}
+
+/// Rest-frame calibration points [px] (thesis §3.2.4, eq. 3.10 with ERRATA).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationConfig {
+    pub x_l: f64,
+    pub x_r: f64,
+    pub z_t: f64,
+    pub z_base: f64,
+}
+
+/// Power-law fit settings (thesis §3.2.5).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FitConfig {
+    /// Length of the fit window before the halt [s].
+    pub window_s: Option<f64>,
+    pub halt: Option<HaltChoice>,
+}
+
+/// One experiment's configuration, as written (before automatic choices).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExperimentConfig {
+    /// Capture frame rate [1/s].
+    pub fps: Option<f64>,
+    pub plate: Option<Plate>,
+    pub two_view: Option<bool>,
+    /// Base-plate material (a thesis Table 3.1 name) for studies and `compare`.
+    pub material: Option<String>,
+    /// Disk name for studies with several disks.
+    pub disk_name: Option<String>,
+    /// Plate orientation or any other grouping label of the study.
+    pub orientation: Option<String>,
+    pub disk: Option<DiskConfig>,
+    pub vision: Option<VisionConfig>,
+    pub calibration: Option<CalibrationConfig>,
+    pub fit: Option<FitConfig>,
+}
+
+/// Default fit window before the halt [s] (the thesis's last 0.5 s).
+pub const DEFAULT_WINDOW_S: f64 = 0.5;
+
+impl ExperimentConfig {
+    /// Parse one TOML text; `path` names it in errors.
+    ///
+    /// # Errors
+    /// `Invalid` with TOML's line and column for syntax errors and unknown keys,
+    /// or with the reason a value makes no sense.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
+        let table: toml::Table = toml::from_str(text).map_err(|e| invalid(path, e))?;
+        Self::from_table(table, path)
+    }
+
+    fn from_table(table: toml::Table, path: &Path) -> Result<Self, ConfigError> {
+        let config: Self = toml::Value::Table(table)
+            .try_into()
+            .map_err(|e| invalid(path, e))?;
+        config.validate().map_err(|reason| ConfigError::Invalid {
+            path: path.to_path_buf(),
+            reason,
+        })?;
+        Ok(config)
+    }
+
+    /// Read and merge config files in order (later files override earlier ones key
+    /// by key, tables merged recursively); missing files are skipped.
+    ///
+    /// # Errors
+    /// The first file that cannot be read or parsed, or the merged result when it
+    /// is invalid (named by the last file that contributed).
+    pub fn load_layered(files: &[PathBuf]) -> Result<Self, ConfigError> {
+        let mut merged = toml::Table::new();
+        let mut last = PathBuf::from("(defaults)");
+        for file in files.iter().filter(|f| f.is_file()) {
+            let text = std::fs::read_to_string(file).map_err(|e| ConfigError::Unreadable {
+                path: file.clone(),
+                reason: e.to_string(),
+            })?;
+            let table: toml::Table = toml::from_str(&text).map_err(|e| invalid(file, e))?;
+            // Check each layer alone too, so a typo is blamed on its own file.
+            Self::from_table(table.clone(), file)?;
+            merge(&mut merged, table);
+            last = file.clone();
+        }
+        Self::from_table(merged, &last)
+    }
+
+    /// The config files that apply to `clip` below the study `root`, outermost
+    /// first: every `eulerdisk.toml` from `root` down to the clip's folder, then
+    /// the clip's own `CLIP.toml`. For a single clip (`root` = its folder) that is
+    /// the folder's `eulerdisk.toml` and the clip's own file.
+    pub fn layers_for(root: &Path, clip: &Path) -> Vec<PathBuf> {
+        let mut folders: Vec<&Path> = clip
+            .ancestors()
+            .skip(1)
+            .take_while(|dir| dir.starts_with(root))
+            .collect();
+        folders.reverse();
+        let mut files: Vec<PathBuf> = folders.iter().map(|d| d.join(FOLDER_CONFIG)).collect();
+        files.push(clip.with_extension("toml"));
+        files
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let positive = |name: &str, value: Option<f64>| match value {
+            Some(v) if !(v.is_finite() && v > 0.0) => {
+                Err(format!("`{name}` = {v} must be a positive number"))
+            }
+            _ => Ok(()),
+        };
+        positive("fps", self.fps)?;
+        if let Some(disk) = &self.disk {
+            positive("disk.mass_kg", disk.mass_kg)?;
+            positive("disk.radius_m", disk.radius_m)?;
+            positive("disk.half_thickness_m", disk.half_thickness_m)?;
+            positive("disk.inertia_a_kg_m2", disk.inertia_a_kg_m2)?;
+            positive("disk.inertia_c_kg_m2", disk.inertia_c_kg_m2)?;
+        }
+        if let Some(gamma) = self.vision.as_ref().and_then(|v| v.gamma) {
+            if !(0.0..=255.0).contains(&gamma) {
+                return Err(format!("`vision.gamma` = {gamma} must lie in 0–255"));
+            }
+        }
+        if let Some(c) = &self.calibration {
+            if !(c.x_r > c.x_l) {
+                return Err(format!(
+                    "calibration: x_r = {} must lie right of x_l = {}",
+                    c.x_r, c.x_l
+                ));
+            }
+            if !(c.z_base > c.z_t) {
+                return Err(format!(
+                    "calibration: z_base = {} must lie below z_t = {} (image rows grow downward)",
+                    c.z_base, c.z_t
+                ));
+            }
+        }
+        positive("fit.window_s", self.fit.as_ref().and_then(|f| f.window_s))?;
+        Ok(())
+    }
+
+    /// The disk parameters: the preset (Euler's disk by default) with any measured
+    /// values put in.
+    pub fn disk_params(&self) -> DiskParams {
+        let disk = self.disk.clone().unwrap_or_default();
+        let mut params = disk.preset.unwrap_or(Preset::EulerDisk).params();
+        let set = |field: &mut f64, value: Option<f64>| {
+            if let Some(v) = value {
+                *field = v;
+            }
+        };
+        set(&mut params.mass, disk.mass_kg);
+        set(&mut params.radius, disk.radius_m);
+        set(&mut params.half_thickness, disk.half_thickness_m);
+        set(&mut params.inertia_a, disk.inertia_a_kg_m2);
+        set(&mut params.inertia_c, disk.inertia_c_kg_m2);
+        params
+    }
+
+    /// The fit window before the halt [s].
+    pub fn window_s(&self) -> f64 {
+        self.fit
+            .as_ref()
+            .and_then(|f| f.window_s)
+            .unwrap_or(DEFAULT_WINDOW_S)
+    }
+}
+
+fn invalid(path: &Path, e: impl std::fmt::Display) -> ConfigError {
+    ConfigError::Invalid {
+        path: path.to_path_buf(),
+        reason: e.to_string().trim_end().to_string(),
+    }
+}
+
+/// Merge `over` into `base`: tables recursively, any other value replaced.
+fn merge(base: &mut toml::Table, over: toml::Table) {
+    for (key, value) in over {
+        match (base.get_mut(&key), value) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),
+            (_, value) => {
+                base.insert(key, value);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_typo_is_an_error_naming_the_file_and_the_key() {
+        let err = ExperimentConfig::parse("fsp = 480\n", Path::new("exp.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("exp.toml") && err.contains("fsp"), "{err}");
+        let err = ExperimentConfig::parse("[vision]\ngama = 3\n", Path::new("e.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("gama"), "{err}");
+    }
+
+    #[test]
+    fn nonsense_values_are_rejected() {
+        for text in [
+            "fps = -480",
+            "fps = 0",
+            "[vision]\ngamma = 300",
+            "[calibration]\nx_l = 10\nx_r = 5\nz_t = 1\nz_base = 2",
+            "[calibration]\nx_l = 1\nx_r = 5\nz_t = 3\nz_base = 2",
+            "[fit]\nwindow_s = -1",
+            "plate = \"shiny\"",
+        ] {
+            assert!(
+                ExperimentConfig::parse(text, Path::new("x.toml")).is_err(),
+                "{text}"
+            );
+        }
+    }
+
+    #[test]
+    fn layers_override_key_by_key() {
+        let root = tempfile::tempdir().unwrap();
+        let material = root.path().join("euler/steel");
+        std::fs::create_dir_all(&material).unwrap();
+        std::fs::write(
+            root.path().join(FOLDER_CONFIG),
+            "fps = 480\n[vision]\ngamma = 100\nband_half_width_px = 4\n",
+        )
+        .unwrap();
+        std::fs::write(material.join(FOLDER_CONFIG), "material = \"steel\"\n").unwrap();
+        let clip = material.join("run07.mp4");
+        std::fs::write(material.join("run07.toml"), "[vision]\ngamma = 120\n").unwrap();
+        let layers = ExperimentConfig::layers_for(root.path(), &clip);
+        assert_eq!(layers.len(), 4, "{layers:?}");
+        let config = ExperimentConfig::load_layered(&layers).unwrap();
+        assert_eq!(config.fps, Some(480.0));
+        assert_eq!(config.material.as_deref(), Some("steel"));
+        let vision = config.vision.unwrap();
+        assert_eq!(vision.gamma, Some(120.0), "the clip's own file wins");
+        assert_eq!(
+            vision.band_half_width_px,
+            Some(4),
+            "inherited from the root"
+        );
+    }
+
+    #[test]
+    fn disk_overrides_replace_preset_values() {
+        let config = ExperimentConfig::parse(
+            "[disk]\npreset = \"brass-disk\"\nradius_m = 0.05\n",
+            Path::new("x.toml"),
+        )
+        .unwrap();
+        let params = config.disk_params();
+        assert_eq!(params.radius, 0.05);
+        assert_eq!(params.mass, Preset::BrassDisk.params().mass);
+        assert_eq!(
+            ExperimentConfig::default().disk_params(),
+            Preset::EulerDisk.params()
+        );
+    }
+}
