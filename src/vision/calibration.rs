@@ -218,7 +218,7 @@ pub fn calibrate_at_rest(
             });
         }
     }
-    if !(config.rest_tolerance_px > 0.0) {
+    if config.rest_tolerance_px.is_nan() || config.rest_tolerance_px <= 0.0 {
         return Err(VisionError::InvalidSetting {
             name: "rest_tolerance_px",
             value: config.rest_tolerance_px,

@@ -104,7 +104,7 @@ impl Labeller {
                 found.push(comp);
             }
         }
-        found.sort_by(|a, b| b.pixels.cmp(&a.pixels));
+        found.sort_by_key(|c| std::cmp::Reverse(c.pixels));
         found
     }
 }

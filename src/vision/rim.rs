@@ -90,7 +90,7 @@ impl RimGauge {
         height: usize,
     ) -> Result<Self, VisionError> {
         calibration.validate(width, height)?;
-        if !(config.search_below_px >= 1.0) {
+        if config.search_below_px.is_nan() || config.search_below_px < 1.0 {
             return Err(VisionError::InvalidSetting {
                 name: "search_below_px",
                 value: config.search_below_px,

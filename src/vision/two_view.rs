@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use super::VisionError;
 use super::components::Labeller;
 use super::profile::check_frame;
-use crate::footage::FrameView;
+use crate::footage::{ChannelOrder, FrameView};
 
 /// The top (mirror side view, rows `0..split_row`) and bottom (plan view, rows
 /// `split_row..height`) parts of a two-view frame, as views of the same bytes.
@@ -187,15 +187,18 @@ impl StripFinder {
             [self.thresholds.r, self.thresholds.g, self.thresholds.b].map(|t| (t * mean) as f32);
         self.mask.clear();
         self.mask.reserve(w * h);
-        let mut candidates = 0;
+        let (ri, bi) = match plan.order {
+            ChannelOrder::Rgb => (0, 2),
+            ChannelOrder::Bgr => (2, 0),
+        };
         for y in 0..h {
-            for x in 0..w {
-                let [r, g, b] = plan.rgb(x, y).map(f32::from);
-                let on = r > rt && g < gt && b < bt;
-                candidates += usize::from(on);
-                self.mask.push(on);
-            }
+            self.mask.extend(
+                plan.row(y).chunks_exact(3).map(|p| {
+                    f32::from(p[ri]) > rt && f32::from(p[1]) < gt && f32::from(p[bi]) < bt
+                }),
+            );
         }
+        let candidates = self.mask.iter().filter(|&&on| on).count();
         let no_strip = |pixels| VisionError::NoStrip {
             frame: index,
             pixels,
@@ -243,7 +246,7 @@ fn principal_axis(sxx: f64, syy: f64, sxy: f64) -> (f64, f64, f64) {
 /// Mean intensity of a whole view (mean of all channels of all pixels).
 fn mean_intensity(frame: &FrameView) -> f64 {
     let total: u64 = (0..frame.height)
-        .map(|y| frame.row(y).iter().map(|&b| u64::from(b)).sum::<u64>())
+        .map(|y| u64::from(frame.row(y).iter().map(|&b| u32::from(b)).sum::<u32>()))
         .sum();
     total as f64 / (3 * frame.width * frame.height) as f64
 }
@@ -349,7 +352,17 @@ mod tests {
         let bytes = first.to_bgr(2);
         let thresholds = auto_colour_thresholds(&first.view(&bytes, 2), 0).unwrap();
         let mut finder = StripFinder::new(thresholds, ThresholdSource::Automatic);
-        for beta in [0.4, 0.0, -1.2, 1.5707, -1.5707, 0.9, 1.5707963267948966] {
+        // Near-vertical strips on both sides of ±π/2, and exactly vertical.
+        let near_vertical = std::f64::consts::FRAC_PI_2 - 1e-4;
+        for beta in [
+            0.4,
+            0.0,
+            -1.2,
+            near_vertical,
+            -near_vertical,
+            0.9,
+            std::f64::consts::FRAC_PI_2,
+        ] {
             let c = plan_view(beta, (200.3, 150.2), 180.0, 12.0);
             let bytes = c.to_bgr(2);
             let strip = finder.measure(&c.view(&bytes, 2), 3).unwrap();
