@@ -1,0 +1,660 @@
+//! Calibration from the rest frame after the halt (thesis §3.2.4, fig. 3.3):
+//! the ends of the disk x_l and x_r, its near top rim z_t and the plate line
+//! z_base on the centre line, found automatically (the thesis picked them by
+//! hand) or given, and a check that the frames used really show the disk at rest.
+//!
+//! # How the points are found
+//!
+//! Everything brighter than γ is labelled; the disk is the largest bright blob
+//! that lies wholly inside the frame. Anything bright that touches the frame
+//! border (a light plate, a lit wall) is taken not to be the disk, so the disk
+//! must rest wholly inside the view. On a band of columns around the blob's
+//! centre, z_t is the first dark-to-bright step going down and the bright run
+//! below it ends at the disk's bottom, except on a dark, mirror-like plate whose
+//! reflection is brighter than γ: the run then holds the disk *and* its mirror
+//! image, about equally tall, and the plate line is the step down from the disk
+//! to its dimmer reflection near the middle of the run. A reflection as bright
+//! as the disk itself shows no such step and cannot be told from a thicker
+//! disk; give z_base in the [`CalibrationOverride`] then. x_l and x_r are the
+//! ends of the bright run along the rows just above z_base. Every point is
+//! placed at the local half level between the two sides of its step
+//! (sub-pixel).
+
+use serde::{Deserialize, Serialize};
+
+use super::VisionError;
+use super::components::{Component, Labeller};
+use super::profile::{check_frame, column_band_mean, half_level_crossing, row_band_mean};
+use super::rim::RimGauge;
+use super::threshold::Threshold;
+use crate::footage::FrameView;
+
+/// Settings of the side-view stage (calibration and rim height).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SideViewConfig {
+    /// γ ∈ (0, 1) on the mean channel value / 256; `None`: Otsu on the rest frame.
+    pub gamma: Option<f64>,
+    /// Half-width of the band of columns around the centre line, px: the band
+    /// is 2·half_width + 1 columns wide.
+    pub half_width_px: usize,
+    /// How far below the plate line the upward edge search starts, px (≥ 1).
+    pub search_below_px: f64,
+    /// Largest rim height searched for, px; `None`: up to the top of the frame.
+    pub max_rim_px: Option<f64>,
+    /// Largest movement of a calibration point (or of the rim edge) across the
+    /// rest frames that still counts as at rest, px.
+    pub rest_tolerance_px: f64,
+}
+
+impl Default for SideViewConfig {
+    fn default() -> Self {
+        Self {
+            gamma: None,
+            half_width_px: 2,
+            search_below_px: 2.0,
+            max_rim_px: None,
+            rest_tolerance_px: 0.5,
+        }
+    }
+}
+
+/// The calibration points of the rest frame, px in image coordinates (rows grow
+/// downward; see the module docs of [`vision`](super)).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Calibration {
+    /// Left end of the bottom of the disk.
+    pub x_l: f64,
+    /// Right end of the bottom of the disk.
+    pub x_r: f64,
+    /// Near top rim of the disk on the centre line.
+    pub z_t: f64,
+    /// Plate line: the bottom of the disk on the centre line at rest.
+    pub z_base: f64,
+}
+
+impl Calibration {
+    /// Centre line x_centre = (x_l + x_r)/2 (§3.2.4 as corrected in ERRATA).
+    pub fn x_centre(&self) -> f64 {
+        0.5 * (self.x_l + self.x_r)
+    }
+
+    /// Apparent thickness of the disk at rest on the centre line, z_base − z_t, px.
+    pub fn disk_height_px(&self) -> f64 {
+        self.z_base - self.z_t
+    }
+
+    /// Scale δ = 2H / (z_base − z_t), m/px: thesis eq. 3.10 as corrected in
+    /// ERRATA, with H the disk's half-thickness in metres.
+    pub fn metres_per_px(&self, half_thickness_m: f64) -> f64 {
+        2.0 * half_thickness_m / self.disk_height_px()
+    }
+
+    /// Checks that the points describe a disk inside a `width × height` frame.
+    pub fn validate(&self, width: usize, height: usize) -> Result<(), VisionError> {
+        let reason = if ![self.x_l, self.x_r, self.z_t, self.z_base]
+            .iter()
+            .all(|v| v.is_finite())
+        {
+            Some("points must be finite")
+        } else if self.x_r <= self.x_l {
+            Some("x_r must lie right of x_l")
+        } else if self.z_base <= self.z_t {
+            Some("z_base must lie below z_t (rows grow downward)")
+        } else if self.x_l < 0.0
+            || self.x_r > width as f64
+            || self.z_t < 0.0
+            || self.z_base > height as f64
+        {
+            Some("points must lie inside the frame")
+        } else {
+            None
+        };
+        match reason {
+            None => Ok(()),
+            Some(reason) => Err(VisionError::InvalidCalibration {
+                x_l: self.x_l,
+                x_r: self.x_r,
+                z_t: self.z_t,
+                z_base: self.z_base,
+                width,
+                height,
+                reason,
+            }),
+        }
+    }
+}
+
+/// Calibration points given by hand; each one given replaces the detected one.
+/// With all four given nothing is detected.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CalibrationOverride {
+    pub x_l: Option<f64>,
+    pub x_r: Option<f64>,
+    pub z_t: Option<f64>,
+    pub z_base: Option<f64>,
+}
+
+impl CalibrationOverride {
+    fn complete(&self) -> Option<Calibration> {
+        Some(Calibration {
+            x_l: self.x_l?,
+            x_r: self.x_r?,
+            z_t: self.z_t?,
+            z_base: self.z_base?,
+        })
+    }
+
+    fn apply(&self, detected: Calibration) -> Calibration {
+        Calibration {
+            x_l: self.x_l.unwrap_or(detected.x_l),
+            x_r: self.x_r.unwrap_or(detected.x_r),
+            z_t: self.z_t.unwrap_or(detected.z_t),
+            z_base: self.z_base.unwrap_or(detected.z_base),
+        }
+    }
+}
+
+impl From<Calibration> for CalibrationOverride {
+    fn from(c: Calibration) -> Self {
+        Self {
+            x_l: Some(c.x_l),
+            x_r: Some(c.x_r),
+            z_t: Some(c.z_t),
+            z_base: Some(c.z_base),
+        }
+    }
+}
+
+/// Where a calibration point came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PointSource {
+    Detected,
+    Given,
+}
+
+/// The resolved side-view calibration with its provenance.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationReport {
+    pub calibration: Calibration,
+    /// γ used, and how it was chosen.
+    pub threshold: Threshold,
+    /// Sources of x_l, x_r, z_t, z_base, in that order.
+    pub sources: [PointSource; 4],
+    /// Index of the rest frame the points were taken from (the last one given).
+    pub frame: usize,
+    /// How many frames the rest check compared (including the rest frame).
+    pub frames_checked: usize,
+}
+
+const POINT_NAMES: [&str; 4] = ["x_l", "x_r", "z_t", "z_base"];
+
+/// Calibrates on the last of `frames` (frames from the end of the clip, after
+/// the halt; `frames[0]` has clip index `first_index`) and checks that all of
+/// them show the disk at rest: every detected point, and the rim edge on the
+/// centre line, must stay within `config.rest_tolerance_px` of the last frame's.
+///
+/// γ is `config.gamma`, or Otsu's on the last frame.
+pub fn calibrate_at_rest(
+    frames: &[FrameView],
+    first_index: usize,
+    config: &SideViewConfig,
+    given: Option<&CalibrationOverride>,
+) -> Result<CalibrationReport, VisionError> {
+    let (reference, others) = frames.split_last().ok_or(VisionError::NoFrames)?;
+    let ref_index = first_index + others.len();
+    check_frame(reference, ref_index)?;
+    for (k, f) in others.iter().enumerate() {
+        check_frame(f, first_index + k)?;
+        if (f.width, f.height) != (reference.width, reference.height) {
+            return Err(VisionError::SizeMismatch {
+                frame: first_index + k,
+                width: f.width,
+                height: f.height,
+                expected_width: reference.width,
+                expected_height: reference.height,
+            });
+        }
+    }
+    if config.rest_tolerance_px.is_nan() || config.rest_tolerance_px <= 0.0 {
+        return Err(VisionError::InvalidSetting {
+            name: "rest_tolerance_px",
+            value: config.rest_tolerance_px,
+            reason: "must be positive",
+        });
+    }
+    let threshold = Threshold::given_or_otsu(config.gamma, reference, ref_index)?;
+    let given = given.copied().unwrap_or_default();
+    let given_flags = [given.x_l, given.x_r, given.z_t, given.z_base].map(|v| v.is_some());
+    let (calibration, detected) = match given.complete() {
+        Some(c) => (c, None),
+        None => {
+            let d = calibrate_frame(reference, ref_index, &threshold, config.half_width_px)?;
+            (given.apply(d), Some(d))
+        }
+    };
+    calibration.validate(reference.width, reference.height)?;
+    let gauge = RimGauge::new(
+        &calibration,
+        &threshold,
+        config,
+        reference.width,
+        reference.height,
+    )?;
+    let ref_rim = gauge.measure(reference, ref_index)?;
+
+    let tol = config.rest_tolerance_px;
+    for (k, f) in others.iter().enumerate() {
+        let index = first_index + k;
+        if let Some(d) = detected {
+            let here = calibrate_frame(f, index, &threshold, config.half_width_px)?;
+            let pairs = [
+                (here.x_l, d.x_l),
+                (here.x_r, d.x_r),
+                (here.z_t, d.z_t),
+                (here.z_base, d.z_base),
+            ];
+            for (p, ((a, b), is_given)) in pairs.iter().zip(given_flags).enumerate() {
+                if !is_given && (a - b).abs() > tol {
+                    return Err(not_at_rest(index, ref_index, POINT_NAMES[p], a - b, tol));
+                }
+            }
+        }
+        let rim = gauge.measure(f, index)?;
+        let shift = match (rim.z_rim_px(), ref_rim.z_rim_px()) {
+            (Some(a), Some(b)) => a - b,
+            (None, None) => 0.0,
+            _ => f64::INFINITY,
+        };
+        if shift.abs() > tol {
+            return Err(not_at_rest(index, ref_index, "the rim edge", shift, tol));
+        }
+    }
+    Ok(CalibrationReport {
+        calibration,
+        threshold,
+        sources: given_flags.map(|g| {
+            if g {
+                PointSource::Given
+            } else {
+                PointSource::Detected
+            }
+        }),
+        frame: ref_index,
+        frames_checked: frames.len(),
+    })
+}
+
+fn not_at_rest(
+    frame: usize,
+    reference: usize,
+    point: &'static str,
+    shift: f64,
+    tol: f64,
+) -> VisionError {
+    VisionError::NotAtRest {
+        frame,
+        reference,
+        point,
+        shift_px: shift.abs(),
+        tolerance_px: tol,
+    }
+}
+
+/// Smallest blob (pixels) that can be the disk.
+const MIN_DISK_PIXELS: usize = 16;
+/// Samples either side of a step used for its local levels.
+const REACH: usize = 3;
+/// A step inside the bright run counts as the plate line (disk → dimmer
+/// reflection) when it drops by at least this fraction of the run's contrast.
+const MIRROR_STEP_FRACTION: f32 = 0.2;
+/// Least contrast (0–255 intensity) between the disk and what lies below it:
+/// less, and the "disk" is a clump of noise.
+const MIN_CONTRAST: f32 = 20.0;
+
+/// Finds x_l, x_r, z_t and z_base on one frame of the disk at rest, with the
+/// band of columns 2·half_width + 1 wide (see the module docs for the method).
+pub fn calibrate_frame(
+    frame: &FrameView,
+    index: usize,
+    threshold: &Threshold,
+    half_width: usize,
+) -> Result<Calibration, VisionError> {
+    check_frame(frame, index)?;
+    let level = threshold.level();
+    let (w, h) = (frame.width, frame.height);
+    let sum_level = 3.0 * level;
+    let mut mask = Vec::with_capacity(w * h);
+    for y in 0..h {
+        mask.extend(
+            frame
+                .row(y)
+                .chunks_exact(3)
+                .map(|p| (u32::from(p[0]) + u32::from(p[1]) + u32::from(p[2])) as f32 > sum_level),
+        );
+    }
+    let blobs = Labeller::default().components(&mask, w, h, |c| {
+        !c.touches_border && c.pixels >= MIN_DISK_PIXELS
+    });
+    let disk = blobs.first().ok_or(VisionError::NoDisk {
+        frame: index,
+        gamma: threshold.gamma,
+    })?;
+
+    let mut x_centre = (disk.col_min + disk.col_max + 1) as f64 / 2.0;
+    let mut last = None;
+    // The blob's box centre is within a pixel of the true centre; one more pass
+    // on the refined centre line settles the band.
+    for _ in 0..2 {
+        let (x0, x1) = band(x_centre, half_width, w);
+        let (z_t, z_base) = vertical_points(frame, index, threshold, disk, x0, x1)?;
+        let (x_l, x_r) = horizontal_points(frame, index, level, disk, x_centre, z_t, z_base)?;
+        let cal = Calibration {
+            x_l,
+            x_r,
+            z_t,
+            z_base,
+        };
+        let same_band = cal.x_centre().floor() == x_centre.floor();
+        last = Some(cal);
+        if same_band {
+            break;
+        }
+        x_centre = cal.x_centre();
+    }
+    last.ok_or(VisionError::CalibrationPointNotFound {
+        frame: index,
+        point: "x_centre",
+    })
+}
+
+/// Columns `x0..x1` of the band of half-width `half_width` around `x_centre`,
+/// clipped to the frame.
+pub(crate) fn band(x_centre: f64, half_width: usize, width: usize) -> (usize, usize) {
+    let c = (x_centre.floor().max(0.0) as usize).min(width - 1);
+    (
+        c.saturating_sub(half_width),
+        (c + half_width + 1).min(width),
+    )
+}
+
+/// z_t and z_base on the band of columns `x0..x1`.
+fn vertical_points(
+    frame: &FrameView,
+    index: usize,
+    threshold: &Threshold,
+    disk: &Component,
+    x0: usize,
+    x1: usize,
+) -> Result<(f64, f64), VisionError> {
+    let level = threshold.level();
+    let missing = |point| VisionError::CalibrationPointNotFound {
+        frame: index,
+        point,
+    };
+    let y0 = disk.row_min.saturating_sub(REACH + 1);
+    let y1 = (disk.row_max + REACH + 2).min(frame.height);
+    let p: Vec<f32> = (y0..y1).map(|y| row_band_mean(frame, y, x0, x1)).collect();
+    let origin = y0 as f64;
+
+    let top = p.iter().position(|&v| v > level).filter(|&k| k > 0);
+    let top = top.ok_or_else(|| missing("z_t"))?;
+    let z_t = half_level_crossing(&p, top - 1, REACH, origin).ok_or_else(|| missing("z_t"))?;
+    let run_len = p[top..].iter().take_while(|&&v| v > level).count();
+    let bottom = top + run_len - 1;
+    if bottom + 1 >= p.len() {
+        return Err(missing("z_base"));
+    }
+    let z_bottom =
+        half_level_crossing(&p, bottom, REACH, origin).ok_or_else(|| missing("z_base"))?;
+
+    // A dimmer mirror image above γ: look for the step down near the middle.
+    let run = &p[top..=bottom];
+    let below = &p[bottom + 1..(bottom + 1 + REACH).min(p.len())];
+    let contrast = run.iter().copied().fold(f32::MIN, f32::max)
+        - below.iter().copied().fold(f32::MAX, f32::min);
+    if contrast < MIN_CONTRAST {
+        return Err(VisionError::NoDisk {
+            frame: index,
+            gamma: threshold.gamma,
+        });
+    }
+    let mid = 0.5 * (z_t + z_bottom) - origin - 0.5;
+    let half_window = 0.2 * (z_bottom - z_t);
+    let j_lo = ((mid - half_window).ceil().max(1.0) as usize).max(top + 1);
+    let j_hi = ((mid + half_window).floor().max(0.0) as usize).min(bottom.saturating_sub(1));
+    let step = (j_lo..=j_hi)
+        .map(|j| (j, p[j - 1] - p[j + 1]))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .filter(|&(_, drop)| drop >= MIRROR_STEP_FRACTION * contrast);
+    let z_base = match step {
+        Some((j, _)) => {
+            // The pair (j−1, j) or (j, j+1) that holds most of the drop.
+            let i = if p[j - 1] - p[j] >= p[j] - p[j + 1] {
+                j - 1
+            } else {
+                j
+            };
+            half_level_crossing(&p, i, REACH, origin).ok_or_else(|| missing("z_base"))?
+        }
+        None => z_bottom,
+    };
+    Ok((z_t, z_base))
+}
+
+/// x_l and x_r: the ends of the bright run through the centre column, on the
+/// mean of the (up to three) whole rows just above the plate line.
+fn horizontal_points(
+    frame: &FrameView,
+    index: usize,
+    level: f32,
+    disk: &Component,
+    x_centre: f64,
+    z_t: f64,
+    z_base: f64,
+) -> Result<(f64, f64), VisionError> {
+    let missing = |point| VisionError::CalibrationPointNotFound {
+        frame: index,
+        point,
+    };
+    let rows_end = z_base.floor().max(0.0) as usize;
+    let rows = (((z_base - z_t) / 4.0).floor() as usize).clamp(1, 3);
+    let rows_start = rows_end.checked_sub(rows).ok_or_else(|| missing("x_l"))?;
+    let c0 = disk.col_min.saturating_sub(REACH + 1);
+    let c1 = (disk.col_max + REACH + 2).min(frame.width);
+    let q: Vec<f32> = (c0..c1)
+        .map(|x| column_band_mean(frame, x, rows_start, rows_end))
+        .collect();
+    let origin = c0 as f64;
+    let kc = (x_centre.floor() as usize)
+        .checked_sub(c0)
+        .filter(|&k| k < q.len() && q[k] > level)
+        .ok_or_else(|| missing("x_l"))?;
+    let left = q[..=kc].iter().rev().take_while(|&&v| v > level).count();
+    let k_left = kc + 1 - left;
+    let x_l = k_left
+        .checked_sub(1)
+        .and_then(|i| half_level_crossing(&q, i, REACH, origin))
+        .ok_or_else(|| missing("x_l"))?;
+    let right = q[kc..].iter().take_while(|&&v| v > level).count();
+    let k_right = kc + right - 1;
+    let x_r = (k_right + 1 < q.len())
+        .then(|| half_level_crossing(&q, k_right, REACH, origin))
+        .flatten()
+        .ok_or_else(|| missing("x_r"))?;
+    Ok((x_l, x_r))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vision::synthetic::{Canvas, SideScene, grey};
+
+    // Every calibration point is a half-level crossing of an exactly
+    // anti-aliased edge: ≤ 0.09 px of interpolation error plus 8-bit rounding.
+    // The brief asks for 0.5 px; 0.1 px is what the method should give.
+    const TOL: f64 = 0.1;
+
+    fn assert_points(cal: &Calibration, s: &SideScene) {
+        let truth = [s.x_l, s.x_r, s.z_t(), s.z_base];
+        let got = [cal.x_l, cal.x_r, cal.z_t, cal.z_base];
+        for ((name, t), g) in POINT_NAMES.iter().zip(truth).zip(got) {
+            assert!((t - g).abs() < TOL, "{name}: truth {t}, found {g}");
+        }
+    }
+
+    fn calibrate_one(c: &Canvas) -> CalibrationReport {
+        let bytes = c.to_bgr(5);
+        calibrate_at_rest(&[c.view(&bytes, 5)], 900, &SideViewConfig::default(), None).unwrap()
+    }
+
+    #[test]
+    fn dark_plate_with_bright_reflection() {
+        // The mirror image (grey 142) is brighter than Otsu's γ: the bright run
+        // holds disk and reflection, and z_base is the step between them.
+        let s = SideScene::standard();
+        let report = calibrate_one(&s.dark_plate(0.0, 0.55));
+        assert_points(&report.calibration, &s);
+        assert_eq!(report.threshold.source, crate::vision::GammaSource::Otsu);
+        assert_eq!(report.sources, [PointSource::Detected; 4]);
+        assert_eq!(report.frame, 900);
+        // Eq. 3.10 (corrected): δ = 2H/(z_base − z_t).
+        let delta = report.calibration.metres_per_px(0.00635);
+        // z_t and z_base each within 0.1 px of truth: 0.2 px in 40.35 px, 0.5 %.
+        let truth = 0.0127 / s.thickness;
+        assert!(
+            (delta / truth - 1.0).abs() < 0.005,
+            "δ {delta}, truth {truth}"
+        );
+        let x_centre = report.calibration.x_centre();
+        assert!((x_centre - 0.5 * (s.x_l + s.x_r)).abs() < TOL);
+    }
+
+    #[test]
+    fn dark_plate_with_dim_reflection() {
+        let s = SideScene::standard();
+        let report = calibrate_one(&s.dark_plate(0.0, 0.12));
+        assert_points(&report.calibration, &s);
+    }
+
+    #[test]
+    fn light_plate_with_shadow() {
+        let s = SideScene::standard();
+        let report = calibrate_one(&s.light_plate(0.0, 3.0));
+        assert_points(&report.calibration, &s);
+    }
+
+    #[test]
+    fn given_points_replace_detected_ones() {
+        let s = SideScene::standard();
+        let c = s.dark_plate(0.0, 0.55);
+        let bytes = c.to_bgr(0);
+        let given = CalibrationOverride {
+            z_base: Some(191.0),
+            ..Default::default()
+        };
+        let config = SideViewConfig {
+            gamma: Some(0.3),
+            ..Default::default()
+        };
+        let report = calibrate_at_rest(&[c.view(&bytes, 0)], 0, &config, Some(&given)).unwrap();
+        assert_eq!(report.calibration.z_base, 191.0);
+        assert!((report.calibration.z_t - s.z_t()).abs() < TOL);
+        assert_eq!(report.threshold.source, crate::vision::GammaSource::Given);
+        assert_eq!(report.sources[3], PointSource::Given);
+        assert_eq!(report.sources[0], PointSource::Detected);
+        // All four given: nothing is detected, even on an empty frame.
+        let blank = Canvas::new(64, 48, grey(20.0)).to_bgr(0);
+        let all = CalibrationOverride::from(Calibration {
+            x_l: 10.0,
+            x_r: 50.0,
+            z_t: 20.0,
+            z_base: 30.0,
+        });
+        let view = Canvas::new(64, 48, grey(20.0)).view(&blank, 0);
+        let report = calibrate_at_rest(&[view], 0, &config, Some(&all)).unwrap();
+        assert_eq!(report.sources, [PointSource::Given; 4]);
+    }
+
+    #[test]
+    fn empty_frames_have_no_disk() {
+        for amplitude in [0.0, 6.0] {
+            let mut c = Canvas::new(320, 240, grey(30.0));
+            c.noise(amplitude, 3);
+            let bytes = c.to_bgr(0);
+            let err = calibrate_at_rest(&[c.view(&bytes, 0)], 41, &SideViewConfig::default(), None)
+                .unwrap_err();
+            assert!(
+                matches!(err, VisionError::NoDisk { frame: 41, .. }),
+                "noise {amplitude}: {err}"
+            );
+        }
+        let err = calibrate_at_rest(&[], 0, &SideViewConfig::default(), None).unwrap_err();
+        assert_eq!(err, VisionError::NoFrames);
+    }
+
+    #[test]
+    fn rest_check_passes_still_frames_and_fails_moving_ones() {
+        let s = SideScene::standard();
+        let config = SideViewConfig::default();
+        // Still disk, fresh sensor noise in every frame (±3 grey levels).
+        let still: Vec<Vec<u8>> = (0..4)
+            .map(|k| {
+                let mut c = s.dark_plate(0.0, 0.55);
+                c.noise(3.0, k);
+                c.to_bgr(0)
+            })
+            .collect();
+        let canvas = s.dark_plate(0.0, 0.55);
+        let views: Vec<FrameView> = still.iter().map(|b| canvas.view(b, 0)).collect();
+        let report = calibrate_at_rest(&views, 100, &config, None).unwrap();
+        assert_eq!(report.frames_checked, 4);
+        assert_eq!(report.frame, 103);
+
+        // Still rocking: the rim is 1.5 px up in the first frame.
+        let moving = [
+            s.dark_plate(1.5, 0.55).to_bgr(0),
+            s.dark_plate(0.0, 0.55).to_bgr(0),
+            s.dark_plate(0.0, 0.55).to_bgr(0),
+        ];
+        let views: Vec<FrameView> = moving.iter().map(|b| canvas.view(b, 0)).collect();
+        let err = calibrate_at_rest(&views, 100, &config, None).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                VisionError::NotAtRest {
+                    frame: 100,
+                    reference: 102,
+                    ..
+                }
+            ),
+            "{err}"
+        );
+
+        // Still sliding: 2 px to the right between frames.
+        let slid = SideScene {
+            x_l: s.x_l + 2.0,
+            x_r: s.x_r + 2.0,
+            ..s
+        };
+        let frames = [
+            slid.dark_plate(0.0, 0.55).to_bgr(0),
+            s.dark_plate(0.0, 0.55).to_bgr(0),
+        ];
+        let views: Vec<FrameView> = frames.iter().map(|b| canvas.view(b, 0)).collect();
+        let err = calibrate_at_rest(&views, 7, &config, None).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                VisionError::NotAtRest {
+                    frame: 7,
+                    point: "x_l",
+                    ..
+                }
+            ),
+            "{err}"
+        );
+    }
+}

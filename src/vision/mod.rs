@@ -1,0 +1,56 @@
+//! Vision: the second stage of the data flow, frames → pixel measurements.
+//!
+//! Input is a [`FrameView`](crate::footage::FrameView) per frame, as `footage`
+//! decodes it; output is, per frame, the rim height `z_rim` in px
+//! ([`RimHeight`]) and, for two-view clips, the strip angle β ([`Strip`]).
+//! The conversion to metres happens once, with [`Calibration::metres_per_px`]
+//! (thesis eq. 3.10 as corrected in ERRATA), at the boundary to `signal`.
+//! This module neither reads files nor prints.
+//!
+//! # Side view (thesis §3.2.3–3.2.5)
+//!
+//! 1. [`calibrate_at_rest`] looks at the last frames, after the halt, with the
+//!    disk lying flat: it picks γ ([`Threshold`]: given, or Otsu on the rest
+//!    frame), finds x_l, x_r, z_t and z_base ([`Calibration`], each
+//!    overridable by hand as the thesis did), and fails with
+//!    [`VisionError::NotAtRest`] when the frames differ.
+//! 2. [`RimGauge::measure`] then reads one frame: it touches only a band of
+//!    columns around the centre line x_centre = (x_l + x_r)/2 and returns
+//!    z_rim = z_base − (bottom edge row), sub-pixel.
+//!
+//! # Two views (thesis §3.3.2)
+//!
+//! [`find_split_row`] and [`split_views`] cut a portrait frame into the mirror
+//! side view (top, measured as above) and the plan view (bottom), in which
+//! [`StripFinder`] finds the red strip (eq. 3.23 on RGB normalised by the image
+//! mean, largest connected component) and its principal axis (eq. 3.24).
+//!
+//! # Coordinates
+//!
+//! Image coordinates are continuous, in px: pixel (column c, row r) covers
+//! [c, c+1) × [r, r+1), so its centre is (c + ½, r + ½). Rows grow downward;
+//! heights such as z_rim are positive upward. Intensities are the mean of the
+//! three channels, 0–255; the thesis's γ is that mean divided by 256.
+
+mod calibration;
+mod components;
+mod error;
+mod profile;
+mod rim;
+mod threshold;
+mod two_view;
+
+#[cfg(test)]
+mod synthetic;
+
+pub use calibration::{
+    Calibration, CalibrationOverride, CalibrationReport, PointSource, SideViewConfig,
+    calibrate_at_rest, calibrate_frame,
+};
+pub use error::VisionError;
+pub use rim::{RimGauge, RimHeight};
+pub use threshold::{GammaSource, Threshold};
+pub use two_view::{
+    ColourThresholds, Strip, StripFinder, ThresholdSource, auto_colour_thresholds, find_split_row,
+    split_views,
+};

@@ -1,0 +1,473 @@
+//! Two-view clips (thesis §3.3.2, figs. 3.19–3.20): a portrait frame whose top
+//! part is the side view seen in a mirror and whose bottom part is the plan
+//! view of the disk with a red strip across its top face.
+//!
+//! The top part goes through the side-view stage as a frame of its own
+//! ([`split_views`] makes it a [`FrameView`] without copying); the bottom part
+//! gives the strip angle β by eq. 3.23 (colour thresholds on RGB normalised
+//! by the image mean), the largest connected component (as MATLAB's
+//! BWCONNCOMP) and its first principal component (eq. 3.24).
+//!
+//! β lies in (−π/2, π/2]: a strip has no head, so β and β + π are the same
+//! strip. Making β continuous across ±π/2 is the signal stage's job.
+//!
+//! # Angle convention
+//!
+//! β is measured from the image's x axis (columns, rightward) towards the
+//! image's *up* direction, i.e. counter-clockwise as the frame is displayed
+//! (the thesis's "position in the image" with y pointing up). It is the angle
+//! of the strip as seen in the frame: a mirror or camera that flips the image
+//! flips the sign of β̇.
+
+use serde::{Deserialize, Serialize};
+
+use super::VisionError;
+use super::components::Labeller;
+use super::profile::check_frame;
+use crate::footage::{ChannelOrder, FrameView};
+
+/// The top (mirror side view, rows `0..split_row`) and bottom (plan view, rows
+/// `split_row..height`) parts of a two-view frame, as views of the same bytes.
+pub fn split_views<'a>(
+    frame: &FrameView<'a>,
+    split_row: usize,
+    index: usize,
+) -> Result<(FrameView<'a>, FrameView<'a>), VisionError> {
+    check_frame(frame, index)?;
+    if split_row == 0 || split_row >= frame.height {
+        return Err(VisionError::InvalidSetting {
+            name: "split_row",
+            value: split_row as f64,
+            reason: "the split row must leave rows above and below it",
+        });
+    }
+    let top = FrameView {
+        height: split_row,
+        ..*frame
+    };
+    let bottom = FrameView {
+        height: frame.height - split_row,
+        data: &frame.data[split_row * frame.stride..],
+        ..*frame
+    };
+    Ok((top, bottom))
+}
+
+/// Finds the row that separates the mirror side view (top) from the plan view
+/// (bottom), for clips whose configuration does not give it.
+///
+/// Assumption: the two views are separated by a full-width band of dark,
+/// uniform rows (the mirror's edge or frame, a black divider), somewhere in the
+/// middle three quarters of the frame. Each row there is scored by its mean
+/// intensity plus its mean absolute deviation; the best row must score at most
+/// half the median row's and be dark (score ≤ 64 of 255). The middle row of the
+/// run of adjacent rows scoring at most 1.5 × best + 2 is returned. Scans the whole frame:
+/// call it once per clip, e.g. on the calibration frame.
+pub fn find_split_row(frame: &FrameView, index: usize) -> Result<usize, VisionError> {
+    check_frame(frame, index)?;
+    let (w, h) = (frame.width, frame.height);
+    let (lo, hi) = (h / 8, h - h / 8);
+    if hi <= lo + 2 {
+        return Err(VisionError::NoSplit { frame: index });
+    }
+    let scores: Vec<f32> = (lo..hi)
+        .map(|y| {
+            let row = frame.row(y);
+            let values = row
+                .chunks_exact(3)
+                .map(|p| (f32::from(p[0]) + f32::from(p[1]) + f32::from(p[2])) / 3.0);
+            let mean = values.clone().sum::<f32>() / w as f32;
+            let dev = values.map(|v| (v - mean).abs()).sum::<f32>() / w as f32;
+            mean + dev
+        })
+        .collect();
+    let mut sorted = scores.clone();
+    sorted.sort_by(f32::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    let (best, best_score) = scores
+        .iter()
+        .copied()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .ok_or(VisionError::NoSplit { frame: index })?;
+    if best_score > 0.5 * median || best_score > 64.0 {
+        return Err(VisionError::NoSplit { frame: index });
+    }
+    // Rows nearly as dark and uniform as the best one belong to the divider.
+    let near = 1.5 * best_score + 2.0;
+    let first = (0..=best)
+        .rev()
+        .take_while(|&k| scores[k] <= near)
+        .last()
+        .unwrap_or(best);
+    let last = (best..scores.len())
+        .take_while(|&k| scores[k] <= near)
+        .last()
+        .unwrap_or(best);
+    Ok(lo + (first + last) / 2)
+}
+
+/// Colour thresholds of eq. 3.23 on the channels divided by the image's mean
+/// intensity: a pixel is strip when R > r, G < g and B < b.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ColourThresholds {
+    pub r: f64,
+    pub g: f64,
+    pub b: f64,
+}
+
+/// How the colour thresholds were chosen: recorded as provenance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ThresholdSource {
+    Given,
+    /// [`auto_colour_thresholds`] on a plan-view frame.
+    Automatic,
+}
+
+/// The strip found in one plan-view frame.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Strip {
+    /// Strip angle β ∈ (−π/2, π/2], rad (eq. 3.24; see the module's convention).
+    pub beta: f64,
+    /// Pixels in the largest connected component (the strip).
+    pub pixels: usize,
+    /// Pixels that passed the colour thresholds (strip plus isolated specks).
+    pub candidates: usize,
+    /// Centroid of the strip, px, image coordinates of the plan view.
+    pub centroid_px: [f64; 2],
+    /// √(1 − λ₂/λ₁) of the strip's covariance: 1 for a line, 0 for a disc.
+    /// An angle from a blob with eccentricity well below 1 is not to be trusted.
+    pub eccentricity: f64,
+    /// Standard deviations along the principal axes, √λ₁ and √λ₂, px
+    /// (a strip of length L and width W gives L/√12 and W/√12).
+    pub axes_sd_px: [f64; 2],
+}
+
+/// Finds the strip frame after frame, reusing its buffers.
+#[derive(Debug)]
+pub struct StripFinder {
+    thresholds: ColourThresholds,
+    source: ThresholdSource,
+    min_pixels: usize,
+    mask: Vec<bool>,
+    labeller: Labeller,
+}
+
+impl StripFinder {
+    /// Default smallest strip, px.
+    pub const MIN_PIXELS: usize = 20;
+
+    pub fn new(thresholds: ColourThresholds, source: ThresholdSource) -> Self {
+        Self {
+            thresholds,
+            source,
+            min_pixels: Self::MIN_PIXELS,
+            mask: Vec::new(),
+            labeller: Labeller::default(),
+        }
+    }
+
+    /// The smallest component accepted as the strip.
+    pub fn with_min_pixels(mut self, min_pixels: usize) -> Self {
+        self.min_pixels = min_pixels.max(2);
+        self
+    }
+
+    pub fn thresholds(&self) -> (ColourThresholds, ThresholdSource) {
+        (self.thresholds, self.source)
+    }
+
+    /// β and the strip's statistics in one plan-view frame.
+    pub fn measure(&mut self, plan: &FrameView, index: usize) -> Result<Strip, VisionError> {
+        check_frame(plan, index)?;
+        let (w, h) = (plan.width, plan.height);
+        let mean = mean_intensity(plan);
+        let [rt, gt, bt] =
+            [self.thresholds.r, self.thresholds.g, self.thresholds.b].map(|t| (t * mean) as f32);
+        self.mask.clear();
+        self.mask.reserve(w * h);
+        let (ri, bi) = match plan.order {
+            ChannelOrder::Rgb => (0, 2),
+            ChannelOrder::Bgr => (2, 0),
+        };
+        for y in 0..h {
+            self.mask.extend(
+                plan.row(y).chunks_exact(3).map(|p| {
+                    f32::from(p[ri]) > rt && f32::from(p[1]) < gt && f32::from(p[bi]) < bt
+                }),
+            );
+        }
+        let candidates = self.mask.iter().filter(|&&on| on).count();
+        let no_strip = |pixels| VisionError::NoStrip {
+            frame: index,
+            pixels,
+            min_pixels: self.min_pixels,
+        };
+        if candidates < self.min_pixels {
+            return Err(no_strip(candidates));
+        }
+        let comps = self.labeller.components(&self.mask, w, h, |_| true);
+        let strip = comps.first().ok_or_else(|| no_strip(0))?;
+        if strip.pixels < self.min_pixels {
+            return Err(no_strip(strip.pixels));
+        }
+        let (cx, cy) = strip.centroid();
+        let (sxx, syy, sxy_image) = strip.covariance();
+        let (beta, l1, l2) = principal_axis(sxx, syy, -sxy_image);
+        Ok(Strip {
+            beta,
+            pixels: strip.pixels,
+            candidates,
+            centroid_px: [cx, cy],
+            eccentricity: if l1 > 0.0 {
+                (1.0 - l2 / l1).max(0.0).sqrt()
+            } else {
+                0.0
+            },
+            axes_sd_px: [l1.max(0.0).sqrt(), l2.max(0.0).sqrt()],
+        })
+    }
+}
+
+/// Angle of the first principal component of a 2-D covariance (x right, y up)
+/// in (−π/2, π/2], eq. 3.24, with the eigenvalues λ₁ ≥ λ₂.
+fn principal_axis(sxx: f64, syy: f64, sxy: f64) -> (f64, f64, f64) {
+    let half_diff = 0.5 * (sxx - syy);
+    let root = half_diff.hypot(sxy);
+    let centre = 0.5 * (sxx + syy);
+    let mut beta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    if beta <= -std::f64::consts::FRAC_PI_2 {
+        beta += std::f64::consts::PI;
+    }
+    (beta, centre + root, centre - root)
+}
+
+/// Mean intensity of a whole view (mean of all channels of all pixels).
+fn mean_intensity(frame: &FrameView) -> f64 {
+    let total: u64 = (0..frame.height)
+        .map(|y| u64::from(frame.row(y).iter().map(|&b| u32::from(b)).sum::<u32>()))
+        .sum();
+    total as f64 / (3 * frame.width * frame.height) as f64
+}
+
+/// Colour thresholds (eq. 3.23) chosen from one plan-view frame, for clips whose
+/// configuration does not give them.
+///
+/// With every channel divided by the image mean, the pixels are split by
+/// Otsu's method on their redness r − max(g, b); the redder class is the strip.
+/// r_thresh lies halfway between the strip's mean r and the rest's; g_thresh
+/// and b_thresh halfway between the strip's mean and that of the non-strip
+/// pixels bright enough to pass r_thresh (the grey or white top face), or of
+/// the rest when none is.
+pub fn auto_colour_thresholds(
+    plan: &FrameView,
+    index: usize,
+) -> Result<ColourThresholds, VisionError> {
+    check_frame(plan, index)?;
+    let mean = mean_intensity(plan);
+    let no_strip = |pixels| VisionError::NoStrip {
+        frame: index,
+        pixels,
+        min_pixels: StripFinder::MIN_PIXELS,
+    };
+    if mean <= 0.0 {
+        return Err(no_strip(0));
+    }
+    let pixels: Vec<[f64; 3]> = (0..plan.height)
+        .flat_map(|y| (0..plan.width).map(move |x| (x, y)))
+        .map(|(x, y)| plan.rgb(x, y).map(|c| f64::from(c) / mean))
+        .collect();
+    let redness = |p: &[f64; 3]| p[0] - p[1].max(p[2]);
+    // Redness lies in [−255/mean, 255/mean]; 1024 bins resolve it finely.
+    let span = 255.0 / mean;
+    const BINS: usize = 1024;
+    let bin = |d: f64| (((d + span) / (2.0 * span)) * (BINS - 1) as f64).round() as usize;
+    let mut hist = vec![0u64; BINS];
+    for p in &pixels {
+        hist[bin(redness(p)).min(BINS - 1)] += 1;
+    }
+    let cut = super::threshold::otsu_level(&hist).ok_or_else(|| no_strip(0))?;
+    let is_red = |p: &[f64; 3]| bin(redness(p)) as f64 > cut;
+    let mean_of = |sel: &dyn Fn(&[f64; 3]) -> bool| {
+        let (mut s, mut n) = ([0.0; 3], 0usize);
+        for p in pixels.iter().filter(|p| sel(p)) {
+            for c in 0..3 {
+                s[c] += p[c];
+            }
+            n += 1;
+        }
+        (s.map(|v| v / n.max(1) as f64), n)
+    };
+    let (red, n_red) = mean_of(&is_red);
+    let (rest, n_rest) = mean_of(&|p| !is_red(p));
+    // The strip is a minority that is clearly red.
+    if n_red < StripFinder::MIN_PIXELS || n_rest < n_red || redness(&red) < 0.2 {
+        return Err(no_strip(n_red));
+    }
+    let r = 0.5 * (red[0] + rest[0]);
+    let (bright, n_bright) = mean_of(&|p| !is_red(p) && p[0] > r);
+    let others = if n_bright > 0 { bright } else { rest };
+    Ok(ColourThresholds {
+        r,
+        g: 0.5 * (red[1] + others[1]),
+        b: 0.5 * (red[2] + others[2]),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vision::synthetic::{Canvas, SideScene, grey};
+
+    const RED: [f64; 3] = [205.0, 45.0, 40.0];
+
+    /// Plan view: a grey disk on a dark plate, a red strip of `length × width`
+    /// px through (cx, cy) at angle β (counter-clockwise from +x, y up).
+    fn plan_view(beta: f64, (cx, cy): (f64, f64), length: f64, width: f64) -> Canvas {
+        let (w, h) = (400, 300);
+        let mut c = Canvas::new(w, h, grey(30.0));
+        let (dx, dy) = (200.0, 150.0);
+        c.shape(
+            (60.0, 10.0, 340.0, 290.0),
+            8,
+            |x, y| (x - dx).hypot(y - dy) < 135.0,
+            grey(150.0),
+        );
+        let (ux, uy) = (beta.cos(), -beta.sin());
+        let strip = |x: f64, y: f64| {
+            let (rx, ry) = (x - cx, y - cy);
+            let along = rx * ux + ry * uy;
+            let across = -rx * uy + ry * ux;
+            along.abs() < 0.5 * length && across.abs() < 0.5 * width
+        };
+        let r = 0.5 * length + width;
+        c.shape((cx - r, cy - r, cx + r, cy + r), 8, strip, RED);
+        c
+    }
+
+    #[test]
+    fn strip_angle_by_pca() {
+        let first = plan_view(0.4, (200.3, 150.2), 180.0, 12.0);
+        let bytes = first.to_bgr(2);
+        let thresholds = auto_colour_thresholds(&first.view(&bytes, 2), 0).unwrap();
+        let mut finder = StripFinder::new(thresholds, ThresholdSource::Automatic);
+        // Near-vertical strips on both sides of ±π/2, and exactly vertical.
+        let near_vertical = std::f64::consts::FRAC_PI_2 - 1e-4;
+        for beta in [
+            0.4,
+            0.0,
+            -1.2,
+            near_vertical,
+            -near_vertical,
+            0.9,
+            std::f64::consts::FRAC_PI_2,
+        ] {
+            let c = plan_view(beta, (200.3, 150.2), 180.0, 12.0);
+            let bytes = c.to_bgr(2);
+            let strip = finder.measure(&c.view(&bytes, 2), 3).unwrap();
+            // β in (−π/2, π/2]: a strip at −π/2 + ε is the same as one at π/2 + ε.
+            let mut err = (strip.beta - beta).rem_euclid(std::f64::consts::PI);
+            if err > std::f64::consts::FRAC_PI_2 {
+                err -= std::f64::consts::PI;
+            }
+            // The thesis's noise floor for β at rest is 5e-3 rad (§3.3.2).
+            assert!(err.abs() < 0.005, "β {beta}: found {}", strip.beta);
+            assert!(strip.beta > -std::f64::consts::FRAC_PI_2);
+            assert!(strip.beta <= std::f64::consts::FRAC_PI_2);
+            // 180 × 12 px strip: about 2160 pixels; a line-like blob.
+            assert!(
+                (strip.pixels as f64 - 2160.0).abs() < 100.0,
+                "{}",
+                strip.pixels
+            );
+            assert!(strip.eccentricity > 0.99);
+            assert!((strip.axes_sd_px[0] - 180.0 / 12f64.sqrt()).abs() < 1.0);
+            // Binarising moves each end of the strip by up to ½ px.
+            assert!((strip.centroid_px[0] - 200.3).abs() < 0.5, "{strip:?}");
+        }
+    }
+
+    #[test]
+    fn isolated_specks_are_dropped_and_missing_strips_reported() {
+        let mut c = plan_view(-0.3, (190.0, 160.0), 150.0, 10.0);
+        // Red specks away from the strip, as the thesis found (fig. 3.20).
+        for (x, y) in [(120.0, 80.0), (280.0, 230.0), (300.0, 100.0)] {
+            c.shape((x, y, x + 3.0, y + 3.0), 1, |_, _| true, RED);
+        }
+        let bytes = c.to_bgr(0);
+        let thresholds = ColourThresholds {
+            r: 1.5,
+            g: 1.0,
+            b: 1.0,
+        };
+        let mut finder = StripFinder::new(thresholds, ThresholdSource::Given);
+        let strip = finder.measure(&c.view(&bytes, 0), 0).unwrap();
+        assert_eq!(strip.candidates, strip.pixels + 27);
+        assert!((strip.beta + 0.3).abs() < 0.005);
+
+        let bare = plan_view(0.0, (200.0, 150.0), 0.0, 0.0);
+        let bytes = bare.to_bgr(0);
+        let err = finder.measure(&bare.view(&bytes, 0), 17).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                VisionError::NoStrip {
+                    frame: 17,
+                    pixels: 0,
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        let err = auto_colour_thresholds(&bare.view(&bytes, 0), 17).unwrap_err();
+        assert!(
+            matches!(err, VisionError::NoStrip { frame: 17, .. }),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn split_between_side_and_plan_views() {
+        // Portrait two-view frame: side view (rows 0..300), a black divider
+        // (rows 300..312), plan view (rows 312..612).
+        let side = SideScene::standard();
+        let (top, plan) = (
+            side.dark_plate(3.0, 0.55),
+            plan_view(0.7, (200.0, 150.0), 180.0, 12.0),
+        );
+        let w = 400;
+        let mut bytes = Vec::new();
+        let top_bytes = top.to_bgr(0);
+        for r in 0..300 {
+            // The side view's middle 400 columns, rows 0..300 (the disk is in them).
+            bytes.extend_from_slice(&top_bytes[r * 3 * top.w + 3 * 120..r * 3 * top.w + 3 * 520]);
+        }
+        bytes.extend(std::iter::repeat_n(4u8, 12 * 3 * w));
+        bytes.extend(plan.to_bgr(0));
+        let frame = FrameView {
+            width: w,
+            height: 612,
+            stride: 3 * w,
+            order: crate::footage::ChannelOrder::Bgr,
+            data: &bytes,
+        };
+        let split = find_split_row(&frame, 0).unwrap();
+        assert!((300..312).contains(&split), "split {split}");
+        let (upper, lower) = split_views(&frame, split, 0).unwrap();
+        assert_eq!(upper.height + lower.height, 612);
+        // The bottom view measures the strip as the plan view alone does.
+        let thresholds = auto_colour_thresholds(&lower, 0).unwrap();
+        let strip = StripFinder::new(thresholds, ThresholdSource::Automatic)
+            .measure(&lower, 0)
+            .unwrap();
+        assert!((strip.beta - 0.7).abs() < 0.005);
+        // A frame without a divider has no split.
+        let plain = plan.to_bgr(0);
+        assert!(matches!(
+            find_split_row(&plan.view(&plain, 0), 9),
+            Err(VisionError::NoSplit { frame: 9 })
+        ));
+        assert!(split_views(&frame, 0, 0).is_err());
+    }
+}
