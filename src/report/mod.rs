@@ -4,6 +4,7 @@
 
 pub mod plot;
 pub mod simulation;
+pub mod study_plots;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
