@@ -5,5 +5,6 @@ pub mod footage;
 pub mod model;
 pub mod report;
 pub mod reproduce;
+pub mod stats;
 pub mod study;
 pub mod vision;

@@ -5,6 +5,7 @@
 pub mod html;
 pub mod plot;
 pub mod simulation;
+pub mod study_plots;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

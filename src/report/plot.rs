@@ -234,7 +234,7 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PlotError> {
 }
 
 /// Registers the embedded font with plotters once per process.
-fn ensure_font() -> Result<(), String> {
+pub(crate) fn ensure_font() -> Result<(), String> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         // Also register the other generic families so nothing falls through to a
