@@ -5,6 +5,7 @@
 pub mod html;
 pub mod plot;
 pub mod simulation;
+pub mod study;
 pub mod study_plots;
 
 use std::io::Write;
@@ -31,6 +32,9 @@ pub enum ReportError {
         /// Why.
         reason: String,
     },
+    /// A figure or table that could not be made from its inputs.
+    #[error("cannot draw a figure: {0}")]
+    Plot(String),
 }
 
 fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
