@@ -327,8 +327,8 @@ pub const TABLE_4_1_TIME_TOLERANCE: f64 = 1e-4;
 /// Stopping angle of the Table 4.1 runs [rad] (the thesis: 1e-10, §4.3.1). Models with
 /// n > 1 fall flat with ψ̇ growing without bound (ψ̇² ≈ 1/(aφ), eq. 4.40), so every
 /// decade of φ below 1e-4 costs more precession cycles (and slip phases) than the
-/// last, while it moves the end by about a millisecond and E by less than 1e-4 of
-/// E(0). The fitted n does not depend on the angle between 1e-4 and 1e-10
+/// last, while below 1e-6 rad the end moves by a few milliseconds and E is below
+/// 1e-4 of E(0). The fitted n does not depend on the angle between 1e-4 and 1e-10
 /// (tests/simulator.rs, `table_4_1_exponent_does_not_depend_on_stopping_angle`;
 /// BENCHMARKS.md). The contour-like models end on θ̇ = 0 at φ ≈ 3e-5 before
 /// reaching it.

@@ -1,6 +1,9 @@
-//! The hybrid rolling/slipping simulation of thesis §4.3.1: integrate one mode with
-//! DOP853 (tolerances 1e-12) until an event, locate the event by re-integrating
-//! from the last accepted step, switch mode or stop, repeat.
+//! The hybrid rolling/slipping simulation of thesis §4.3.1: integrate one mode
+//! (tolerances 1e-12) until an event, locate the event by re-integrating from the last
+//! accepted step, switch mode or stop, repeat. Rolling is integrated with DOP853;
+//! slipping, which is stiff at small slip speeds, starts with the Rosenbrock method
+//! RODAS4 and changes to DOP853 once the friction mode is no longer stiff
+//! ([`integrate_slipping`]).
 //!
 //! Events (each located to 1e-13 in scaled time, well inside the thesis's 1e-10):
 //! * rolling → slipping when |F|/N reaches μ (eq. 4.33); the slip is seeded with
