@@ -287,19 +287,19 @@ fn sgn(x: f64) -> f64 {
 }
 
 /// Eq. (4.62): `q = (−v sign(θ̇) cos φ, −u sign(φ̇), v sign(θ̇) sin φ)`, the moment of a
-/// centre of pressure offset by `v` along `y^I` and `u` along `x^I` (scaled by R).
+/// centre of pressure offset by `v` along `y^I` and `u` along `x^I` (scaled by R);
+/// `st` is sign(θ̇).
 #[inline]
-fn offset_q(r: &Rates, v: f64, u: f64) -> Vector3<f64> {
+fn offset_q(r: &Rates, v: f64, u: f64, st: f64) -> Vector3<f64> {
     let (s, c) = r.phi.sin_cos();
-    let vs = v * sgn(r.theta_dot);
+    let vs = v * st;
     Vector3::new(-vs * c, -u * sgn(r.phi_dot), vs * s)
 }
 
-/// Eq. (4.59): `q = sign(θ̇)(−cot φ, 0, 1)`.
+/// Eq. (4.59): `q = sign(θ̇)(−cot φ, 0, 1)`; `st` is sign(θ̇).
 #[inline]
-fn contour_q(r: &Rates) -> Vector3<f64> {
+fn contour_q(r: &Rates, st: f64) -> Vector3<f64> {
     let (s, c) = r.phi.sin_cos();
-    let st = sgn(r.theta_dot);
     Vector3::new(-st * c / s, 0.0, st)
 }
 
@@ -334,7 +334,19 @@ impl Dissipation {
     /// * AugmentedContour (§4.7.1): `φ^{−p} sign(θ̇)(−c/s, 0, 1)`.
     ///
     /// Here `r_u` is [`Dissipation::ku_over_kv`].
-    pub fn q_body(&self, r: &Rates, _h: f64) -> Vector3<f64> {
+    pub fn q_body(&self, r: &Rates, h: f64) -> Vector3<f64> {
+        let side = self.discontinuity(r).map_or(0.0, sgn);
+        self.q_body_on_side(r, h, side)
+    }
+
+    /// q^B with the sign of the model's discontinuity function D ([`Self::discontinuity`])
+    /// taken as `side` (±1) instead of sign(D): the smooth branch of the moment that
+    /// holds where sign(D) = side, continued across D = 0. Reaching D = 0 ends a run
+    /// (§4.3.1, third terminal condition), so the simulator integrates on the branch
+    /// the run starts on; the vector field then stays smooth up to and across the
+    /// terminal event, which its root location needs. Models without a discontinuity
+    /// set ignore `side`.
+    pub fn q_body_on_side(&self, r: &Rates, _h: f64, side: f64) -> Vector3<f64> {
         match self.kind {
             ModelKind::None => Vector3::zeros(),
             ModelKind::ClassicalRolling => {
@@ -349,7 +361,7 @@ impl Dissipation {
             ModelKind::ViscousRolling => r.horizontal_omega_body(),
             ModelKind::Pivoting => {
                 let (s, c) = r.phi.sin_cos();
-                sgn(r.psi_dot + r.theta_dot * c) * Vector3::new(s, 0.0, c)
+                side * Vector3::new(s, 0.0, c)
             }
             ModelKind::GeneralRolling => {
                 let w = r.omega_body();
@@ -360,13 +372,12 @@ impl Dissipation {
                     Vector3::zeros()
                 }
             }
-            ModelKind::Contour => contour_q(r),
-            ModelKind::ConstantOffset => offset_q(r, 1.0, self.ku_over_kv),
+            ModelKind::Contour => contour_q(r, side),
+            ModelKind::ConstantOffset => offset_q(r, 1.0, self.ku_over_kv, side),
             ModelKind::CurvatureOffset => {
                 // v = k_v / sin φ (eq. 4.68) in eq. (4.62): v cos φ = cot φ, v sin φ = 1.
                 let (s, c) = r.phi.sin_cos();
-                let st = sgn(r.theta_dot);
-                Vector3::new(-st * c / s, -self.ku_over_kv * sgn(r.phi_dot), st)
+                Vector3::new(-side * c / s, -self.ku_over_kv * sgn(r.phi_dot), side)
             }
             ModelKind::Greenwood
             | ModelKind::BreweHamrock
@@ -378,9 +389,11 @@ impl Dissipation {
                     Some(pu) if self.ku_over_kv != 0.0 => self.ku_over_kv * r.phi.powf(pu),
                     _ => 0.0,
                 };
-                offset_q(r, v, u)
+                offset_q(r, v, u, side)
             }
-            ModelKind::AugmentedContour => r.phi.powf(-self.augmented_exponent) * contour_q(r),
+            ModelKind::AugmentedContour => {
+                r.phi.powf(-self.augmented_exponent) * contour_q(r, side)
+            }
         }
     }
 

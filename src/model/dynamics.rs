@@ -22,10 +22,11 @@
 //! GP = (−(cos φ − h sin φ), 0, −(sin φ + h cos φ)), and the disk's angular velocity is
 //! Ω = (−θ̇ sin φ, −φ̇, ψ̇ + θ̇ cos φ).
 
-use nalgebra::{Matrix3, Matrix6, SVector, Vector2, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector2, Vector3, Vector6};
 
 use super::closed_form::stationary_precession_squared;
 use super::dissipation::{Dissipation, Rates};
+use super::rosenbrock::Lu;
 
 /// Scaled state `(ψ, ψ̇, φ, φ̇, θ, θ̇, x, ẋ, y, ẏ)` of eq. (4.43); (ẋ, ẏ) is the slip
 /// velocity of the contact point in the intermediate frame (eq. 4.28).
@@ -77,6 +78,10 @@ pub struct ScaledDisk {
     pub eta: f64,
     /// Shape of the dissipative moment q (eq. 4.5).
     pub dissipation: Dissipation,
+    /// Branch of a discontinuous moment: `Some(±1)` evaluates q with the sign of the
+    /// discontinuity function fixed ([`Dissipation::q_body_on_side`]), `None` with its
+    /// sign at each state ([`Dissipation::q_body`]).
+    pub branch: Option<f64>,
 }
 
 /// Accelerations and contact forces at one state, scaled (forces in mg).
@@ -121,31 +126,40 @@ fn body_from_intermediate(phi: f64) -> Matrix3<f64> {
     Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
 }
 
-impl ScaledDisk {
-    /// The rates a dissipative moment depends on.
-    pub fn rates(y: &StateVector) -> Rates {
-        Rates {
-            phi: y[PHI],
-            phi_dot: y[PHI_DOT],
-            psi_dot: y[PSI_DOT],
-            theta_dot: y[THETA_DOT],
-        }
-    }
+/// The state-dependent parts of the Newton–Euler residual at one state (see
+/// [`ScaledDisk::residual_terms`]).
+struct ResidualTerms {
+    mode: Mode,
+    mu: f64,
+    inertia: Vector3<f64>,
+    h: f64,
+    s: f64,
+    c: f64,
+    psi_dot: f64,
+    phi_dot: f64,
+    theta_dot: f64,
+    slip: Vector3<f64>,
+    gp: Vector3<f64>,
+    gp_rate: Vector3<f64>,
+    /// η q^B (eq. 4.5): the dissipative moment is −η n q^B.
+    eta_q: Vector3<f64>,
+    body_from_intermediate: Matrix3<f64>,
+}
 
+impl ResidualTerms {
     /// Residual of Newton–Euler (eqs. 4.2a in I, 4.2b in B) for the unknowns
     /// `u = (ψ̈, φ̈, θ̈, λ₁, λ₂, n)`; affine in `u`.
-    fn residual(&self, y: &StateVector, mode: Mode, u: &Vector6<f64>) -> Vector6<f64> {
-        let (phi, phi_dot) = (y[PHI], y[PHI_DOT]);
-        let (psi_dot, theta_dot) = (y[PSI_DOT], y[THETA_DOT]);
+    fn residual(&self, u: &Vector6<f64>) -> Vector6<f64> {
+        let (s, c) = (self.s, self.c);
+        let (psi_dot, phi_dot, theta_dot) = (self.psi_dot, self.phi_dot, self.theta_dot);
         let (psi_ddot, phi_ddot, theta_ddot) = (u[0], u[1], u[2]);
         let normal = u[5];
-        let (s, c) = phi.sin_cos();
         let z_hat = Vector3::z();
         let frame_rate = z_hat * psi_dot; // angular velocity of I
 
         // Slip velocity, its rate, and the friction force, all in I.
-        let slip = Vector3::new(y[X_DOT], y[Y_DOT], 0.0);
-        let (slip_rate, friction) = match mode {
+        let slip = self.slip;
+        let (slip_rate, friction) = match self.mode {
             Mode::Rolling => (Vector3::zeros(), Vector3::new(u[3], u[4], 0.0)),
             Mode::Slipping => {
                 let speed = slip.norm();
@@ -163,7 +177,7 @@ impl ScaledDisk {
             -phi_ddot,
             psi_ddot + theta_ddot * c - theta_dot * phi_dot * s,
         );
-        let (gp, gp_rate) = contact_arm(self.h, phi, phi_dot);
+        let (gp, gp_rate) = (self.gp, self.gp_rate);
         let w = omega.cross(&gp);
         let w_rate = omega_rate.cross(&gp) + omega.cross(&gp_rate) + frame_rate.cross(&w);
         let accel_g = slip_rate + frame_rate.cross(&slip) - w_rate;
@@ -172,7 +186,7 @@ impl ScaledDisk {
         let force = accel_g - friction - z_hat * (normal - 1.0);
 
         // Moment balance about G in the body frame, eq. (4.2b).
-        let inertia = Vector3::new(self.a, self.a, self.c);
+        let inertia = self.inertia;
         let omega_b = Vector3::new(psi_dot * s, -phi_dot, psi_dot * c + theta_dot);
         let frame_b = Vector3::new(psi_dot * s, -phi_dot, psi_dot * c);
         let omega_b_rate = Vector3::new(
@@ -181,9 +195,8 @@ impl ScaledDisk {
             psi_ddot * c - psi_dot * phi_dot * s + theta_ddot,
         );
         let gp_b = Vector3::new(-1.0, 0.0, -self.h);
-        let contact_b = body_from_intermediate(phi) * (friction + z_hat * normal);
-        let q = self.dissipation.q_body(&Self::rates(y), self.h);
-        let moment_q = -self.eta * normal * q;
+        let contact_b = self.body_from_intermediate * (friction + z_hat * normal);
+        let moment_q = -normal * self.eta_q;
         let moment = inertia.component_mul(&omega_b_rate)
             + frame_b.cross(&inertia.component_mul(&omega_b))
             - gp_b.cross(&contact_b)
@@ -191,18 +204,56 @@ impl ScaledDisk {
 
         Vector6::new(force.x, force.y, force.z, moment.x, moment.y, moment.z)
     }
+}
+
+impl ScaledDisk {
+    /// The rates a dissipative moment depends on.
+    pub fn rates(y: &StateVector) -> Rates {
+        Rates {
+            phi: y[PHI],
+            phi_dot: y[PHI_DOT],
+            psi_dot: y[PSI_DOT],
+            theta_dot: y[THETA_DOT],
+        }
+    }
+
+    /// The state-dependent terms of the Newton–Euler residual (eqs. 4.2a in I, 4.2b in
+    /// B), computed once per state: trigonometric functions, the contact arm and the
+    /// dissipative moment q (eq. 4.5) do not depend on the unknowns.
+    fn residual_terms(&self, y: &StateVector, mode: Mode) -> ResidualTerms {
+        let phi = y[PHI];
+        let (s, c) = phi.sin_cos();
+        let (gp, gp_rate) = contact_arm(self.h, phi, y[PHI_DOT]);
+        ResidualTerms {
+            mode,
+            mu: self.mu,
+            inertia: Vector3::new(self.a, self.a, self.c),
+            h: self.h,
+            s,
+            c,
+            psi_dot: y[PSI_DOT],
+            phi_dot: y[PHI_DOT],
+            theta_dot: y[THETA_DOT],
+            slip: Vector3::new(y[X_DOT], y[Y_DOT], 0.0),
+            gp,
+            gp_rate,
+            eta_q: self.eta * self.q_body(y),
+            body_from_intermediate: body_from_intermediate(phi),
+        }
+    }
 
     /// Solves the Newton–Euler equations for the accelerations and contact forces.
     /// Returns `None` when the system is singular (which happens only at φ = 0 with
     /// h = 0 or a zero slip speed in slipping mode).
     pub fn accelerations(&self, y: &StateVector, mode: Mode) -> Option<Accelerations> {
-        let bias = self.residual(y, mode, &Vector6::zeros());
+        let terms = self.residual_terms(y, mode);
+        let bias = terms.residual(&Vector6::zeros());
         let mut jacobian = Matrix6::zeros();
         for k in 0..6 {
-            let column = self.residual(y, mode, &Vector6::ith(k, 1.0)) - bias;
+            let column = terms.residual(&Vector6::ith(k, 1.0)) - bias;
             jacobian.set_column(k, &column);
         }
-        let u = jacobian.lu().solve(&(-bias))?;
+        let u = Lu::new(jacobian)?.solve(&(-bias));
         let normal = u[5];
         let (slip_accel, friction) = match mode {
             Mode::Rolling => (Vector2::zeros(), Vector2::new(u[3], u[4])),
@@ -241,6 +292,44 @@ impl ScaledDisk {
             dy[Y_DOT] = acc.slip_accel.y;
         }
         Some(dy)
+    }
+
+    /// The dissipative moment's shape q^B at `y` (eq. 4.5), on [`ScaledDisk::branch`].
+    pub fn q_body(&self, y: &StateVector) -> Vector3<f64> {
+        let rates = Self::rates(y);
+        match self.branch {
+            Some(side) => self.dissipation.q_body_on_side(&rates, self.h, side),
+            None => self.dissipation.q_body(&rates, self.h),
+        }
+    }
+
+    /// The Jacobian ∂f/∂y of [`ScaledDisk::derivative`] at `y`, by forward differences,
+    /// given `f0` = f(y). The cyclic coordinates ψ, θ, x, y do not appear in f (§4.2.3),
+    /// so their columns are zero. The slip-velocity steps are relative to the slip speed,
+    /// which sets the scale of the stiff friction terms (−μ n v/|v|, eq. 4.32d–e).
+    pub fn jacobian(
+        &self,
+        y: &StateVector,
+        mode: Mode,
+        f0: &StateVector,
+    ) -> Option<SMatrix<f64, 10, 10>> {
+        let slip_speed = y[X_DOT].hypot(y[Y_DOT]);
+        let mut jacobian = SMatrix::<f64, 10, 10>::zeros();
+        for k in [PSI_DOT, PHI, PHI_DOT, THETA_DOT, X_DOT, Y_DOT] {
+            let scale = match k {
+                X_DOT | Y_DOT => y[k].abs().max(slip_speed),
+                PHI => y[k].abs(),
+                _ => y[k].abs().max(1.0),
+            };
+            let mut shifted = *y;
+            shifted[k] += f64::EPSILON.sqrt() * scale;
+            let step = shifted[k] - y[k];
+            if step == 0.0 {
+                continue;
+            }
+            jacobian.set_column(k, &((self.derivative(&shifted, mode)? - f0) / step));
+        }
+        Some(jacobian)
     }
 
     /// Centre-of-mass velocity in the intermediate frame, V_G = V_P − Ω × GP (eq. 4.15).
@@ -333,6 +422,7 @@ mod tests {
             mu,
             eta,
             dissipation: Dissipation::new(kind),
+            branch: None,
         }
     }
 

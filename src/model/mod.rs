@@ -4,5 +4,6 @@ pub mod dissipation;
 pub mod dynamics;
 pub mod params;
 pub mod post_flat;
+pub mod rosenbrock;
 pub mod simulate;
 pub mod tuning;

@@ -1,6 +1,9 @@
-//! The hybrid rolling/slipping simulation of thesis §4.3.1: integrate one mode with
-//! DOP853 (tolerances 1e-12) until an event, locate the event by re-integrating
-//! from the last accepted step, switch mode or stop, repeat.
+//! The hybrid rolling/slipping simulation of thesis §4.3.1: integrate one mode
+//! (tolerances 1e-12) until an event, locate the event by re-integrating from the last
+//! accepted step, switch mode or stop, repeat. Rolling is integrated with DOP853;
+//! slipping, which is stiff at small slip speeds, starts with the Rosenbrock method
+//! RODAS4 and changes to DOP853 once the friction mode is no longer stiff
+//! ([`integrate_slipping`]).
 //!
 //! Events (each located to 1e-13 in scaled time, well inside the thesis's 1e-10):
 //! * rolling → slipping when |F|/N reaches μ (eq. 4.33); the slip is seeded with
@@ -23,6 +26,7 @@ use super::dynamics::{
     Y_DOT, strip_angle, strip_rate, vertical_spin,
 };
 use super::params::DiskParams;
+use super::rosenbrock::{Step, error_norm, step_factor};
 
 /// Slip speed below which slipping ends (eq. 4.36), scaled.
 const STICK_SPEED: f64 = 1e-10;
@@ -32,6 +36,10 @@ const SLIP_SEED: f64 = 1.1e-10;
 const TOLERANCE: f64 = 1e-12;
 /// Time tolerance of event location, scaled.
 const EVENT_TOLERANCE: f64 = 1e-13;
+/// First step of a slipping phase, scaled time; RODAS4 grows it by up to 6× a step.
+const INITIAL_SLIP_STEP: f64 = 1e-6;
+/// Step limit of one phase.
+const MAX_STEPS: usize = 50_000_000;
 /// Guard against endless chattering between modes.
 const MAX_SWITCHES: usize = 200_000;
 
@@ -307,7 +315,11 @@ struct Events<'a> {
 }
 
 impl Events<'_> {
-    fn values(&self, y: &StateVector) -> [(Trigger, f64); 4] {
+    /// The event functions at `y`, inside a step that started at `start`. The stick
+    /// function is |v| − 1e-10 (eq. 4.36) while the slip velocity keeps the half-plane
+    /// of its direction at the step start, and −|v| − 1e-10 once it has turned through
+    /// zero, so that a step jumping across |v| = 0 counts as reaching the stick speed.
+    fn values(&self, y: &StateVector, start: &StateVector) -> [(Trigger, f64); 4] {
         let acc = self.disk.accelerations(y, self.mode);
         let normal = acc.map_or(f64::NAN, |a| a.normal);
         let mode_event = match self.mode {
@@ -315,7 +327,12 @@ impl Events<'_> {
                 Trigger::Slip,
                 acc.map_or(f64::NAN, |a| self.disk.mu - a.friction_ratio()),
             ),
-            Mode::Slipping => (Trigger::Stick, y[X_DOT].hypot(y[Y_DOT]) - STICK_SPEED),
+            Mode::Slipping => {
+                let speed = y[X_DOT].hypot(y[Y_DOT]);
+                let along = y[X_DOT] * start[X_DOT] + y[Y_DOT] * start[Y_DOT];
+                let signed = if along < 0.0 { -speed } else { speed };
+                (Trigger::Stick, signed - STICK_SPEED)
+            }
         };
         let discontinuity = self
             .disk
@@ -339,17 +356,73 @@ struct PhaseOutput {
     previous: Option<[(Trigger, f64); 4]>,
     hit: Option<(Trigger, f64, StateVector)>,
     last: (f64, StateVector),
+    /// Set when the integration stopped, without an event, to change integrator.
+    handover: bool,
 }
 
-/// Records uniform output, watches the events and stops the integrator at the first.
+/// Records the uniform output samples inside one accepted step [t_prev, t_curr] and
+/// finds the earliest event in it (Illinois root location on `state_at`, the state at
+/// a time inside the step); returns true when an event ends the phase.
+fn record_step(
+    events: &Events,
+    out: &mut PhaseOutput,
+    t_prev: f64,
+    y_prev: &StateVector,
+    t_curr: f64,
+    y_curr: &StateVector,
+    state_at: impl Fn(f64) -> StateVector,
+) -> bool {
+    let previous = out
+        .previous
+        .unwrap_or_else(|| events.values(y_prev, y_prev));
+    let current = events.values(y_curr, y_prev);
+    out.previous = Some(current);
+    out.last = (t_curr, *y_curr);
+
+    // The earliest event whose function crossed from positive to non-positive.
+    let mut earliest: Option<(Trigger, f64)> = None;
+    for (k, &(trigger, g1)) in current.iter().enumerate() {
+        let g0 = previous[k].1;
+        let crossed = g0 > 0.0 && (g1 <= 0.0 || g1.is_nan());
+        if !crossed {
+            continue;
+        }
+        let t_root = locate_root(t_prev, t_curr, g0, |t| {
+            events.values(&state_at(t), y_prev)[k].1
+        });
+        if earliest.is_none_or(|(_, t)| t_root < t) {
+            earliest = Some((trigger, t_root));
+        }
+    }
+
+    let t_stop = earliest.map_or(t_curr, |(_, t)| t);
+    while out.next_output <= t_stop {
+        let t = out.next_output;
+        out.states.push((t, state_at(t)));
+        out.next_output += out.output_step;
+    }
+    match earliest {
+        Some((trigger, t)) => {
+            out.hit = Some((trigger, t, state_at(t)));
+            true
+        }
+        None => false,
+    }
+}
+
+/// Feeds DOP853's accepted steps (rolling phases) to [`record_step`].
 ///
 /// States between step ends (output samples, event roots) are computed by a short
 /// DOP853 integration from the last accepted step (see [`advance`]) rather than by the
 /// solver's dense output, which was measured to lose up to 1e-7 relative energy on
 /// this system (tests/simulator.rs, energy conservation at the samples).
+///
+/// While slipping, it stops the integration (a hand-over to RODAS4, no event) once the
+/// slip speed falls below `hand_back_speed`, where the slip equations become stiff.
 struct PhaseRecorder<'a, 'b> {
     events: Events<'a>,
     out: &'b mut PhaseOutput,
+    hand_back_speed: f64,
 }
 
 impl Solout<f64, StateVector> for PhaseRecorder<'_, '_> {
@@ -365,13 +438,6 @@ impl Solout<f64, StateVector> for PhaseRecorder<'_, '_> {
     where
         I: Interpolation<f64, StateVector> + ?Sized,
     {
-        let previous = self
-            .out
-            .previous
-            .unwrap_or_else(|| self.events.values(y_prev));
-        let current = self.events.values(y_curr);
-        self.out.previous = Some(current);
-        self.out.last = (t_curr, *y_curr);
         let (disk, mode) = (self.events.disk, self.events.mode);
         let state_at = |t: f64| -> StateVector {
             if t <= t_prev {
@@ -382,42 +448,145 @@ impl Solout<f64, StateVector> for PhaseRecorder<'_, '_> {
                 advance(disk, mode, t_prev, y_prev, t).unwrap_or(*y_curr)
             }
         };
-
-        // The earliest event whose function crossed from positive to non-positive.
-        let mut earliest: Option<(Trigger, f64)> = None;
-        for (k, &(trigger, g1)) in current.iter().enumerate() {
-            let g0 = previous[k].1;
-            let crossed = g0 > 0.0 && (g1 <= 0.0 || g1.is_nan());
-            if !crossed {
-                continue;
-            }
-            let t_root = locate_root(t_prev, t_curr, g0, |t| {
-                self.events.values(&state_at(t))[k].1
-            });
-            if earliest.is_none_or(|(_, t)| t_root < t) {
-                earliest = Some((trigger, t_root));
-            }
+        if record_step(
+            &self.events,
+            self.out,
+            t_prev,
+            y_prev,
+            t_curr,
+            y_curr,
+            state_at,
+        ) {
+            return ControlFlag::Terminate;
         }
-
-        let t_stop = earliest.map_or(t_curr, |(_, t)| t);
-        let out = &mut *self.out;
-        while out.next_output <= t_stop {
-            let t = out.next_output;
-            out.states.push((t, state_at(t)));
-            out.next_output += out.output_step;
+        if mode == Mode::Slipping && y_curr[X_DOT].hypot(y_curr[Y_DOT]) < self.hand_back_speed {
+            self.out.handover = true;
+            return ControlFlag::Terminate;
         }
-        match earliest {
-            Some((trigger, t)) => {
-                out.hit = Some((trigger, t, state_at(t)));
-                ControlFlag::Terminate
-            }
-            None => ControlFlag::Continue,
-        }
+        ControlFlag::Continue
     }
 }
 
-/// Integrates one mode from (t0, y0) to t1 without events (DOP853, same tolerances);
-/// `None` if the integrator fails.
+/// Integrates a slipping interval from (t0, y0) towards t_end with RODAS4 (see
+/// [`super::rosenbrock`]), tolerances [`TOLERANCE`], feeding each accepted step to
+/// [`record_step`] until an event ends the phase. States inside a step are one RODAS4
+/// step from its start with the same Jacobian.
+///
+/// RODAS4 (order 4) pays off only while the friction mode is stiff. Its decay rate ρ
+/// is read off the slip block ∂(ẍ, ÿ)/∂(ẋ, ẏ) of the Jacobian (≈ 0.45/|v| for the
+/// thesis's disk); once ρ h ≤ 1 for the next step h, an explicit step of that size is
+/// stable and DOP853 (order 8) is cheaper, so the interval is handed over
+/// (`out.handover`) at the end of the step.
+fn integrate_slipping(
+    events: &Events,
+    out: &mut PhaseOutput,
+    t0: f64,
+    y0: StateVector,
+    t_end: f64,
+    stats: &mut SolverStats,
+) -> Result<(), SimulationError> {
+    let disk = events.disk;
+    let evaluations = std::cell::Cell::new(0usize);
+    let f = |y: &StateVector| {
+        evaluations.set(evaluations.get() + 1);
+        disk.derivative(y, Mode::Slipping)
+    };
+    let failure = |t: f64, reason: &str| SimulationError::Integration {
+        t,
+        reason: reason.into(),
+    };
+    let (mut t, mut y) = (t0, y0);
+    let mut h = INITIAL_SLIP_STEP;
+    let result = loop {
+        if t >= t_end {
+            out.last = (t, y);
+            break Ok(());
+        }
+        let Some(f0) = f(&y) else {
+            break Err(failure(t, "slipping equations singular"));
+        };
+        let Some(jacobian) = disk.jacobian(&y, Mode::Slipping, &f0) else {
+            break Err(failure(t, "slipping Jacobian singular"));
+        };
+        evaluations.set(evaluations.get() + 6);
+        let stiffness = slip_decay_rate(&jacobian);
+        let step = Step::new(y, f0, jacobian);
+        // Attempt steps until one passes the error test.
+        let accepted = loop {
+            let h_try = h.min(t_end - t);
+            if h_try <= 1e-14 * t.abs().max(1.0) {
+                break None;
+            }
+            let attempt = step
+                .to(h_try, &f)
+                .filter(|r| r.y.iter().all(|v| v.is_finite()));
+            let err = attempt
+                .as_ref()
+                .map_or(f64::INFINITY, |r| error_norm(&y, r, TOLERANCE, TOLERANCE));
+            if err <= 1.0 {
+                h = h_try * step_factor(err);
+                break attempt.map(|r| (h_try, r.y));
+            }
+            stats.rejected_steps += 1;
+            h = h_try * step_factor(err).min(1.0);
+        };
+        let Some((h_done, y_next)) = accepted else {
+            break Err(failure(t, "RODAS4 step size underflow"));
+        };
+        stats.accepted_steps += 1;
+        if stats.accepted_steps > MAX_STEPS {
+            break Err(failure(t, "too many steps"));
+        }
+        let t_next = if h_done == t_end - t {
+            t_end
+        } else {
+            t + h_done
+        };
+        let state_at = |s: f64| -> StateVector {
+            if s <= t {
+                y
+            } else if s >= t_next {
+                y_next
+            } else {
+                step.to(s - t, &f).map_or(y_next, |r| r.y)
+            }
+        };
+        if record_step(events, out, t, &y, t_next, &y_next, state_at) {
+            break Ok(());
+        }
+        (t, y) = (t_next, y_next);
+        if stiffness * h <= 1.0 {
+            out.last = (t, y);
+            out.handover = true;
+            break Ok(());
+        }
+    };
+    stats.rhs_evaluations += evaluations.get();
+    result
+}
+
+/// The decay rate of the stiffest slip-velocity mode: max(0, −Re λ) over the
+/// eigenvalues λ of the 2×2 block ∂(ẍ, ÿ)/∂(ẋ, ẏ) of the Jacobian. Coulomb friction
+/// (eq. 4.32d–e) gives it a real eigenvalue ∝ −μ n/|v|; the frame rotation adds
+/// ±iψ̇, which is not stiff.
+fn slip_decay_rate(jacobian: &nalgebra::SMatrix<f64, 10, 10>) -> f64 {
+    let (a, b) = (jacobian[(X_DOT, X_DOT)], jacobian[(X_DOT, Y_DOT)]);
+    let (c, d) = (jacobian[(Y_DOT, X_DOT)], jacobian[(Y_DOT, Y_DOT)]);
+    let mean = 0.5 * (a + d);
+    let discriminant = mean * mean - (a * d - b * c);
+    let most_negative = if discriminant >= 0.0 {
+        mean - discriminant.sqrt()
+    } else {
+        mean
+    };
+    (-most_negative).max(0.0)
+}
+
+/// Integrates one mode from (t0, y0) to t1 without events (DOP853, same tolerances),
+/// starting with a single step of size t1 − t0: called with t0 the start of an
+/// accepted step and t1 inside it, that step is no longer than the accepted one and
+/// so passes the same error test (the solver shortens it if not); `None` if the
+/// integrator fails.
 fn advance(
     disk: &ScaledDisk,
     mode: Mode,
@@ -427,7 +596,12 @@ fn advance(
 ) -> Option<StateVector> {
     let field = PhaseField { disk, mode };
     let solution = IVP::ode(&field, t0, t1, *y0)
-        .method(ExplicitRungeKutta::dop853().rtol(TOLERANCE).atol(TOLERANCE))
+        .method(
+            ExplicitRungeKutta::dop853()
+                .rtol(TOLERANCE)
+                .atol(TOLERANCE)
+                .h0(t1 - t0),
+        )
         .solve()
         .ok()?;
     match (solution.t.last(), solution.y.last()) {
@@ -501,6 +675,11 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
         )));
     }
 
+    let units = Units::of(p);
+    let mut y = units.to_scaled(&spec.initial);
+    // The discontinuity function's value at the start of the run: its zero is terminal,
+    // and the run integrates the moment's branch on this side of it.
+    let discontinuity = spec.dissipation.discontinuity(&ScaledDisk::rates(&y));
     let disk = ScaledDisk {
         h: p.h(),
         a: p.a(),
@@ -508,9 +687,8 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
         mu: spec.mu,
         eta: spec.eta,
         dissipation: spec.dissipation,
+        branch: discontinuity.filter(|d| *d != 0.0).map(f64::signum),
     };
-    let units = Units::of(p);
-    let mut y = units.to_scaled(&spec.initial);
     let tau_end = spec.t_end / units.time;
     let output_step = spec.output_interval / units.time;
 
@@ -525,14 +703,14 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
     let mut next_output = 0.0;
     let mut stats = SolverStats::default();
     let mut switches = 0usize;
-    // The discontinuity function's sign at the start of the run: its zero is terminal.
-    let discontinuity_sign = disk
-        .dissipation
-        .discontinuity(&ScaledDisk::rates(&y))
-        .map_or(1.0, f64::signum);
+    let discontinuity_sign = discontinuity.map_or(1.0, f64::signum);
 
+    // Slipping is integrated by RODAS4 while stiff, else by DOP853 (see
+    // `integrate_slipping`); DOP853 hands back below a quarter of the slip speed at which
+    // RODAS4 handed over.
+    let mut stiff = true;
+    let mut hand_back_speed = 0.0;
     let end_reason = loop {
-        let field = PhaseField { disk: &disk, mode };
         let events = Events {
             disk: &disk,
             mode,
@@ -543,37 +721,58 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
             next_output,
             output_step,
             states: Vec::new(),
-            previous: Some(events.values(&y)),
+            previous: Some(events.values(&y, &y)),
             hit: None,
             last: (tau, y),
+            handover: false,
         };
-        let recorder = PhaseRecorder {
-            events,
-            out: &mut out,
-        };
-        // DOP853 in both modes. Slip phases are stiff near small slip speeds (friction
-        // turns the slip direction at a rate ∝ μ/|v|), so they cost many small steps;
-        // the implicit solvers of `differential-equations` 0.7 (Radau5, BDF) chatter
-        // around |v| = 0 or fail to start from the 1.1e-10 seed (see BENCHMARKS.md).
-        let solution = IVP::ode(&field, tau, tau_end, y)
-            .method(
-                ExplicitRungeKutta::dop853()
-                    .rtol(TOLERANCE)
-                    .atol(TOLERANCE)
-                    .max_steps(50_000_000),
-            )
-            .solout(recorder)
-            .solve()
-            .map_err(|e| SimulationError::Integration {
-                t: tau * units.time,
-                reason: format!("{e:?}").chars().take(200).collect(),
-            })?;
-        stats.rhs_evaluations += solution.evals.function;
-        stats.accepted_steps += solution.steps.accepted;
-        stats.rejected_steps += solution.steps.rejected;
+        let slip_speed = y[X_DOT].hypot(y[Y_DOT]);
+        if mode == Mode::Slipping && stiff {
+            // Stiff slipping (small slip speed): RODAS4.
+            integrate_slipping(&events, &mut out, tau, y, tau_end, &mut stats).map_err(
+                |e| match e {
+                    SimulationError::Integration { t, reason } => SimulationError::Integration {
+                        t: t * units.time,
+                        reason,
+                    },
+                    other => other,
+                },
+            )?;
+            hand_back_speed = 0.25 * out.last.1[X_DOT].hypot(out.last.1[Y_DOT]);
+        } else {
+            // Rolling, and slipping once the friction mode is no longer stiff: DOP853.
+            let field = PhaseField { disk: &disk, mode };
+            let recorder = PhaseRecorder {
+                events,
+                out: &mut out,
+                hand_back_speed: hand_back_speed.min(slip_speed),
+            };
+            let solution = IVP::ode(&field, tau, tau_end, y)
+                .method(
+                    ExplicitRungeKutta::dop853()
+                        .rtol(TOLERANCE)
+                        .atol(TOLERANCE)
+                        .max_steps(MAX_STEPS),
+                )
+                .solout(recorder)
+                .solve()
+                .map_err(|e| SimulationError::Integration {
+                    t: tau * units.time,
+                    reason: format!("{e:?}").chars().take(200).collect(),
+                })?;
+            stats.rhs_evaluations += solution.evals.function;
+            stats.accepted_steps += solution.steps.accepted;
+            stats.rejected_steps += solution.steps.rejected;
+        }
         next_output = out.next_output;
         scaled_samples.extend(out.states.iter().map(|&(t, s)| (t, s, mode)));
 
+        if out.hit.is_none() && out.handover {
+            // Same phase, other integrator.
+            (tau, y) = out.last;
+            stiff = !stiff;
+            continue;
+        }
         let Some((trigger, t_hit, y_hit)) = out.hit else {
             // Reached t_end.
             tau = tau_end;
@@ -598,6 +797,9 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
             }
             Trigger::Stick => stick_or_slip_on(&disk, &mut y, tau)?,
         };
+        // A (re)seeded slip starts at the stiff slip speed of eq. (4.41).
+        stiff = true;
+        hand_back_speed = 0.0;
         scaled_samples.push((tau, y, mode));
         if new_mode != mode {
             switches += 1;
