@@ -41,7 +41,7 @@ enum Command {
         /// Output folder for the table (Markdown, CSV, JSON).
         #[arg(short, long, default_value = "out/reproduce")]
         out: PathBuf,
-        /// Leave out Table 4.1 (ten η tunings; minutes of computing).
+        /// Leave out Table 4.1 (ten η tunings; several seconds of computing).
         #[arg(long)]
         skip_table_4_1: bool,
     },
