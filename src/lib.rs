@@ -2,5 +2,6 @@
 pub mod energy;
 pub mod footage;
 pub mod model;
+pub mod render;
 pub mod report;
 pub mod reproduce;
