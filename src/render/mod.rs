@@ -46,7 +46,9 @@
 //! (H sin φ + R cos φ cos α) cos ψ = R sin α sin ψ. The camera (looking along +y) sees
 //! the underside when the contact point is behind the disk, and the white edge is the
 //! near crossing; when the disk leans towards the camera it sees the lower silhouette,
-//! which touches the plate (z_rim = 0) while the contact point is near the column. So
+//! which reaches down to the contact point while that is near the column (z_rim =
+//! (R(1 − cos φ) + H sin φ) tan ε there, zero for ε = 0: seen from above, a contact
+//! point in front of the rest rim sits higher in the image). So
 //! z_rim(ψ) has period 2π in ψ: **one peak per precession cycle**, at ψ ≡ −π/2, when
 //! the contact point is straight behind G and the high point of the bottom rim (α = 0)
 //! faces the camera (fig. 3.6). The rim height there is exactly 2R sin φ; the image
@@ -75,10 +77,14 @@
 //! row, so frames are reproducible in any order), Gaussian blur (σ px), 50 Hz mains
 //! flicker (intensity × (1 + A sin(2π·100 Hz·t))), lateral drift (px/s, ending at the
 //! rest position at the halt) and dropped frames (missing from the output; the truth
-//! keeps every written frame's capture index and true time). Pixels are anti-aliased
-//! by 16-ray supersampling (a rank-1 lattice, so axis-aligned edges get 16 levels)
-//! wherever the rays at a pixel's corners meet different surfaces; rays are cast only
-//! inside the bounding box of the disk, its mirror image and its shadow.
+//! keeps every written frame's capture index and true time). Pixels are anti-aliased:
+//! rays are cast at the corners of 2 × 2 pixel blocks, then at the pixel corners of
+//! blocks whose corners see different surfaces, then 16 rays (a rank-1 lattice, so
+//! axis-aligned edges get 16 coverage levels; 8 where only the plate's shadow or
+//! mirror image changes) in pixels whose corners disagree. A feature thinner than
+//! 2 px that no block corner sees (the strip seen edge-on in the side view) can be
+//! missed. Rays are cast only inside the exact image extent of the disk, its mirror
+//! image and its shadow; the rest of the frame is a background rendered once.
 
 pub mod motion;
 pub mod scene;
@@ -96,7 +102,7 @@ pub use motion::{
     trajectory_motion,
 };
 pub use scene::Plate;
-use scene::{Camera, DiskShape, Look, Pose, Sample, Scene, View};
+use scene::{Camera, DiskShape, Look, PLATE_CLASSES, Pose, Prepared, Sample, Scene, View};
 pub use write::{ClipFormat, truth_path, write_clip};
 
 /// Errors of the render stage; file errors name the file.
@@ -313,14 +319,19 @@ pub struct Renderer {
     written: Vec<usize>,
 }
 
-/// Supersampling pattern: a 16-point rank-1 lattice (i/16, 5i/16 mod 1), centred.
+/// Supersampling patterns: rank-1 lattices (i/n, g·i/n mod 1), centred, so that
+/// axis-aligned edges get n coverage levels: 16 rays (g = 5) where a direct view of
+/// the disk is involved, 8 rays (g = 3) where only the plate's shadow and mirror
+/// image differ.
 const SUPERSAMPLES: usize = 16;
+const SUPERSAMPLES_PLATE: usize = 8;
 
-fn supersample_offset(i: usize) -> (f64, f64) {
-    let n = SUPERSAMPLES as f64;
+fn supersample_offset(i: usize, n: usize) -> (f64, f64) {
+    let g = if n == SUPERSAMPLES { 5 } else { 3 };
+    let nf = n as f64;
     (
-        (i as f64 + 0.5) / n - 0.5,
-        ((5 * i) % SUPERSAMPLES) as f64 / n + 0.5 / n - 0.5,
+        (i as f64 + 0.5) / nf - 0.5,
+        ((g * i) % n) as f64 / nf + 0.5 / nf - 0.5,
     )
 }
 
@@ -592,81 +603,127 @@ impl Renderer {
     }
 
     /// Pixel rectangle of a view that the disk, its mirror image and its shadow can
-    /// touch, with a 2 px margin.
+    /// touch, with a 2 px margin (exact extents of the cylinder along the image axes).
     fn disk_rect(&self, cam: &Camera, pose: &Pose) -> Option<Rect> {
+        let disk = &self.scene.disk;
         let key = self.scene.look.key_light;
-        let (mut x0, mut x1, mut y0, mut y1) = (
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        );
-        for c in self.scene.disk.box_corners(pose) {
-            let mirror = [c[0], c[1], -c[2]];
-            let shadow = [
-                c[0] - c[2] / key[2] * key[0],
-                c[1] - c[2] / key[2] * key[1],
-                0.0,
-            ];
-            for p in [c, mirror, shadow] {
-                let (x, y) = cam.project(p);
-                x0 = x0.min(x);
-                x1 = x1.max(x);
-                y0 = y0.min(y);
-                y1 = y1.max(y);
-            }
+        let (ax, up) = cam.axes();
+        // The mirror image (z → −z) seen along `up` is the disk seen along `up` with
+        // its z component negated; the shadow is p ↦ p − (p_z / L_z) L on the plate.
+        let mirror_up = [up[0], up[1], -up[2]];
+        let shadow = |u: [f64; 3]| [u[0], u[1], -(u[0] * key[0] + u[1] * key[1]) / key[2]];
+        let xs = [disk.extent(pose, ax), disk.extent(pose, shadow(ax))];
+        let mut ups = vec![disk.extent(pose, up), disk.extent(pose, shadow(up))];
+        if self.scene.look.reflectivity > 0.0 && cam.view == View::Side {
+            ups.push(disk.extent(pose, mirror_up));
         }
-        let w = self.spec.width as f64;
+        let x0 = xs.iter().map(|e| e.0).fold(f64::INFINITY, f64::min);
+        let x1 = xs.iter().map(|e| e.1).fold(f64::NEG_INFINITY, f64::max);
+        let u0 = ups.iter().map(|e| e.0).fold(f64::INFINITY, f64::min);
+        let u1 = ups.iter().map(|e| e.1).fold(f64::NEG_INFINITY, f64::max);
+        let (s, w) = (cam.scale, f64::from(self.spec.width));
+        let (r0, r1) = (f64::from(cam.row_start), f64::from(cam.row_end));
         let rect = Rect {
-            x0: (x0 - 2.0).floor().clamp(0.0, w) as usize,
-            x1: (x1 + 3.0).ceil().clamp(0.0, w) as usize,
-            y0: (y0 - 2.0)
-                .floor()
-                .clamp(f64::from(cam.row_start), f64::from(cam.row_end)) as usize,
-            y1: (y1 + 3.0)
-                .ceil()
-                .clamp(f64::from(cam.row_start), f64::from(cam.row_end)) as usize,
+            x0: (cam.cx + x0 / s - 2.0).floor().clamp(0.0, w) as usize,
+            x1: (cam.cx + x1 / s + 3.0).ceil().clamp(0.0, w) as usize,
+            y0: (cam.cy - u1 / s - 2.0).floor().clamp(r0, r1) as usize,
+            y1: (cam.cy - u0 / s + 3.0).ceil().clamp(r0, r1) as usize,
         };
         (rect.x0 < rect.x1 && rect.y0 < rect.y1).then_some(rect)
     }
 
-    /// Renders the pixels of `rect` into `buf`: rays at the pixel corners, and 16
-    /// rays per pixel where the corners disagree about what they see.
+    /// Renders the pixels of `rect` into `buf`. Rays are cast at the corners of 2 × 2
+    /// pixel blocks; a block whose four corner rays see the same class is filled by
+    /// bilinear interpolation, otherwise its pixel corners are cast, and a pixel whose
+    /// corners disagree gets 16 rays.
     fn render_rect(&self, buf: &mut [[f32; 3]], cam: &Camera, pose: Option<&Pose>, rect: Rect) {
         let w = self.spec.width as usize;
-        let cw = rect.x1 - rect.x0 + 1;
+        let (_, dir) = cam.ray(0.0, 0.0);
+        let prepared = pose.map(|p| Prepared::new(&self.scene, p, dir));
         let trace = |x: f64, y: f64| -> Sample {
             let (o, d) = cam.ray(x, y);
-            self.scene.trace(pose, o, d)
+            match &prepared {
+                Some(prep) => self.scene.trace_prepared(prep, o),
+                None => self.scene.trace_empty(o, d),
+            }
         };
-        let corners: Vec<Vec<Sample>> = (rect.y0..=rect.y1)
+        let (pw, ph) = (rect.x1 - rect.x0, rect.y1 - rect.y0);
+        let (bw, bh) = (pw.div_ceil(2), ph.div_ceil(2));
+        let corner =
+            |i: usize, j: usize| trace((rect.x0 + i) as f64 - 0.5, (rect.y0 + j) as f64 - 0.5);
+        let coarse: Vec<Vec<Sample>> = (0..=bh)
             .into_par_iter()
-            .map(|r| {
-                (0..cw)
-                    .map(|i| trace((rect.x0 + i) as f64 - 0.5, r as f64 - 0.5))
-                    .collect()
-            })
+            .map(|j| (0..=bw).map(|i| corner(2 * i, 2 * j)).collect())
             .collect();
         buf[rect.y0 * w..rect.y1 * w]
-            .par_chunks_mut(w)
+            .par_chunks_mut(2 * w)
             .enumerate()
-            .for_each(|(j, row)| {
-                let y = (rect.y0 + j) as f64;
-                let (above, below) = (&corners[j], &corners[j + 1]);
-                for i in 0..rect.x1 - rect.x0 {
-                    let quad = [above[i], above[i + 1], below[i], below[i + 1]];
-                    let x = (rect.x0 + i) as f64;
-                    row[rect.x0 + i] = if quad.iter().all(|s| s.class == quad[0].class) {
-                        average(quad.iter().map(|s| s.rgb), 4)
-                    } else {
-                        average(
-                            (0..SUPERSAMPLES).map(|k| {
-                                let (dx, dy) = supersample_offset(k);
-                                trace(x + dx, y + dy).rgb
-                            }),
-                            SUPERSAMPLES,
-                        )
-                    };
+            .for_each(|(bj, rows)| {
+                let (above, below) = (&coarse[bj], &coarse[bj + 1]);
+                let rows_here = rows.len() / w;
+                for bi in 0..bw {
+                    let quad = [above[bi], above[bi + 1], below[bi], below[bi + 1]];
+                    let cols_here = (pw - 2 * bi).min(2);
+                    if quad.iter().all(|s| s.class == quad[0].class) {
+                        for dy in 0..rows_here {
+                            for dx in 0..cols_here {
+                                // Pixel centres at 1/4 and 3/4 of the block.
+                                let (fx, fy) = (0.25 + 0.5 * dx as f32, 0.25 + 0.5 * dy as f32);
+                                let mut c = [0.0f32; 3];
+                                for (k, ck) in c.iter_mut().enumerate() {
+                                    let top = quad[0].rgb[k] * (1.0 - fx) + quad[1].rgb[k] * fx;
+                                    let bot = quad[2].rgb[k] * (1.0 - fx) + quad[3].rgb[k] * fx;
+                                    *ck = top * (1.0 - fy) + bot * fy;
+                                }
+                                rows[dy * w + rect.x0 + 2 * bi + dx] = c;
+                            }
+                        }
+                        continue;
+                    }
+                    // Fine corners of the block: a 3 × 3 grid.
+                    let mut fine = [[quad[0]; 3]; 3];
+                    for (fj, fine_row) in fine.iter_mut().enumerate() {
+                        for (fi, f) in fine_row.iter_mut().enumerate() {
+                            *f = match (fi, fj) {
+                                (0, 0) => quad[0],
+                                (2, 0) => quad[1],
+                                (0, 2) => quad[2],
+                                (2, 2) => quad[3],
+                                _ => corner(2 * bi + fi, 2 * bj + fj),
+                            };
+                        }
+                    }
+                    for dy in 0..rows_here {
+                        for dx in 0..cols_here {
+                            let q = [
+                                fine[dy][dx],
+                                fine[dy][dx + 1],
+                                fine[dy + 1][dx],
+                                fine[dy + 1][dx + 1],
+                            ];
+                            let (x, y) = (
+                                (rect.x0 + 2 * bi + dx) as f64,
+                                (rect.y0 + 2 * bj + dy) as f64,
+                            );
+                            rows[dy * w + rect.x0 + 2 * bi + dx] =
+                                if q.iter().all(|s| s.class == q[0].class) {
+                                    average(q.iter().map(|s| s.rgb), 4)
+                                } else {
+                                    let n = if q.iter().all(|s| s.class >= PLATE_CLASSES) {
+                                        SUPERSAMPLES_PLATE
+                                    } else {
+                                        SUPERSAMPLES
+                                    };
+                                    average(
+                                        (0..n).map(|k| {
+                                            let (ox, oy) = supersample_offset(k, n);
+                                            trace(x + ox, y + oy).rgb
+                                        }),
+                                        n,
+                                    )
+                                };
+                        }
+                    }
                 }
             });
     }

@@ -131,6 +131,32 @@ pub struct DiskShape {
     pub strip_half_width: f64,
 }
 
+/// A family of parallel rays (one orthographic view, the shadow rays or the mirrored
+/// rays of one frame) with its direction precomputed in the disk's body frame.
+#[derive(Clone, Copy, Debug)]
+pub struct RayFamily {
+    world: [f64; 3],
+    body: [f64; 3],
+    inv_dz: Option<f64>,
+    a: f64,
+    inv_a: Option<f64>,
+}
+
+impl RayFamily {
+    /// The family of rays along the unit vector `dir` for the disk at `pose`.
+    pub fn new(pose: &Pose, dir: [f64; 3]) -> Self {
+        let body = pose.dir_to_body(dir);
+        let a = body[0] * body[0] + body[1] * body[1];
+        RayFamily {
+            world: dir,
+            body,
+            inv_dz: (body[2].abs() >= 1e-300).then(|| 1.0 / body[2]),
+            a,
+            inv_a: (a >= 1e-300).then(|| 1.0 / a),
+        }
+    }
+}
+
 /// A ray's first entry into the disk.
 #[derive(Clone, Copy, Debug)]
 pub struct DiskHit {
@@ -146,44 +172,19 @@ impl DiskShape {
     /// First entry of the ray `origin + t dir` (t > 0) into the solid cylinder
     /// x² + y² ≤ R², |z| ≤ H of the body frame, or `None`.
     pub fn intersect(&self, pose: &Pose, origin: [f64; 3], dir: [f64; 3]) -> Option<DiskHit> {
-        let o = pose.body_from_world(origin);
-        let d = pose.dir_to_body(dir);
-        let (r, h) = (self.radius, self.half_thickness);
-        // Slab |z| ≤ H.
-        let (slab_in, slab_out) = if d[2].abs() < 1e-300 {
-            if o[2].abs() > h {
-                return None;
-            }
-            (f64::NEG_INFINITY, f64::INFINITY)
-        } else {
-            let t1 = (-h - o[2]) / d[2];
-            let t2 = (h - o[2]) / d[2];
-            (t1.min(t2), t1.max(t2))
-        };
-        // Infinite cylinder x² + y² ≤ R².
-        let a = d[0] * d[0] + d[1] * d[1];
-        let b = o[0] * d[0] + o[1] * d[1];
-        let c = o[0] * o[0] + o[1] * o[1] - r * r;
-        let (cyl_in, cyl_out) = if a < 1e-300 {
-            if c > 0.0 {
-                return None;
-            }
-            (f64::NEG_INFINITY, f64::INFINITY)
-        } else {
-            let disc = b * b - a * c;
-            if disc < 0.0 {
-                return None;
-            }
-            let sq = disc.sqrt();
-            ((-b - sq) / a, (-b + sq) / a)
-        };
-        let t_in = slab_in.max(cyl_in);
-        let t_out = slab_out.min(cyl_out);
-        if t_in > t_out || t_out <= 0.0 || t_in <= 0.0 {
-            return None;
-        }
-        let p = [o[0] + t_in * d[0], o[1] + t_in * d[1], o[2] + t_in * d[2]];
-        let (surface, normal_body) = if slab_in >= cyl_in {
+        self.intersect_family(pose, &RayFamily::new(pose, dir), origin)
+    }
+
+    /// As [`DiskShape::intersect`] for a ray of a family of parallel rays.
+    pub fn intersect_family(
+        &self,
+        pose: &Pose,
+        family: &RayFamily,
+        origin: [f64; 3],
+    ) -> Option<DiskHit> {
+        let (t_in, cap, p) = self.entry(pose, family, origin)?;
+        let d = family.body;
+        let (surface, normal_body) = if cap {
             if d[2] < 0.0 {
                 let across = -self.beta0.sin() * p[0] + self.beta0.cos() * p[1];
                 let surface = if across.abs() <= self.strip_half_width {
@@ -204,6 +205,84 @@ impl DiskShape {
             surface,
             normal: pose.dir_to_world(normal_body),
         })
+    }
+
+    /// Whether a ray of the family meets the disk at all (shadow rays).
+    pub fn blocks(&self, pose: &Pose, family: &RayFamily, origin: [f64; 3]) -> bool {
+        self.entry(pose, family, origin).is_some()
+    }
+
+    /// Entry parameter, whether it is on a cap, and the body-frame entry point.
+    fn entry(
+        &self,
+        pose: &Pose,
+        family: &RayFamily,
+        origin: [f64; 3],
+    ) -> Option<(f64, bool, [f64; 3])> {
+        // Bounding sphere first: most rays of a frame miss the disk.
+        let oc = sub(origin, pose.centre);
+        let b_sphere = dot(oc, family.world);
+        if b_sphere * b_sphere - (dot(oc, oc) - self.bounding_radius_sq()) < 0.0 {
+            return None;
+        }
+        let o = pose.body_from_world(origin);
+        let d = family.body;
+        let (r, h) = (self.radius, self.half_thickness);
+        // Slab |z| ≤ H.
+        let (slab_in, slab_out) = match family.inv_dz {
+            None => {
+                if o[2].abs() > h {
+                    return None;
+                }
+                (f64::NEG_INFINITY, f64::INFINITY)
+            }
+            Some(inv) => {
+                let t1 = (-h - o[2]) * inv;
+                let t2 = (h - o[2]) * inv;
+                (t1.min(t2), t1.max(t2))
+            }
+        };
+        // Infinite cylinder x² + y² ≤ R².
+        let c = o[0] * o[0] + o[1] * o[1] - r * r;
+        let (cyl_in, cyl_out) = match family.inv_a {
+            None => {
+                if c > 0.0 {
+                    return None;
+                }
+                (f64::NEG_INFINITY, f64::INFINITY)
+            }
+            Some(inv_a) => {
+                let b = o[0] * d[0] + o[1] * d[1];
+                let disc = b * b - family.a * c;
+                if disc < 0.0 {
+                    return None;
+                }
+                let sq = disc.sqrt();
+                ((-b - sq) * inv_a, (-b + sq) * inv_a)
+            }
+        };
+        let t_in = slab_in.max(cyl_in);
+        let t_out = slab_out.min(cyl_out);
+        if t_in > t_out || t_out <= 0.0 || t_in <= 0.0 {
+            return None;
+        }
+        let p = [o[0] + t_in * d[0], o[1] + t_in * d[1], o[2] + t_in * d[2]];
+        Some((t_in, slab_in >= cyl_in, p))
+    }
+
+    fn bounding_radius_sq(&self) -> f64 {
+        self.radius * self.radius + self.half_thickness * self.half_thickness
+    }
+
+    /// Range of `u · p` over the points p of the disk at `pose` (`u` any vector):
+    /// u·G ± (R √(|u|² − (a·u)²) + H |a·u|), with a the symmetry axis.
+    pub fn extent(&self, pose: &Pose, u: [f64; 3]) -> (f64, f64) {
+        let axis = [pose.m[0][2], pose.m[1][2], pose.m[2][2]];
+        let au = dot(axis, u);
+        let half =
+            self.radius * (dot(u, u) - au * au).max(0.0).sqrt() + self.half_thickness * au.abs();
+        let mid = dot(pose.centre, u);
+        (mid - half, mid + half)
     }
 
     /// The eight corners of the body-frame bounding box, in the world.
@@ -342,6 +421,18 @@ impl Camera {
         }
     }
 
+    /// Image-plane functionals (x, up) of the view: image x = cx + (x·p)/s and
+    /// row = cy − (up·p)/s.
+    pub fn axes(&self) -> ([f64; 3], [f64; 3]) {
+        match self.view {
+            View::Side => {
+                let (se, ce) = self.elevation.sin_cos();
+                ([1.0, 0.0, 0.0], [0.0, se, ce])
+            }
+            View::Plan => ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        }
+    }
+
     /// Image (x, row) of a world point.
     pub fn project(&self, p: [f64; 3]) -> (f64, f64) {
         match self.view {
@@ -370,6 +461,9 @@ pub struct Scene {
     pub plate_front: f64,
 }
 
+/// Classes at or above this are the plate (lit or shadowed, with its mirror image).
+pub const PLATE_CLASSES: u8 = 8;
+
 /// One ray's colour and class.
 #[derive(Clone, Copy, Debug)]
 pub struct Sample {
@@ -388,7 +482,48 @@ impl Scene {
     /// Colour and class of the ray (origin, dir) with the disk at `pose`
     /// (`None`: the empty scene, used for the static background).
     pub fn trace(&self, pose: Option<&Pose>, origin: [f64; 3], dir: [f64; 3]) -> Sample {
-        if let Some(hit) = pose.and_then(|p| self.disk.intersect(p, origin, dir)) {
+        match pose {
+            Some(pose) => self.trace_prepared(&Prepared::new(self, pose, dir), origin),
+            None => self.trace_empty(origin, dir),
+        }
+    }
+
+    /// Colour and class of a ray of the empty scene.
+    pub fn trace_empty(&self, origin: [f64; 3], dir: [f64; 3]) -> Sample {
+        match self.plate_hit(origin, dir) {
+            Some(_) => {
+                let look = &self.look;
+                let rho = look.reflectivity;
+                let mut rgb = look.plate;
+                for (c, m) in rgb.iter_mut().zip(look.background) {
+                    *c = (1.0 - rho) * *c + rho * m;
+                }
+                Sample { rgb, class: 8 }
+            }
+            None => Sample {
+                rgb: self.look.background,
+                class: 0,
+            },
+        }
+    }
+
+    fn plate_hit(&self, origin: [f64; 3], dir: [f64; 3]) -> Option<[f64; 3]> {
+        if dir[2] < 0.0 && origin[2] > 0.0 {
+            let t = -origin[2] / dir[2];
+            let q = [origin[0] + t * dir[0], origin[1] + t * dir[1], 0.0];
+            let on_plate = q[0].abs() <= self.plate_front
+                && q[1] >= -self.plate_front
+                && q[1] <= self.plate_back;
+            return on_plate.then_some(q);
+        }
+        None
+    }
+
+    /// Colour and class of a ray of the prepared family, starting at `origin`.
+    pub fn trace_prepared(&self, prep: &Prepared, origin: [f64; 3]) -> Sample {
+        let pose = &prep.pose;
+        let dir = prep.view.world;
+        if let Some(hit) = self.disk.intersect_family(pose, &prep.view, origin) {
             // The disk lies on the plate (z ≥ 0) and the cameras look down, so a disk
             // hit always comes before the plate.
             return Sample {
@@ -396,35 +531,21 @@ impl Scene {
                 class: hit.surface.class(),
             };
         }
-        if dir[2] < 0.0 && origin[2] > 0.0 {
-            let t = -origin[2] / dir[2];
-            let q = [origin[0] + t * dir[0], origin[1] + t * dir[1], 0.0];
-            if q[0].abs() <= self.plate_front
-                && q[1] >= -self.plate_front
-                && q[1] <= self.plate_back
-            {
-                return self.plate_colour(pose, q, dir);
-            }
-        }
-        Sample {
-            rgb: self.look.background,
-            class: 0,
-        }
-    }
-
-    fn plate_colour(&self, pose: Option<&Pose>, q: [f64; 3], dir: [f64; 3]) -> Sample {
+        let Some(q) = self.plate_hit(origin, dir) else {
+            return Sample {
+                rgb: self.look.background,
+                class: 0,
+            };
+        };
         let look = &self.look;
         let lifted = [q[0], q[1], 1e-12];
-        let shadowed = pose
-            .and_then(|p| self.disk.intersect(p, lifted, look.key_light))
-            .is_some();
+        let shadowed = self.disk.blocks(pose, &prep.shadow, lifted);
         let light = if shadowed { look.shadow_factor } else { 1.0 };
         let mut rgb = look.plate.map(|c| c * light);
         let mut class = 8 + u8::from(shadowed);
         if look.reflectivity > 0.0 {
-            let reflected_dir = [dir[0], dir[1], -dir[2]];
             let (mirror, mirror_class) =
-                match pose.and_then(|p| self.disk.intersect(p, lifted, reflected_dir)) {
+                match self.disk.intersect_family(pose, &prep.mirror, lifted) {
                     Some(hit) => (look.disk_colour(&hit), 2 * hit.surface.class()),
                     None => (look.background, 0),
                 };
@@ -435,6 +556,28 @@ impl Scene {
             class += 16 * mirror_class;
         }
         Sample { rgb, class }
+    }
+}
+
+/// The three ray families of one view and frame: camera rays, shadow rays towards
+/// the key light, and camera rays mirrored in the plate.
+#[derive(Clone, Copy, Debug)]
+pub struct Prepared {
+    pose: Pose,
+    view: RayFamily,
+    shadow: RayFamily,
+    mirror: RayFamily,
+}
+
+impl Prepared {
+    /// Families for camera rays along `dir` with the disk at `pose`.
+    pub fn new(scene: &Scene, pose: &Pose, dir: [f64; 3]) -> Self {
+        Prepared {
+            pose: *pose,
+            view: RayFamily::new(pose, dir),
+            shadow: RayFamily::new(pose, scene.look.key_light),
+            mirror: RayFamily::new(pose, [dir[0], dir[1], -dir[2]]),
+        }
     }
 }
 
