@@ -3,6 +3,7 @@ pub mod config;
 pub mod energy;
 pub mod footage;
 pub mod model;
+pub mod render;
 pub mod report;
 pub mod reproduce;
 pub mod stats;

@@ -12,6 +12,10 @@ use eulerdisk::model::dissipation::{Dissipation, ModelKind};
 use eulerdisk::model::params::Preset;
 use eulerdisk::model::simulate::{InitialState, SimulationSpec, simulate};
 use eulerdisk::model::tuning::tune_eta;
+use eulerdisk::render::{
+    Effects, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Timing, power_law_motion,
+    trajectory_motion, write_clip,
+};
 use eulerdisk::report::simulation::write_simulation;
 use eulerdisk::{footage, reproduce};
 
@@ -36,6 +40,9 @@ enum Command {
     /// Simulate the rolling/slipping disk (thesis Chapter 4) and write a trajectory
     /// CSV, a JSON summary and a plot panel.
     Simulate(SimulateArgs),
+    /// Render synthetic footage (MP4 or PNG folder) of a prescribed power-law motion
+    /// or a simulated one, with its ground truth as `<clip>.truth.json`.
+    Render(RenderArgs),
     /// Recompute the thesis's published numbers and show them side by side.
     Reproduce {
         /// Output folder for the table (Markdown, CSV, JSON).
@@ -102,6 +109,84 @@ struct SimulateArgs {
     out: PathBuf,
 }
 
+#[derive(Args)]
+struct RenderArgs {
+    /// Energy exponent n of E = A_e (t_halt − t)^n (prescribed motion), in (0, 2).
+    #[arg(long, default_value_t = 0.5)]
+    n: f64,
+    /// Clip time of the halt [s] (prescribed motion; the first frame is at 0).
+    #[arg(long, default_value_t = 1.0)]
+    halt: f64,
+    /// A_e [J s^-n] (thesis fig. 3.14: 0.0063).
+    #[arg(long, default_value_t = 0.0063)]
+    a_e: f64,
+    /// Base plate: dark reflective steel or a light plate with a shadow (fig. 3.9).
+    #[arg(long, value_enum, default_value = "dark")]
+    plate: Plate,
+    /// Side view above, plan view with the red strip below (fig. 3.19).
+    #[arg(long)]
+    two_view: bool,
+    /// Sensor noise σ [grey levels].
+    #[arg(long, default_value_t = 0.0)]
+    noise: f64,
+    /// Gaussian blur σ [px].
+    #[arg(long, default_value_t = 0.0)]
+    blur: f64,
+    /// 50 Hz mains flicker: amplitude of the 100 Hz intensity modulation.
+    #[arg(long, default_value_t = 0.0)]
+    flicker: f64,
+    /// Lateral drift before the halt [px/s].
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    drift: f64,
+    /// Capture indices (0-based) of frames to drop, e.g. 10,57.
+    #[arg(long, value_delimiter = ',')]
+    drop: Vec<usize>,
+    /// Frame rate [frames/s] (thesis: 480).
+    #[arg(long, default_value_t = 480.0)]
+    fps: f64,
+    /// Frame size WxH (default 1280x720, or 720x1280 with --two-view).
+    #[arg(long)]
+    size: Option<String>,
+    /// Image scale [m/px] (default: the disk spans 90 % of the width).
+    #[arg(long)]
+    scale: Option<f64>,
+    /// Camera elevation of the side view [deg].
+    #[arg(long, default_value_t = 3.0)]
+    elevation: f64,
+    /// Flat disk filmed after the halt [s] (post-flat spin, then rest frames).
+    #[arg(long, default_value_t = 0.15)]
+    after_halt: f64,
+    /// β̇ just after the halt [rad/s] (prescribed motion); it stops by eq. 4.113.
+    #[arg(long, default_value_t = -2.8, allow_hyphen_values = true)]
+    beta_dot_flat: f64,
+    /// Coulomb friction μ of the post-flat spin (Table 3.1, stainless steel).
+    #[arg(long, default_value_t = 0.134)]
+    mu: f64,
+    /// Strip angle on the top face β0 [rad] (eq. 3.13).
+    #[arg(long, default_value_t = 0.3, allow_hyphen_values = true)]
+    beta0: f64,
+    /// Seed of the sensor noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Disk parameters.
+    #[arg(long, value_enum, default_value = "euler-disk")]
+    preset: Preset,
+    /// Render a simulated trajectory (eq. 4.43 start, the halt where it ends) instead
+    /// of a prescribed power law.
+    #[arg(long)]
+    simulate: bool,
+    /// Dissipation model for --simulate.
+    #[arg(long, value_enum, default_value = "contour")]
+    model: ModelKind,
+    /// η for --simulate (default: the thesis's 2.43e-4 for contour, 1.1e-5 for
+    /// augmented contour).
+    #[arg(long)]
+    eta: Option<f64>,
+    /// Output: a path ending in .mp4, or a folder for PNG frames.
+    #[arg(short, long)]
+    out: PathBuf,
+}
+
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
@@ -124,6 +209,7 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Simulate(args) => run_simulate(&args),
+        Command::Render(args) => run_render(&args),
         Command::Reproduce {
             out,
             skip_table_4_1,
@@ -182,6 +268,98 @@ fn run_simulate(args: &SimulateArgs) -> Result<()> {
     for path in written {
         println!("wrote {}", path.display());
     }
+    Ok(())
+}
+
+fn run_render(args: &RenderArgs) -> Result<()> {
+    let params = args.preset.params();
+    let motion = if args.simulate {
+        let eta = match (args.eta, args.model) {
+            (Some(eta), _) => eta,
+            (None, ModelKind::Contour) => 2.43e-4,
+            (None, ModelKind::AugmentedContour) => 1.1e-5,
+            (None, model) => bail!("give --eta for the `{model:?}` model"),
+        };
+        let dissipation = Dissipation::new(args.model);
+        let mut spec = SimulationSpec::thesis_default(params, dissipation, eta);
+        spec.t_end = 5.0;
+        spec.mu = args.mu;
+        spec.beta0 = args.beta0;
+        let trajectory = simulate(&spec).context("simulation for render failed")?;
+        trajectory_motion(
+            &params,
+            &trajectory,
+            args.beta0,
+            args.mu,
+            args.fps,
+            args.after_halt,
+            dissipation.analytic_exponent(),
+        )?
+    } else {
+        let law = PowerLaw {
+            n: args.n,
+            a_e: args.a_e,
+            precession_sign: -1.0,
+            beta0: args.beta0,
+        };
+        let timing = Timing {
+            fps: args.fps,
+            halt_time: args.halt,
+            after_halt: args.after_halt,
+        };
+        let spin = PostFlatSpin {
+            beta_dot0: args.beta_dot_flat,
+            mu: args.mu,
+        };
+        power_law_motion(&params, &law, &timing, spin)?
+    };
+    let mut spec = RenderSpec::thesis(args.plate, args.two_view);
+    if let Some(size) = &args.size {
+        let parsed = size
+            .split_once(['x', 'X'])
+            .and_then(|(w, h)| Some((w.trim().parse().ok()?, h.trim().parse().ok()?)));
+        let Some((w, h)) = parsed else {
+            bail!("--size must look like 320x480 (width x height), got `{size}`");
+        };
+        (spec.width, spec.height) = (w, h);
+    }
+    spec.metres_per_px = args.scale;
+    spec.elevation_deg = args.elevation;
+    spec.effects = Effects {
+        noise_sigma: args.noise,
+        blur_sigma: args.blur,
+        flicker_amplitude: args.flicker,
+        drift_px_per_s: args.drift,
+        seed: args.seed,
+    };
+    spec.dropped = args.drop.clone();
+    let renderer = Renderer::new(&spec, &motion)?;
+    eprintln!(
+        "rendering {} frames ({} × {} px, {} fps)…",
+        renderer.frame_count(),
+        spec.width,
+        spec.height,
+        args.fps
+    );
+    let written = write_clip(&renderer, &args.out)?;
+    let truth = renderer.truth();
+    println!(
+        "halt at clip time {:.4} s, t_β = {:.4} s after it, δ = {:.4e} m/px{}",
+        truth.halt_time,
+        truth.t_beta,
+        truth.delta,
+        written
+            .codec
+            .as_deref()
+            .map(|c| format!(", codec {c}"))
+            .unwrap_or_default()
+    );
+    println!(
+        "wrote {} ({} frames)",
+        written.clip.display(),
+        written.frames
+    );
+    println!("wrote {}", written.truth.display());
     Ok(())
 }
 
