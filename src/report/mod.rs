@@ -2,6 +2,7 @@
 //! the destination folder and renamed into place, so an interrupted run never
 //! leaves a half-written result (DESIGN.md, conventions).
 
+pub mod diagnostics;
 pub mod html;
 pub mod plot;
 pub mod simulation;

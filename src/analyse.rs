@@ -1,0 +1,570 @@
+//! One clip from pixels to the energy exponent: the stages of DESIGN.md chained.
+//!
+//! ```text
+//! footage::  probe, capture fps (config / container tag / container fps), FrameSource
+//!   │        pass 1: the last frames (rest after the halt)
+//!   ▼
+//! vision::   calibrate_at_rest → x_l, x_r, z_t, z_base, γ     (thesis §3.2.4)
+//!   │        two-view: split row, colour thresholds             (§3.3.2)
+//!   │        pass 2, streamed: RimGauge per frame → z_rim [px]; StripFinder → β
+//!   ▼
+//! signal::   halt t_φ, peaks, φ (eq. 3.9), ψ, ψ̇ (eq. 3.11), per-frame states,
+//!   │        β unwrapped and smoothed, t_β, frame-skip flags    (§3.2.5, §3.3.3)
+//!   ▼
+//! energy::   E at peaks by eq. 3.8, per frame by eq. 3.8, and by eq. 3.6 with
+//!            θ̇ = β̇ − ψ̇ (eq. 3.22) for two-view clips; E = A_e (t0 − t)^n fitted
+//!            over the window, and over 1, 0.5, 0.25, 0.1 s
+//! ```
+//!
+//! [`analyse_clip`] reads the clip twice (the calibration must be known before the
+//! rim can be measured) and keeps only scalars per frame, so memory does not grow
+//! with frame size or, beyond a few numbers per frame, with clip length.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::config::{ExperimentConfig, HaltChoice};
+use crate::energy::{self, FitError, HaltTime, PowerLawFit};
+use crate::footage::{self, CaptureFps, FootageError, FrameSource, FrameView};
+use crate::model::params::DiskParams;
+use crate::report::diagnostics;
+use crate::signal::{self, SignalConfig, SignalError, StateSeries, ThesisRim};
+use crate::vision::{
+    self, CalibrationOverride, CalibrationReport, ColourThresholds, RimGauge, RimHeight,
+    SideViewConfig, StripFinder, ThresholdSource, VisionError,
+};
+
+/// Frames at the end of a clip that must show the disk at rest (calibration).
+pub const REST_FRAMES: usize = 5;
+
+/// The windows of the window-sensitivity table [s] (issue: 1, 0.5, 0.25, 0.1 s).
+pub const SENSITIVITY_WINDOWS_S: [f64; 4] = [1.0, 0.5, 0.25, 0.1];
+
+/// Why a clip could not be analysed. Every message names the clip; vision errors
+/// name the frame.
+#[derive(Debug, thiserror::Error)]
+pub enum AnalyseError {
+    #[error(transparent)]
+    Footage(#[from] FootageError),
+    #[error("{}: {reason}", path.display())]
+    Fps { path: PathBuf, reason: String },
+    #[error("{}: {source}", path.display())]
+    Vision { path: PathBuf, source: VisionError },
+    #[error("{}: {source}", path.display())]
+    Signal { path: PathBuf, source: SignalError },
+    #[error("{}: energy fit: {source}", path.display())]
+    Fit { path: PathBuf, source: FitError },
+    #[error("{}: {reason}", path.display())]
+    Clip { path: PathBuf, reason: String },
+}
+
+/// Everything an analysis decided before measuring: the resolved plan, recorded
+/// beside every result as its provenance.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ExperimentPlan {
+    pub clip: PathBuf,
+    /// BLAKE3 hash of the clip's bytes (all frame files, in order, for a folder).
+    pub clip_hash: String,
+    pub crate_version: String,
+    pub config: ExperimentConfig,
+    pub fps: CaptureFps,
+    pub frames: usize,
+    pub width: usize,
+    pub height: usize,
+    pub disk: DiskParams,
+    /// Two-view clips: the first row of the plan view [px] and whether it came from
+    /// the config.
+    pub split_row: Option<(usize, bool)>,
+    pub calibration: CalibrationReport,
+    /// Scale δ = 2H / (z_base − z_t) [m/px] (eq. 3.10 with ERRATA).
+    pub metres_per_px: f64,
+    pub band_half_width_px: usize,
+    pub colour_thresholds: Option<(ColourThresholds, ThresholdSource)>,
+    pub window_s: f64,
+    pub halt: HaltChoice,
+}
+
+/// One frame's measurements.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FrameRecord {
+    pub index: usize,
+    /// Capture time from the start of the clip, index / fps [s].
+    pub t_capture: f64,
+    /// Time with the halt at 0 [s].
+    pub t: f64,
+    /// The container's presentation time [s, playback clock], when it has one.
+    pub container_time_s: Option<f64>,
+    /// Rim height above the plate line [px]; 0 when the rim touches; `None`
+    /// when no edge was found.
+    pub z_rim_px: Option<f64>,
+    /// The same in metres.
+    pub z_rim_m: Option<f64>,
+    /// Strip angle β from PCA, in (−π/2, π/2] (two-view clips).
+    pub beta_raw: Option<f64>,
+}
+
+/// Energy at one instant, with the state it came from.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+pub struct EnergySample {
+    /// Time, halt at 0 [s].
+    pub t: f64,
+    pub phi: f64,
+    pub psi_dot: f64,
+    /// θ̇ = β̇ − ψ̇ (eq. 3.22), for eq. 3.6.
+    pub theta_dot: Option<f64>,
+    /// Energy above the flat rest state [J].
+    pub energy: f64,
+}
+
+/// A power-law fit of one energy series, with its window sensitivity.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct EnergyFit {
+    /// What was fitted, e.g. "eq. 3.8 at peaks".
+    pub method: String,
+    pub samples: Vec<EnergySample>,
+    pub fit: PowerLawFit,
+    /// n over other windows: (window [s], fit or the reason it failed).
+    pub windows: Vec<(f64, Result<PowerLawFit, String>)>,
+}
+
+/// The result of one clip.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Experiment {
+    pub plan: ExperimentPlan,
+    pub frames: Vec<FrameRecord>,
+    pub series: StateSeries,
+    /// The headline fit: eq. 3.8 at the peaks (the thesis's method).
+    pub peaks_fit: EnergyFit,
+    /// Eq. 3.8 on the per-frame states.
+    pub frames_fit: Option<EnergyFit>,
+    /// Eq. 3.6 with θ̇ from the strip (two-view clips).
+    pub full_state_fit: Option<EnergyFit>,
+    /// Flagged frames inside the fit window.
+    pub skips_in_window: usize,
+    pub warnings: Vec<String>,
+    /// Diagnostic images (PNG): the calibration frame with its points, and the
+    /// frame of the highest rim thresholded with the band and the edge found.
+    #[serde(skip)]
+    pub diagnostics: Diagnostics,
+}
+
+/// PNG images for a person checking the image stage.
+#[derive(Debug, Clone, Default)]
+pub struct Diagnostics {
+    pub calibration_png: Vec<u8>,
+    pub threshold_png: Vec<u8>,
+}
+
+/// BLAKE3 of a clip's bytes: the file, or every frame file of a folder in order.
+///
+/// # Errors
+/// The file or a frame cannot be read.
+pub fn clip_hash(clip: &Path) -> Result<String, FootageError> {
+    let mut hasher = blake3::Hasher::new();
+    let files = if clip.is_dir() {
+        footage::frame_files(clip)?
+    } else {
+        vec![clip.to_path_buf()]
+    };
+    for file in files {
+        let unreadable = |e: std::io::Error| FootageError::Unreadable {
+            path: file.clone(),
+            reason: e.to_string(),
+        };
+        let mut reader = std::fs::File::open(&file).map_err(unreadable)?;
+        std::io::copy(&mut reader, &mut hasher).map_err(unreadable)?;
+    }
+    Ok(hasher.finalize().to_hex().to_string())
+}
+
+/// An owned copy of a frame (for the few rest frames kept in pass 1).
+struct OwnedFrame {
+    index: usize,
+    width: usize,
+    height: usize,
+    order: footage::ChannelOrder,
+    data: Vec<u8>,
+}
+
+impl OwnedFrame {
+    fn copy(index: usize, view: &FrameView) -> Self {
+        let mut data = Vec::with_capacity(3 * view.width * view.height);
+        for y in 0..view.height {
+            data.extend_from_slice(view.row(y));
+        }
+        Self {
+            index,
+            width: view.width,
+            height: view.height,
+            order: view.order,
+            data,
+        }
+    }
+
+    fn view(&self) -> FrameView<'_> {
+        FrameView {
+            width: self.width,
+            height: self.height,
+            stride: 3 * self.width,
+            order: self.order,
+            data: &self.data,
+        }
+    }
+}
+
+/// The side view of a frame: the whole frame, or its top part in a two-view clip.
+fn side_view<'a>(
+    frame: &FrameView<'a>,
+    split: Option<usize>,
+    index: usize,
+) -> Result<(FrameView<'a>, Option<FrameView<'a>>), VisionError> {
+    match split {
+        Some(row) => {
+            let (side, plan) = vision::split_views(frame, row, index)?;
+            Ok((side, Some(plan)))
+        }
+        None => Ok((*frame, None)),
+    }
+}
+
+/// Analyse one clip with its (merged) config. `progress(done, total)` is called
+/// every few hundred frames of the measuring pass.
+///
+/// # Errors
+/// See [`AnalyseError`]: unreadable or truncated footage, no usable fps, no disk in
+/// view, a calibration frame not at rest, too few peaks, a failed energy fit.
+pub fn analyse_clip(
+    clip: &Path,
+    config: &ExperimentConfig,
+    progress: &dyn Fn(usize, Option<usize>),
+) -> Result<Experiment, AnalyseError> {
+    let vision_err = |source| AnalyseError::Vision {
+        path: clip.to_path_buf(),
+        source,
+    };
+    let info = footage::probe(clip)?;
+    let fps = footage::resolve_capture_fps(
+        config.fps,
+        footage::container_capture_rate(clip),
+        info.container_fps,
+    )
+    .map_err(|reason| AnalyseError::Fps {
+        path: clip.to_path_buf(),
+        reason,
+    })?;
+    let mut warnings = fps.warnings.clone();
+    let params = config.disk_params();
+    let vision_config = config.vision.clone().unwrap_or_default();
+    let two_view = config.two_view.unwrap_or(false);
+
+    // Pass 1: the rest frames at the end.
+    let mut source = FrameSource::open(clip)?;
+    let expected = source.expected_frames().unwrap_or(info.frame_count as usize);
+    if expected < REST_FRAMES + 3 {
+        return Err(AnalyseError::Clip {
+            path: clip.to_path_buf(),
+            reason: format!("only {expected} frames: too short to analyse"),
+        });
+    }
+    source.seek(expected - REST_FRAMES)?;
+    let mut rest = Vec::new();
+    while let Some(frame) = source.next_frame()? {
+        rest.push(OwnedFrame::copy(frame.index, &frame.view));
+    }
+    if rest.len() < 2 {
+        return Err(AnalyseError::Clip {
+            path: clip.to_path_buf(),
+            reason: "cannot read the last frames (needed for the rest-frame calibration)".into(),
+        });
+    }
+    let last = &rest[rest.len() - 1];
+    let split_row = if two_view {
+        Some(match vision_config.split_row {
+            Some(row) => (row as usize, true),
+            None => (
+                vision::find_split_row(&last.view(), last.index).map_err(vision_err)?,
+                false,
+            ),
+        })
+    } else {
+        None
+    };
+    let split = split_row.map(|(row, _)| row);
+    let side_config = SideViewConfig {
+        gamma: vision_config.gamma,
+        half_width_px: vision_config
+            .band_half_width_px
+            .map_or(SideViewConfig::default().half_width_px, |w| w as usize),
+        ..SideViewConfig::default()
+    };
+    let given = config.calibration.map(|c| CalibrationOverride {
+        x_l: Some(c.x_l),
+        x_r: Some(c.x_r),
+        z_t: Some(c.z_t),
+        z_base: Some(c.z_base),
+    });
+    let mut rest_sides = Vec::new();
+    for frame in &rest {
+        rest_sides.push(side_view(&frame.view(), split, frame.index).map_err(vision_err)?.0);
+    }
+    let calibration =
+        vision::calibrate_at_rest(&rest_sides, rest[0].index, &side_config, given.as_ref())
+            .map_err(vision_err)?;
+    let metres_per_px = calibration
+        .calibration
+        .metres_per_px(params.half_thickness);
+    let side0 = &rest_sides[0];
+    let gauge = RimGauge::new(
+        &calibration.calibration,
+        &calibration.threshold,
+        &side_config,
+        side0.width,
+        side0.height,
+    )
+    .map_err(vision_err)?;
+    let colour_thresholds = match split {
+        Some(row) => {
+            let (_, plan) = vision::split_views(&last.view(), row, last.index).map_err(vision_err)?;
+            let thresholds =
+                vision::auto_colour_thresholds(&plan, last.index).map_err(vision_err)?;
+            Some((thresholds, ThresholdSource::Automatic))
+        }
+        None => None,
+    };
+    let (width, height) = (last.width, last.height);
+    let calibration_png = png(&diagnostics::calibration_image(
+        &rest_sides[rest_sides.len() - 1],
+        &calibration.calibration,
+    ));
+    drop(rest_sides);
+    drop(rest);
+
+    // Pass 2: every frame, streamed.
+    let mut source = FrameSource::open(clip)?;
+    let mut strip_finder = colour_thresholds
+        .as_ref()
+        .map(|(t, s)| StripFinder::new(*t, *s));
+    let mut frames = Vec::with_capacity(expected);
+    let mut no_edge = 0usize;
+    // The frame with the highest rim so far, kept for the threshold diagnostic.
+    let mut highest: Option<(f64, f64, OwnedFrame)> = None;
+    while let Some(frame) = source.next_frame()? {
+        let (side, plan) = side_view(&frame.view, split, frame.index).map_err(vision_err)?;
+        let z_rim_px = match gauge.measure(&side, frame.index).map_err(vision_err)? {
+            RimHeight::Edge { z_rim_px, edge_row } => {
+                if highest.as_ref().is_none_or(|(z, _, _)| z_rim_px > *z) {
+                    highest = Some((z_rim_px, edge_row, OwnedFrame::copy(frame.index, &side)));
+                }
+                Some(z_rim_px)
+            }
+            RimHeight::Contact => Some(0.0),
+            RimHeight::NoEdge => {
+                no_edge += 1;
+                None
+            }
+        };
+        let beta_raw = match (&mut strip_finder, plan) {
+            (Some(finder), Some(plan)) => finder.measure(&plan, frame.index).ok().map(|s| s.beta),
+            _ => None,
+        };
+        frames.push(FrameRecord {
+            index: frame.index,
+            t_capture: frame.index as f64 / fps.fps,
+            t: f64::NAN,
+            container_time_s: frame.container_time_s,
+            z_rim_px,
+            z_rim_m: z_rim_px.map(|z| z * metres_per_px),
+            beta_raw,
+        });
+        if frame.index % 256 == 0 {
+            progress(frame.index, Some(expected));
+        }
+    }
+    progress(frames.len(), Some(expected));
+    if no_edge == frames.len() {
+        return Err(AnalyseError::Vision {
+            path: clip.to_path_buf(),
+            source: VisionError::NoDisk { frame: 0 },
+        });
+    }
+    if no_edge > 0 {
+        warnings.push(format!("no rim edge found in {no_edge} of {} frames", frames.len()));
+    }
+
+    // Signal.
+    let t: Vec<f64> = frames.iter().map(|f| f.t_capture).collect();
+    let z: Vec<f64> = frames.iter().map(|f| f.z_rim_m.unwrap_or(f64::NAN)).collect();
+    let beta: Option<Vec<f64>> = strip_finder.as_ref().map(|_| {
+        frames
+            .iter()
+            .map(|f| f.beta_raw.unwrap_or(f64::NAN))
+            .collect()
+    });
+    let window_s = config.window_s();
+    let signal_config = SignalConfig {
+        window_s,
+        // Edges quantised to pixels: a constant rest tail has zero spread.
+        noise_floor: metres_per_px / 12f64.sqrt(),
+        min_prominence: metres_per_px,
+        ..SignalConfig::default()
+    };
+    let model = ThesisRim {
+        radius: params.radius,
+    };
+    let signal_err = |source| AnalyseError::Signal {
+        path: clip.to_path_buf(),
+        source,
+    };
+    let series = signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config)
+        .map_err(signal_err)?;
+    for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
+        record.t = *shifted;
+    }
+    let window = (-window_s, 0.0);
+    let skips_in_window = signal::flags_within(&series.flags, window.0, window.1).len();
+    if skips_in_window > 0 {
+        warnings.push(format!(
+            "{skips_in_window} flagged frame(s) (skips or jumps) inside the fit window"
+        ));
+    }
+
+    // Energy.
+    let halt = match config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default() {
+        HaltChoice::Measured => HaltTime::Fixed(0.0),
+        HaltChoice::Free => HaltTime::Free,
+    };
+    let fit_err = |source| AnalyseError::Fit {
+        path: clip.to_path_buf(),
+        source,
+    };
+    let peak_samples = peak_energies(&params, &series);
+    let peaks_fit = fit_series("eq. 3.8 at peaks", peak_samples, window_s, halt).map_err(fit_err)?;
+    let frame_samples = frame_energies(&params, &series, None);
+    let frames_fit = fit_series("eq. 3.8 per frame", frame_samples, window_s, halt).ok();
+    let full_state_fit = series.strip.as_ref().and_then(|strip| {
+        let samples = frame_energies(&params, &series, Some(strip));
+        fit_series("eq. 3.6 per frame, θ̇ = β̇ − ψ̇ (eq. 3.22)", samples, window_s, halt).ok()
+    });
+
+    let threshold_png = highest.map_or_else(Vec::new, |(_, edge_row, frame)| {
+        png(&diagnostics::threshold_image(
+            &frame.view(),
+            calibration.threshold.gamma,
+            calibration.calibration.x_centre(),
+            side_config.half_width_px,
+            Some(edge_row),
+        ))
+    });
+    let plan = ExperimentPlan {
+        clip: clip.to_path_buf(),
+        clip_hash: clip_hash(clip)?,
+        crate_version: env!("CARGO_PKG_VERSION").into(),
+        config: config.clone(),
+        fps,
+        frames: frames.len(),
+        width,
+        height,
+        disk: params,
+        split_row,
+        calibration,
+        metres_per_px,
+        band_half_width_px: side_config.half_width_px,
+        colour_thresholds,
+        window_s,
+        halt: config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default(),
+    };
+    Ok(Experiment {
+        plan,
+        frames,
+        series,
+        peaks_fit,
+        frames_fit,
+        full_state_fit,
+        skips_in_window,
+        warnings,
+        diagnostics: Diagnostics {
+            calibration_png,
+            threshold_png,
+        },
+    })
+}
+
+/// PNG bytes of a diagnostic image; empty if encoding fails (the images are for
+/// looking at, never an input to a number).
+fn png(image: &image::RgbImage) -> Vec<u8> {
+    diagnostics::png_bytes(image).unwrap_or_default()
+}
+
+/// Eq. 3.8 at each peak of the window, with ψ̇ by eq. 3.11 (the forward
+/// difference to the next peak; the central difference at the last peak).
+fn peak_energies(params: &DiskParams, series: &StateSeries) -> Vec<EnergySample> {
+    let precession = &series.peaks.precession;
+    series
+        .peaks
+        .peaks
+        .iter()
+        .zip(precession)
+        .filter_map(|(peak, p)| {
+            let psi_dot = p.psi_dot_forward.or(p.psi_dot_central)?;
+            Some(EnergySample {
+                t: peak.t,
+                phi: peak.phi,
+                psi_dot,
+                theta_dot: None,
+                energy: energy::stationary_rolling_energy(params, peak.phi, psi_dot),
+            })
+        })
+        .collect()
+}
+
+/// Energies at every frame state: eq. 3.8, or with a strip, eq. 3.6 with
+/// θ̇ = β̇ − ψ̇ (eq. 3.22) and φ̇ = 0.
+fn frame_energies(
+    params: &DiskParams,
+    series: &StateSeries,
+    strip: Option<&signal::StripAnalysis>,
+) -> Vec<EnergySample> {
+    series
+        .states
+        .iter()
+        .filter_map(|s| {
+            let theta_dot = match strip {
+                Some(strip) => Some(strip.series.beta_dot.get(s.index)? - s.psi_dot),
+                None => None,
+            };
+            let energy = match theta_dot {
+                Some(theta_dot) => energy::rolling_energy(params, s.phi, 0.0, s.psi_dot, theta_dot),
+                None => energy::stationary_rolling_energy(params, s.phi, s.psi_dot),
+            };
+            energy.is_finite().then_some(EnergySample {
+                t: s.t,
+                phi: s.phi,
+                psi_dot: s.psi_dot,
+                theta_dot,
+                energy,
+            })
+        })
+        .collect()
+}
+
+fn fit_series(
+    method: &str,
+    samples: Vec<EnergySample>,
+    window_s: f64,
+    halt: HaltTime,
+) -> Result<EnergyFit, FitError> {
+    let t: Vec<f64> = samples.iter().map(|s| s.t).collect();
+    let e: Vec<f64> = samples.iter().map(|s| s.energy).collect();
+    let fit = energy::fit_window(&t, &e, window_s, halt)?;
+    let windows = energy::window_sensitivity(&t, &e, &SENSITIVITY_WINDOWS_S, halt)
+        .into_iter()
+        .map(|(w, r)| (w, r.map_err(|e| e.to_string())))
+        .collect();
+    Ok(EnergyFit {
+        method: method.into(),
+        samples,
+        fit,
+        windows,
+    })
+}
