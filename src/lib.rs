@@ -4,3 +4,4 @@ pub mod footage;
 pub mod model;
 pub mod report;
 pub mod reproduce;
+pub mod signal;
