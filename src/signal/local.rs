@@ -29,6 +29,8 @@ pub(crate) struct LocalFit {
     /// Phase at t_c, not wrapped.
     pub chi: f64,
     pub omega: f64,
+    /// dω/dt of the chirp (0 without it).
+    pub omega_dot: f64,
     pub sigma_phi: f64,
     pub sigma_chi: f64,
     pub sigma_omega: f64,
@@ -104,6 +106,11 @@ pub(crate) fn fit_local(
         phi_slope: p[1] / half_width,
         chi: sign * p[2],
         omega: sign * p[3] / half_width,
+        omega_dot: if chirp {
+            sign * 2.0 * p[4] / (half_width * half_width)
+        } else {
+            0.0
+        },
         sigma_phi: cov[(0, 0)].sqrt(),
         sigma_chi: cov[(2, 2)].sqrt(),
         sigma_omega: cov[(3, 3)].sqrt() / half_width,
@@ -126,11 +133,20 @@ pub(crate) fn fit_local(
 }
 
 impl LocalFit {
-    /// The time nearest `t_c` at which the phase is `target` mod 2π (0 for a peak, π for
-    /// a trough), and the tilt φ there.
+    /// The time near `t_c` at which the phase is `target` mod 2π (0 for a peak, π for a
+    /// trough), and the tilt φ there: χ₀ + ω τ + ½ ω̇ τ² = target, solved by Newton's
+    /// method from the linear root.
     pub(crate) fn time_of_phase(&self, t_c: f64, target: f64) -> (f64, f64) {
         let offset = wrap_pi(self.chi - target);
-        let dt = -offset / self.omega;
+        let mut dt = -offset / self.omega;
+        for _ in 0..4 {
+            let f = offset + self.omega * dt + 0.5 * self.omega_dot * dt * dt;
+            let df = self.omega + self.omega_dot * dt;
+            if df <= 0.0 {
+                break;
+            }
+            dt -= f / df;
+        }
         (t_c + dt, self.phi + self.phi_slope * dt)
     }
 }

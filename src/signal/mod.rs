@@ -77,7 +77,8 @@
 //! # Methods
 //!
 //! * **Halt** ([`halt_time`]): the rest tail (last `rest_tail_s`) gives the rest level
-//!   (median) and noise (1.4826 × MAD); t_φ is the last frame beyond `motion_sigmas`
+//!   (median) and noise (3σ-clipped RMS from the MAD); t_φ is the last frame beyond
+//!   `motion_sigmas`
 //!   × noise; the tail is checked to be at rest (nothing beyond the threshold, no
 //!   oscillation), the noise re-measured over the whole rest and t_φ found again.
 //! * **Peaks** ([`find_peaks`]): local maxima with prominence above
@@ -174,11 +175,11 @@ impl Default for SignalConfig {
         SignalConfig {
             window_s: 0.5,
             rest_tail_s: 0.1,
-            motion_sigmas: 4.0,
+            motion_sigmas: 5.0,
             noise_floor: 0.0,
             prominence_sigmas: 6.0,
             min_prominence: 0.0,
-            state_window_periods: 1.0,
+            state_window_periods: 1.5,
             smoothing_points: 5,
             strip_settled_after: None,
             strip_settled_tail_s: 0.1,
@@ -414,7 +415,7 @@ pub fn frame_states(
             chi: psi0,
             omega,
         };
-        let Some(fit) = fit_local(model, &st[lo..hi], &v[lo..hi], t_c, init, false, None) else {
+        let Some(fit) = fit_local(model, &st[lo..hi], &v[lo..hi], t_c, init, true, None) else {
             continue;
         };
         let psi = fit.chi + 2.0 * PI * ((psi0 - fit.chi) / (2.0 * PI)).round();

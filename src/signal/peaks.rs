@@ -344,6 +344,11 @@ fn parabolic_vertex(t: &[f64], v: &[f64], k: usize) -> (f64, f64) {
     (t1 + dt, y1 + slope_at_t1 * dt + curvature * dt * dt)
 }
 
+/// Width of the chirped local fit at a peak or trough, in turns.
+const CHIRP_WINDOW_PERIODS: f64 = 1.5;
+/// Fewest samples for the chirped (five-parameter) local fit.
+const MIN_CHIRP_SAMPLES: usize = 9;
+
 /// Local oscillation period at the n-th raw peak: the mean spacing to its neighbours.
 fn local_period(raw: &[(usize, f64)], t: &[f64], n: usize) -> Option<f64> {
     let spacing = |a: usize, b: usize| t[raw[b].0] - t[raw[a].0];
@@ -373,11 +378,22 @@ fn refine(
         return None;
     }
     let t_c = t[k];
-    let half = 0.5 * period;
-    let (lo, hi) = (
-        t.partition_point(|&x| x < t_c - half),
-        t.partition_point(|&x| x <= t_c + half),
-    );
+    let window = |periods: f64| {
+        let half = 0.5 * periods * period;
+        (
+            t.partition_point(|&x| x < t_c - half),
+            t.partition_point(|&x| x <= t_c + half),
+        )
+    };
+    // ψ̇ grows within a turn near the halt: with a chirp over 1.5 turns where there are
+    // samples enough, else constant ψ̇ over one turn.
+    let (lo, hi) = window(CHIRP_WINDOW_PERIODS);
+    let (chirp, lo, hi) = if hi - lo >= MIN_CHIRP_SAMPLES {
+        (true, lo, hi)
+    } else {
+        let (lo, hi) = window(1.0);
+        (false, lo, hi)
+    };
     if hi - lo < 6 {
         return None;
     }
@@ -398,7 +414,7 @@ fn refine(
         chi: target + omega * (t_c - parabolic.0),
         omega,
     };
-    let fit = fit_local(model, &t[lo..hi], &v[lo..hi], t_c, init, false, None)?;
+    let fit = fit_local(model, &t[lo..hi], &v[lo..hi], t_c, init, chirp, None)?;
     let (t_x, phi_x) = fit.time_of_phase(t_c, target);
     let plausible = (t_x - parabolic.0).abs() <= frame
         && phi_x > 0.0

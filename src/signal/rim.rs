@@ -190,7 +190,8 @@ mod tests {
         }
     }
 
-    /// Module docs: z = R sin φ (1 + cos χ − h φ sin²χ) − H φ cos χ tan ε + O(R φ³).
+    /// Module docs: z = R sin φ (1 + cos χ − h φ sin²χ) − H φ cos χ tan ε + O(R φ³)
+    /// + O(R φ² tan ε).
     #[test]
     fn exact_model_reduces_to_the_thesis_profile_for_small_tilt() {
         let thesis = ThesisRim { radius: R };
@@ -207,8 +208,8 @@ mod tests {
                         - R * phi * phi * (H / R) * chi.sin().powi(2)
                         - H * phi * chi.cos() * eps.tan();
                     let z = exact.z_rim(phi, chi);
-                    // The neglected terms are O(R φ³) and O(H φ² tan ε).
-                    let bound = 2.0 * R * phi.powi(3) + H * phi * phi * eps.tan() + 1e-17;
+                    // The neglected terms are O(R φ³) and O((R + H) φ² tan ε).
+                    let bound = 2.0 * R * phi.powi(3) + (R + H) * phi * phi * eps.tan() + 1e-17;
                     assert!((z - first_order).abs() < bound, "φ {phi} χ {chi}");
                 }
             }

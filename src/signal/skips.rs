@@ -4,8 +4,7 @@
 
 use super::local::{LocalInit, PhaseTrack, fit_local};
 use super::peaks::nominal_period;
-use super::strip::robust_level;
-use super::{Halt, RimModel, SignalConfig, finite_samples};
+use super::{Halt, RimModel, SignalConfig, finite_samples, mad_sigma, median};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -27,9 +26,11 @@ pub enum SkipReason {
     StripRateSpike {
         /// Raw β̇ from the previous frame [rad/s].
         rate: f64,
-        /// Robust local level of β̇ (median of neighbouring frames) [rad/s].
+        /// Local level of β̇: the nearer of the medians of the 12 frames before and
+        /// after [rad/s].
         local_rate: f64,
-        /// Robust local spread (1.4826 × MAD, at least the configured floor) [rad/s].
+        /// Robust spread of β̇ about its local level over the clip (1.4826 × MAD, at
+        /// least the configured floor) [rad/s].
         local_sigma: f64,
     },
     /// The rim's phase jumps between the previous frame and this one: the local rim fit
@@ -94,8 +95,9 @@ pub fn timestamp_gaps(t: &[f64], gap_factor: f64) -> Vec<FrameFlag> {
 const RATE_NEIGHBOURS: usize = 12;
 
 /// Frames whose raw β̇ from the previous frame, (β_i − β_{i−1}) / (t_i − t_{i−1}) on
-/// the unwrapped β, departs from the median of the 2 × 12 neighbouring rates by more
-/// than `sigmas` × their robust spread (1.4826 × MAD, at least `rate_floor` [rad/s]).
+/// the unwrapped β, departs from both the median of the 12 rates before it and that of
+/// the 12 after it by more than `sigmas` × the robust spread of such departures over
+/// the clip (1.4826 × MAD, at least `rate_floor` [rad/s]).
 /// A dropped frame whose timestamp was renumbered doubles one step of β.
 pub fn strip_rate_spikes(
     t: &[f64],
@@ -109,16 +111,38 @@ pub fn strip_rate_spikes(
         .windows(2)
         .map(|w| (beta_unwrapped[w[1]] - beta_unwrapped[w[0]]) / (t[w[1]] - t[w[0]]))
         .collect();
+    // Local levels: the medians of the 12 rates before and of the 12 after. A skip is
+    // a one-frame spike, away from both; a change of rate (the strip stopping) agrees
+    // with one side. The departure is the one from the nearer level. The spread is the
+    // robust σ of these departures over the whole clip (the angle noise is the
+    // camera's, the same throughout; 24 neighbours alone would estimate it to ±25 %).
+    let levels: Vec<Option<f64>> = (0..rates.len())
+        .map(|k| {
+            let before = &rates[k.saturating_sub(RATE_NEIGHBOURS)..k];
+            let after = &rates[(k + 1).min(rates.len())..(k + 1 + RATE_NEIGHBOURS).min(rates.len())];
+            if before.len() < RATE_NEIGHBOURS / 2 || after.len() < RATE_NEIGHBOURS / 2 {
+                return None;
+            }
+            let (left, right) = (median(before), median(after));
+            Some(if (rates[k] - left).abs() <= (rates[k] - right).abs() {
+                left
+            } else {
+                right
+            })
+        })
+        .collect();
+    let departures: Vec<f64> = rates
+        .iter()
+        .zip(&levels)
+        .filter_map(|(r, l)| l.map(|l| r - l))
+        .collect();
+    if departures.is_empty() {
+        return Vec::new();
+    }
+    let sigma = mad_sigma(&departures, 0.0).max(rate_floor);
     let mut flags = Vec::new();
-    for k in 0..rates.len() {
-        let lo = k.saturating_sub(RATE_NEIGHBOURS);
-        let hi = (k + RATE_NEIGHBOURS + 1).min(rates.len());
-        let neighbours: Vec<f64> = (lo..hi).filter(|&j| j != k).map(|j| rates[j]).collect();
-        if neighbours.len() < RATE_NEIGHBOURS {
-            continue;
-        }
-        let (level, sigma) = robust_level(&neighbours);
-        let sigma = sigma.max(rate_floor);
+    for (k, level) in levels.iter().enumerate() {
+        let Some(level) = *level else { continue };
         if (rates[k] - level).abs() > sigmas * sigma {
             let i = idx[k + 1];
             flags.push(FrameFlag {

@@ -1,7 +1,7 @@
 //! The strip angle β of the top view (thesis §3.3.2): unwrapping by ±π, the 5-point
 //! moving average, β̇, and the stop time t_β by the band method of fig. 3.22.
 
-use super::{SignalError, median};
+use super::SignalError;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -181,11 +181,4 @@ pub fn strip_stop_time(
         settled_after,
         settled_frames: settled.len(),
     })
-}
-
-/// Robust local level of β̇ from raw frame-to-frame rates: (median, 1.4826 × MAD) over
-/// `values` (used by the frame-skip test).
-pub(crate) fn robust_level(values: &[f64]) -> (f64, f64) {
-    let level = median(values);
-    (level, super::mad_sigma(values, level))
 }
