@@ -147,7 +147,10 @@ mod tests {
         let n = 20_000;
         let mut best: Option<(f64, f64)> = None;
         for k in 0..n {
-            let (mut lo, mut hi) = (2.0 * PI * k as f64 / n as f64, 2.0 * PI * (k + 1) as f64 / n as f64);
+            let (mut lo, mut hi) = (
+                2.0 * PI * k as f64 / n as f64,
+                2.0 * PI * (k + 1) as f64 / n as f64,
+            );
             if point(lo).0.signum() == point(hi).0.signum() {
                 continue;
             }

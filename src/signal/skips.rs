@@ -27,7 +27,7 @@ pub enum SkipReason {
         /// Raw β̇ from the previous frame [rad/s].
         rate: f64,
         /// Local level of β̇: the nearer of the medians of the 12 frames before and
-        /// after [rad/s].
+        /// the 12 after [rad/s].
         local_rate: f64,
         /// Robust spread of β̇ about its local level over the clip (1.4826 × MAD, at
         /// least the configured floor) [rad/s].
@@ -72,7 +72,7 @@ pub fn flags_within(flags: &[FrameFlag], start: f64, end: f64) -> Vec<&FrameFlag
 /// (the median frame interval).
 pub fn timestamp_gaps(t: &[f64], gap_factor: f64) -> Vec<FrameFlag> {
     let nominal = nominal_period(t);
-    if !(nominal > 0.0) {
+    if nominal.is_nan() || nominal <= 0.0 {
         return Vec::new();
     }
     (1..t.len())
@@ -95,9 +95,10 @@ pub fn timestamp_gaps(t: &[f64], gap_factor: f64) -> Vec<FrameFlag> {
 const RATE_NEIGHBOURS: usize = 12;
 
 /// Frames whose raw β̇ from the previous frame, (β_i − β_{i−1}) / (t_i − t_{i−1}) on
-/// the unwrapped β, departs from both the median of the 12 rates before it and that of
+/// the unwrapped β, lies beyond both the median of the 12 rates before it and that of
 /// the 12 after it by more than `sigmas` × the robust spread of such departures over
-/// the clip (1.4826 × MAD, at least `rate_floor` [rad/s]).
+/// the clip (1.4826 × MAD, at least `rate_floor` [rad/s]). A rate between the two
+/// medians is a change of rate, not a skip.
 /// A dropped frame whose timestamp was renumbered doubles one step of β.
 pub fn strip_rate_spikes(
     t: &[f64],
@@ -112,23 +113,21 @@ pub fn strip_rate_spikes(
         .map(|w| (beta_unwrapped[w[1]] - beta_unwrapped[w[0]]) / (t[w[1]] - t[w[0]]))
         .collect();
     // Local levels: the medians of the 12 rates before and of the 12 after. A skip is
-    // a one-frame spike, away from both; a change of rate (the strip stopping) agrees
-    // with one side. The departure is the one from the nearer level. The spread is the
-    // robust σ of these departures over the whole clip (the angle noise is the
-    // camera's, the same throughout; 24 neighbours alone would estimate it to ±25 %).
+    // a one-frame spike beyond both; a change of rate (the strip slowing to a stop
+    // within a few frames) passes between them. The departure is the distance from the
+    // interval between the two levels. The spread is the robust σ of these departures
+    // over the whole clip (the angle noise is the camera's, the same throughout; 24
+    // neighbours alone would estimate it to only ±25 %).
     let levels: Vec<Option<f64>> = (0..rates.len())
         .map(|k| {
             let before = &rates[k.saturating_sub(RATE_NEIGHBOURS)..k];
-            let after = &rates[(k + 1).min(rates.len())..(k + 1 + RATE_NEIGHBOURS).min(rates.len())];
+            let after =
+                &rates[(k + 1).min(rates.len())..(k + 1 + RATE_NEIGHBOURS).min(rates.len())];
             if before.len() < RATE_NEIGHBOURS / 2 || after.len() < RATE_NEIGHBOURS / 2 {
                 return None;
             }
             let (left, right) = (median(before), median(after));
-            Some(if (rates[k] - left).abs() <= (rates[k] - right).abs() {
-                left
-            } else {
-                right
-            })
+            Some(rates[k].clamp(left.min(right), left.max(right)))
         })
         .collect();
     let departures: Vec<f64> = rates
@@ -192,8 +191,7 @@ pub(crate) fn rim_phase_steps(
         else {
             continue;
         };
-        if !(psi_dot > 0.0 && phi > 0.0)
-            || model.z_rim(phi, 0.0) < config.skip_min_snr * halt.noise
+        if !(psi_dot > 0.0 && phi > 0.0) || model.z_rim(phi, 0.0) < config.skip_min_snr * halt.noise
         {
             continue;
         }

@@ -140,11 +140,14 @@ fn halt_is_found_within_a_frame() {
     assert!((halt.shifted_t[0] - (t[0] - halt.t_phi)).abs() < 1e-12);
 }
 
-/// How far a peak time may be from the truth (see its use).
+/// How far a peak time may be from the truth: a tenth of a frame by the local fit
+/// (observed < 0.05) while ψ̇ changes slowly; half a frame by the parabola (the last,
+/// tiny peak, 5 frames a turn), or in the last 0.03 s, where ψ̇ ∝ τ^{−1/4} changes by
+/// a quarter within the fit's 1.5 turns and the chirp (linear ω) cannot follow.
 fn timing_tolerance(peak: &Peak) -> f64 {
     match peak.method {
-        ExtremumMethod::LocalFit => 0.1 * FRAME,
-        ExtremumMethod::Parabolic => 0.5 * FRAME,
+        ExtremumMethod::LocalFit if peak.t < -0.03 => 0.1 * FRAME,
+        _ => 0.5 * FRAME,
     }
 }
 
@@ -164,7 +167,11 @@ fn check_peaks(seed: u64) {
     // The count is only a fair test if no true peak sits within two frames of the
     // window's start (where a frame of timing decides in or out).
     let window_start = halt.t_phi - config.window_s;
-    assert!(true_peaks.iter().all(|&tp| (tp - window_start).abs() > 2.0 * FRAME));
+    assert!(
+        true_peaks
+            .iter()
+            .all(|&tp| (tp - window_start).abs() > 2.0 * FRAME)
+    );
     assert_eq!(series.peaks.len(), true_peaks.len(), "{:?}", series.peaks);
 
     let mut fitted_error2 = 0.0;
@@ -173,8 +180,6 @@ fn check_peaks(seed: u64) {
     for (peak, &tp) in series.peaks.iter().zip(&true_peaks) {
         let t_abs = peak.t + halt.t_phi;
         // Sub-frame timing: a tenth of a frame.
-        // Sub-frame timing: a tenth of a frame by the local fit (observed < 0.05); half
-        // a frame by the parabola (the last, tiny peak, 5 frames a turn).
         assert!(
             (t_abs - tp).abs() < timing_tolerance(peak),
             "peak at {t_abs}, truth {tp}: {peak:?}"
@@ -212,11 +217,13 @@ fn check_peaks(seed: u64) {
         assert!(pair[1].t > pair[0].t);
     }
     for trough in &series.troughs {
-        // Troughs are where ψ = π mod 2π: a tenth of a frame.
+        // Troughs are where ψ = π mod 2π: a tenth of a frame; half a frame in the last
+        // 0.02 s (5–6 frames a turn, ψ̇ changing by 10 % within one).
         let psi_true = truth.psi(trough.t + halt.t_phi);
         let offset = local::wrap_pi(psi_true - PI);
         let dt = offset / truth.psi_dot(trough.t + halt.t_phi);
-        assert!(dt.abs() < 0.1 * FRAME, "trough at {}: {dt}", trough.t);
+        let tol = if trough.t < -0.02 { 0.1 } else { 0.5 } * FRAME;
+        assert!(dt.abs() < tol, "trough at {}: {dt}", trough.t);
     }
 
     for (k, s) in psi.iter().enumerate() {
@@ -263,7 +270,7 @@ fn check_peaks(seed: u64) {
 
 #[test]
 fn frame_states_follow_the_truth_with_honest_errors() {
-    for seed in [3, 31] {
+    for seed in [3, 31, 111] {
         check_states(seed);
     }
 }
@@ -281,7 +288,11 @@ fn check_states(seed: u64) {
         .filter(|&i| halt.shifted_t[i] >= -config.window_s && i <= halt.index)
         .count();
     // Every frame of the window has a state (the fits do not fail on clean data).
-    assert!(states.len() >= in_window - 2, "{} of {in_window}", states.len());
+    assert!(
+        states.len() >= in_window - 2,
+        "{} of {in_window}",
+        states.len()
+    );
     let mut covered = 0;
     let mut judged = 0;
     for s in &states {
@@ -299,9 +310,15 @@ fn check_states(seed: u64) {
             s.phi
         );
         // ψ on the peak scale (0 at the window's last peak, a true 2πK) is the truth
-        // minus 2πK; 0.04 rad is 0.6 % of a turn (observed ≤ 0.016 rad).
+        // minus 2πK; 0.03 rad is 0.5 % of a turn (typical errors ≤ 0.016 rad), plus
+        // 4σ for the few windows whose phase is poorly determined (σ_ψ up to 0.02 rad
+        // where the fit says so).
         let psi_err = s.psi - (truth.psi(t_abs) - psi_offset);
-        assert!(psi_err.abs() < 0.04, "ψ error {psi_err} at τ = {tau}");
+        assert!(
+            psi_err.abs() < 0.03 + 4.0 * s.sigma_psi,
+            "ψ error {psi_err} ± {} at τ = {tau}",
+            s.sigma_psi
+        );
         // 1.5 % (observed ≤ 0.5 %).
         let rate_err = s.psi_dot / truth.psi_dot(t_abs) - 1.0;
         assert!(rate_err.abs() < 0.015, "ψ̇ error {rate_err} at τ = {tau}");
@@ -310,11 +327,11 @@ fn check_states(seed: u64) {
             covered += 1;
         }
     }
-    // The standard errors are of the right size, if somewhat small: the residual of
-    // one window is not independent of the model error, so ~90 % of the truths lie
-    // within 3σ (not 99.7 %); at least 85 %.
+    // The standard errors are of the right size, if small: the residuals of a window
+    // carry the model error too, so 83–91 % of the truths lie within 3σ over 100 seeds
+    // (not 99.7 %); at least 80 %.
     assert!(judged > 150, "{judged}");
-    assert!(covered * 100 >= judged * 85, "{covered}/{judged}");
+    assert!(covered * 100 >= judged * 80, "{covered}/{judged}");
 }
 
 /// The exact side-view geometry (H, camera elevation) fitted with its own model gives
@@ -410,7 +427,10 @@ fn too_few_peaks_and_missing_rest_are_errors() {
         window_end: 0.0,
     }
     .to_string();
-    assert!(message.contains("2 peak") && message.contains("[-0.5, 0]"), "{message}");
+    assert!(
+        message.contains("2 peak") && message.contains("[-0.5, 0]"),
+        "{message}"
+    );
 }
 
 /// β of a constructed strip: turning at 20 rad/s, slowing to 1 rad/s, then a Coulomb
@@ -530,10 +550,15 @@ fn moving_average_and_derivative_on_uneven_times() {
 fn two_view(seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let (t, z, truth) = clip(NOISE, seed);
     let mut rng = Rng(seed + 100);
-    // The strip turns at β̇ ≈ ψ̇ + θ̇ ≈ 2 rad/s before the halt and stops 0.03 s after.
+    // The strip turns at β̇ ≈ ψ̇ + θ̇ ≈ 2 rad/s before the halt and stops 0.03 s after,
+    // slowing at constant rate over the last 7 ms (a Coulomb stop, eq. 4.113).
     let beta_true = |x: f64| {
-        let stop = truth.t0 + 0.03;
-        -2.0 * (stop - x).max(0.0)
+        let left = (truth.t0 + 0.03 - x).max(0.0);
+        if left > STOP_DURATION {
+            -2.0 * (left - 0.5 * STOP_DURATION)
+        } else {
+            -2.0 * left * left / (2.0 * STOP_DURATION)
+        }
     };
     let beta = t
         .iter()
@@ -573,18 +598,20 @@ fn check_dropped(seed: u64) {
     let pick = |v: &[f64]| keep.iter().map(|&i| v[i]).collect::<Vec<f64>>();
     let (zs, bs) = (pick(&z), pick(&beta));
     // The frame after each drop, in the shortened series.
-    let expected: Vec<usize> = dropped
-        .iter()
-        .enumerate()
-        .map(|(k, &d)| d - k)
-        .collect();
+    let expected: Vec<usize> = dropped.iter().enumerate().map(|(k, &d)| d - k).collect();
 
     let stamped = pick(&t);
     let flags = all_flags(&stamped, &zs, &bs);
     for &e in &expected {
         assert!(
             flags.iter().any(|f| f.index == e
-                && matches!(f.reason, SkipReason::TimestampGap { missing_frames: 1, .. })),
+                && matches!(
+                    f.reason,
+                    SkipReason::TimestampGap {
+                        missing_frames: 1,
+                        ..
+                    }
+                )),
             "gap before {e}: {flags:?}"
         );
     }
@@ -605,7 +632,10 @@ fn check_dropped(seed: u64) {
         let strip = flags
             .iter()
             .any(|f| f.index == e && matches!(f.reason, SkipReason::StripRateSpike { .. }));
-        assert!(rim && strip, "drop before {e}: rim {rim}, strip {strip}: {flags:?}");
+        assert!(
+            rim && strip,
+            "drop before {e}: rim {rim}, strip {strip}: {flags:?}"
+        );
     }
     assert!(
         flags.iter().all(|f| expected.contains(&f.index)),
@@ -643,7 +673,7 @@ fn analyse_runs_the_stage_end_to_end() {
 #[ignore]
 fn sweep_seeds() {
     let mut failures = Vec::new();
-    for seed in 100..140u64 {
+    for seed in 140..240u64 {
         for (name, f) in [
             ("peaks", check_peaks as fn(u64)),
             ("states", check_states),
