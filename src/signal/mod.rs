@@ -352,15 +352,18 @@ pub struct FrameState {
     pub index: usize,
     /// Time, halt at t = 0 [s].
     pub t: f64,
-    /// Nutation angle φ [rad] and its standard error.
+    /// Nutation angle φ [rad].
     pub phi: f64,
+    /// Standard error of φ [rad].
     pub sigma_phi: f64,
     /// Precession angle ψ [rad] on the peak series' scale (2πk at peaks, 0 at the last
-    /// peak of the window) and its standard error.
+    /// peak of the window).
     pub psi: f64,
+    /// Standard error of ψ [rad].
     pub sigma_psi: f64,
-    /// Precession rate ψ̇ [rad/s] and its standard error.
+    /// Precession rate ψ̇ [rad/s].
     pub psi_dot: f64,
+    /// Standard error of ψ̇ [rad/s].
     pub sigma_psi_dot: f64,
     /// Root-mean-square residual of the fit [m].
     pub residual_rms: f64,
