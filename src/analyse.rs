@@ -260,7 +260,9 @@ pub fn analyse_clip(
 
     // Pass 1: the rest frames at the end.
     let mut source = FrameSource::open(clip)?;
-    let expected = source.expected_frames().unwrap_or(info.frame_count as usize);
+    let expected = source
+        .expected_frames()
+        .unwrap_or(info.frame_count as usize);
     if expected < REST_FRAMES + 3 {
         return Err(AnalyseError::Clip {
             path: clip.to_path_buf(),
@@ -306,14 +308,16 @@ pub fn analyse_clip(
     });
     let mut rest_sides = Vec::new();
     for frame in &rest {
-        rest_sides.push(side_view(&frame.view(), split, frame.index).map_err(vision_err)?.0);
+        rest_sides.push(
+            side_view(&frame.view(), split, frame.index)
+                .map_err(vision_err)?
+                .0,
+        );
     }
     let calibration =
         vision::calibrate_at_rest(&rest_sides, rest[0].index, &side_config, given.as_ref())
             .map_err(vision_err)?;
-    let metres_per_px = calibration
-        .calibration
-        .metres_per_px(params.half_thickness);
+    let metres_per_px = calibration.calibration.metres_per_px(params.half_thickness);
     let side0 = &rest_sides[0];
     let gauge = RimGauge::new(
         &calibration.calibration,
@@ -325,7 +329,8 @@ pub fn analyse_clip(
     .map_err(vision_err)?;
     let colour_thresholds = match split {
         Some(row) => {
-            let (_, plan) = vision::split_views(&last.view(), row, last.index).map_err(vision_err)?;
+            let (_, plan) =
+                vision::split_views(&last.view(), row, last.index).map_err(vision_err)?;
             let thresholds =
                 vision::auto_colour_thresholds(&plan, last.index).map_err(vision_err)?;
             Some((thresholds, ThresholdSource::Automatic))
@@ -383,18 +388,28 @@ pub fn analyse_clip(
     }
     progress(frames.len(), Some(expected));
     if no_edge == frames.len() {
-        return Err(AnalyseError::Vision {
+        return Err(AnalyseError::Clip {
             path: clip.to_path_buf(),
-            source: VisionError::NoDisk { frame: 0 },
+            reason: format!(
+                "no rim edge found on the centre line in any of the {} frames (γ = {:.1})",
+                frames.len(),
+                calibration.threshold.gamma
+            ),
         });
     }
     if no_edge > 0 {
-        warnings.push(format!("no rim edge found in {no_edge} of {} frames", frames.len()));
+        warnings.push(format!(
+            "no rim edge found in {no_edge} of {} frames",
+            frames.len()
+        ));
     }
 
     // Signal.
     let t: Vec<f64> = frames.iter().map(|f| f.t_capture).collect();
-    let z: Vec<f64> = frames.iter().map(|f| f.z_rim_m.unwrap_or(f64::NAN)).collect();
+    let z: Vec<f64> = frames
+        .iter()
+        .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
+        .collect();
     let beta: Option<Vec<f64>> = strip_finder.as_ref().map(|_| {
         frames
             .iter()
@@ -416,8 +431,8 @@ pub fn analyse_clip(
         path: clip.to_path_buf(),
         source,
     };
-    let series = signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config)
-        .map_err(signal_err)?;
+    let series =
+        signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;
     for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
         record.t = *shifted;
     }
@@ -439,12 +454,19 @@ pub fn analyse_clip(
         source,
     };
     let peak_samples = peak_energies(&params, &series);
-    let peaks_fit = fit_series("eq. 3.8 at peaks", peak_samples, window_s, halt).map_err(fit_err)?;
+    let peaks_fit =
+        fit_series("eq. 3.8 at peaks", peak_samples, window_s, halt).map_err(fit_err)?;
     let frame_samples = frame_energies(&params, &series, None);
     let frames_fit = fit_series("eq. 3.8 per frame", frame_samples, window_s, halt).ok();
     let full_state_fit = series.strip.as_ref().and_then(|strip| {
         let samples = frame_energies(&params, &series, Some(strip));
-        fit_series("eq. 3.6 per frame, θ̇ = β̇ − ψ̇ (eq. 3.22)", samples, window_s, halt).ok()
+        fit_series(
+            "eq. 3.6 per frame, θ̇ = β̇ − ψ̇ (eq. 3.22)",
+            samples,
+            window_s,
+            halt,
+        )
+        .ok()
     });
 
     let threshold_png = highest.map_or_else(Vec::new, |(_, edge_row, frame)| {
@@ -567,4 +589,94 @@ fn fit_series(
         fit,
         windows,
     })
+}
+
+/// The config that applies to `clip`: the folder files from `root` down, the
+/// clip's own `CLIP.toml`, then `extra` (a `-c` file) last.
+///
+/// # Errors
+/// A config file that cannot be read or is invalid (named in the message).
+pub fn config_for(
+    root: &Path,
+    clip: &Path,
+    extra: Option<&Path>,
+) -> Result<ExperimentConfig, crate::config::ConfigError> {
+    let mut layers = ExperimentConfig::layers_for(root, clip);
+    if let Some(extra) = extra {
+        if !extra.is_file() {
+            return Err(crate::config::ConfigError::Unreadable {
+                path: extra.to_path_buf(),
+                reason: "no such file".into(),
+            });
+        }
+        layers.push(extra.to_path_buf());
+    }
+    ExperimentConfig::load_layered(&layers)
+}
+
+/// The resume key of a clip under a config: BLAKE3 of the clip's hash, the config
+/// (as JSON) and the crate version.
+///
+/// # Errors
+/// The clip cannot be read.
+pub fn resume_key(clip: &Path, config: &ExperimentConfig) -> Result<String, FootageError> {
+    let mut hasher = blake3::Hasher::new();
+    hasher.update(clip_hash(clip)?.as_bytes());
+    hasher.update(serde_json::to_string(config).unwrap_or_default().as_bytes());
+    hasher.update(env!("CARGO_PKG_VERSION").as_bytes());
+    Ok(hasher.finalize().to_hex().to_string())
+}
+
+/// A study's per-clip work: configs inherited from the study root, one
+/// [`analyse_clip`] and [`write_experiment`](crate::report::experiment::write_experiment)
+/// per clip.
+pub struct StudyAnalyser {
+    pub root: PathBuf,
+}
+
+impl crate::study::ClipAnalyser for StudyAnalyser {
+    fn resume_key(&self, clip: &crate::study::ClipEntry) -> Result<String, String> {
+        let config = config_for(&self.root, &clip.path, None).map_err(|e| e.to_string())?;
+        resume_key(&clip.path, &config).map_err(|e| e.to_string())
+    }
+
+    fn analyse(
+        &self,
+        clip: &crate::study::ClipEntry,
+        dir: &Path,
+        key: &str,
+    ) -> Result<crate::study::ExperimentSummary, String> {
+        let config = config_for(&self.root, &clip.path, None).map_err(|e| e.to_string())?;
+        let experiment =
+            analyse_clip(&clip.path, &config, &|_, _| {}).map_err(|e| e.to_string())?;
+        crate::report::experiment::write_experiment(dir, &experiment).map_err(|e| e.to_string())?;
+        let mut meta = clip.meta.clone();
+        meta.material = meta.material.or(config.material.clone());
+        meta.disk = meta.disk.or(config.disk_name.clone());
+        meta.orientation = meta.orientation.or(config.orientation.clone());
+        Ok(summary(&experiment, &clip.relative, meta, key))
+    }
+}
+
+/// What a study keeps of an experiment.
+pub fn summary(
+    experiment: &Experiment,
+    clip: &str,
+    meta: crate::study::ClipMeta,
+    key: &str,
+) -> crate::study::ExperimentSummary {
+    let fit = &experiment.peaks_fit.fit;
+    crate::study::ExperimentSummary {
+        clip: clip.into(),
+        meta,
+        resume_key: key.into(),
+        n: fit.n,
+        n_ci95: [fit.ci95_n.0, fit.ci95_n.1],
+        t0_s: fit.t0,
+        r_squared: fit.r_squared,
+        points: fit.points,
+        fps: experiment.plan.fps.fps,
+        fps_source: format!("{:?}", experiment.plan.fps.source),
+        warnings: experiment.warnings.clone(),
+    }
 }

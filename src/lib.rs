@@ -1,4 +1,5 @@
 //! eulerdisk: slow-motion footage of spinning disks turned into physics.
+pub mod analyse;
 pub mod config;
 pub mod energy;
 pub mod footage;
@@ -6,6 +7,7 @@ pub mod model;
 pub mod render;
 pub mod report;
 pub mod reproduce;
+pub mod signal;
 pub mod stats;
 pub mod study;
 pub mod vision;

@@ -16,8 +16,14 @@ use eulerdisk::render::{
     Effects, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Timing, power_law_motion,
     trajectory_motion, write_clip,
 };
+use eulerdisk::report::experiment::write_experiment;
 use eulerdisk::report::simulation::write_simulation;
-use eulerdisk::{footage, reproduce};
+use eulerdisk::report::study::{StudyReportOptions, write_published_report, write_study_report};
+use eulerdisk::stats::VarianceModel;
+use eulerdisk::study::{self, Outcome, StudyEvent};
+use eulerdisk::{analyse, footage, reproduce};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
 
 /// Slow-motion footage of spinning disks, turned into physics.
 #[derive(Parser)]
@@ -43,6 +49,31 @@ enum Command {
     /// Render synthetic footage (MP4 or PNG folder) of a prescribed power-law motion
     /// or a simulated one, with its ground truth as `<clip>.truth.json`.
     Render(RenderArgs),
+    /// Measure one clip (thesis Chapter 3): calibration, rim height, peaks, φ, ψ̇,
+    /// energy and its power law; writes CSV, JSON, plots and an HTML page.
+    Analyse {
+        /// A video (MP4, MOV, AVI) or a folder of PNG/TIFF/JPEG frames.
+        clip: PathBuf,
+        /// Experiment config (TOML), applied after the folder's `eulerdisk.toml`
+        /// and the clip's own `CLIP.toml`.
+        #[arg(short, long)]
+        config: Option<PathBuf>,
+        /// Output folder (default: out/<clip name>).
+        #[arg(short, long)]
+        out: Option<PathBuf>,
+    },
+    /// Analyse every clip below a folder, in parallel, and write the study report:
+    /// per-material tables, box plots, t-tests (Tables 3.2, 3.3), trends.
+    Study(StudyArgs),
+    /// Combine the outputs of `study --shard K/N` runs into one study report.
+    Merge {
+        /// The shard output folders.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// Output folder of the combined report.
+        #[arg(short, long, default_value = "out/study")]
+        out: PathBuf,
+    },
     /// Recompute the thesis's published numbers and show them side by side.
     Reproduce {
         /// Output folder for the table (Markdown, CSV, JSON).
@@ -107,6 +138,29 @@ struct SimulateArgs {
     /// Output folder.
     #[arg(short, long, default_value = "out/simulate")]
     out: PathBuf,
+}
+
+#[derive(Args)]
+struct StudyArgs {
+    /// Footage root: clips in folders such as DISK/MATERIAL/run07.mp4.
+    #[arg(required_unless_present = "published")]
+    root: Option<PathBuf>,
+    /// Output folder.
+    #[arg(short, long, default_value = "out/study")]
+    out: PathBuf,
+    /// Analyse only share K of N (Slurm array jobs); combine with `eulerdisk merge`.
+    #[arg(long)]
+    shard: Option<study::Shard>,
+    /// Reuse results whose clip, config and eulerdisk version are unchanged.
+    #[arg(long)]
+    resume: bool,
+    /// Welch's t-test instead of the pooled-variance test of the thesis.
+    #[arg(long)]
+    welch: bool,
+    /// Regenerate Tables 3.2 and 3.3 from the thesis's published exponents
+    /// (Appendix B) instead of analysing footage.
+    #[arg(long, conflicts_with = "root")]
+    published: bool,
 }
 
 #[derive(Args)]
@@ -210,12 +264,147 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Simulate(args) => run_simulate(&args),
         Command::Render(args) => run_render(&args),
+        Command::Analyse { clip, config, out } => run_analyse(&clip, config.as_deref(), out),
+        Command::Study(args) => run_study(&args),
+        Command::Merge { shards, out } => run_merge(&shards, &out),
         Command::Reproduce {
             out,
             skip_table_4_1,
         } => run_reproduce(&out, !skip_table_4_1),
         Command::Demo { out } => run_demo(&out),
     }
+}
+
+/// A progress bar on a terminal; `None` (plain log lines) otherwise, e.g. in Slurm logs.
+fn progress_bar(len: u64, what: &str) -> Option<ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = ProgressBar::new(len);
+    let style = ProgressStyle::with_template(&format!(
+        "{what} {{bar:40}} {{pos}}/{{len}} {{msg}} [{{elapsed_precise}}]"
+    ))
+    .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style);
+    Some(bar)
+}
+
+fn run_analyse(clip: &Path, config: Option<&Path>, out: Option<PathBuf>) -> Result<()> {
+    let root = clip.parent().unwrap_or(Path::new("."));
+    let config = analyse::config_for(root, clip, config)?;
+    let name = clip
+        .file_stem()
+        .map_or_else(|| "clip".into(), |s| s.to_string_lossy().into_owned());
+    let out = out.unwrap_or_else(|| Path::new("out").join(&name));
+    let bar = progress_bar(0, "frames");
+    let experiment = analyse::analyse_clip(clip, &config, &|done, total| {
+        if let Some(bar) = &bar {
+            bar.set_length(total.unwrap_or(0) as u64);
+            bar.set_position(done as u64);
+        }
+    })?;
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    write_experiment(&out, &experiment)?;
+    let fit = &experiment.peaks_fit.fit;
+    for warning in &experiment.warnings {
+        eprintln!("warning: {warning}");
+    }
+    println!(
+        "{}: n = {:.3} (95 % CI {:.3} … {:.3}), {} peaks in the last {} s; fps {} ({:?})",
+        clip.display(),
+        fit.n,
+        fit.ci95_n.0,
+        fit.ci95_n.1,
+        fit.points,
+        experiment.plan.window_s,
+        experiment.plan.fps.fps,
+        experiment.plan.fps.source
+    );
+    println!("report: {}", out.join("index.html").display());
+    Ok(())
+}
+
+fn report_options(welch: bool) -> StudyReportOptions {
+    StudyReportOptions {
+        variance: if welch {
+            VarianceModel::Welch
+        } else {
+            VarianceModel::Pooled
+        },
+        ..StudyReportOptions::default()
+    }
+}
+
+fn run_study(args: &StudyArgs) -> Result<()> {
+    let options = report_options(args.welch);
+    if args.published {
+        write_published_report(&args.out, options)?;
+        println!("report: {}", args.out.join("index.html").display());
+        return Ok(());
+    }
+    let Some(root) = &args.root else {
+        bail!("give a footage folder, or --published");
+    };
+    let clips = study::discover(root)?;
+    let analyser = analyse::StudyAnalyser { root: root.clone() };
+    let bar = progress_bar(0, "clips");
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let events = |event: StudyEvent| match event {
+        StudyEvent::Started { clips } => {
+            if let Some(bar) = &bar {
+                bar.set_length(clips as u64);
+            } else {
+                eprintln!("study: {clips} clips");
+            }
+        }
+        StudyEvent::Finished { clip, outcome } => {
+            let k = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+            let line = match outcome {
+                Outcome::Analysed(s) => format!("{clip}: n = {:.3}", s.n),
+                Outcome::Reused(s) => format!("{clip}: n = {:.3} (unchanged, reused)", s.n),
+                Outcome::Failed(reason) => format!("{clip}: FAILED: {reason}"),
+            };
+            match &bar {
+                Some(bar) => {
+                    bar.set_position(k as u64);
+                    bar.println(line);
+                }
+                None => eprintln!("[{k}] {line}"),
+            }
+        }
+    };
+    let run_options = study::RunOptions {
+        shard: args.shard,
+        resume: args.resume,
+    };
+    let results = study::run(clips, &args.out, run_options, &analyser, &events)?;
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    write_study_report(&args.out, &results, options)?;
+    println!(
+        "{} clips analysed, {} failed; report: {}",
+        results.experiments.len(),
+        results.failures.len(),
+        args.out.join("index.html").display()
+    );
+    Ok(())
+}
+
+fn run_merge(shards: &[PathBuf], out: &Path) -> Result<()> {
+    let results = study::merge(shards)?;
+    eulerdisk::report::write_json(&out.join(study::STUDY_FILE), &results)?;
+    write_study_report(out, &results, StudyReportOptions::default())?;
+    println!(
+        "merged {} shards: {} clips, {} failed; report: {}",
+        shards.len(),
+        results.experiments.len(),
+        results.failures.len(),
+        out.join("index.html").display()
+    );
+    Ok(())
 }
 
 fn run_simulate(args: &SimulateArgs) -> Result<()> {

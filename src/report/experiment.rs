@@ -1,0 +1,477 @@
+//! One experiment's outputs, in its own folder:
+//!
+//! | file | what |
+//! |---|---|
+//! | `index.html` | self-contained page: headline fit, diagnostics, plots, tables |
+//! | `result.json` | everything: plan (provenance), per-frame and per-peak series, fits |
+//! | `plan.json` | the resolved plan alone: fps and its source, γ, calibration, window |
+//! | `frames.csv` | per frame: t, z_rim [px, m], β raw/unwrapped/smoothed, β̇ |
+//! | `peaks.csv` | per peak: t, z, φ (eq. 3.9), ψ, ψ̇ (eq. 3.11 and central), E (eq. 3.8) |
+//! | `states.csv` | per frame in the window: φ, ψ, ψ̇ with standard errors, E |
+//! | `flags.csv` | flagged frames (skips, jumps) with reasons |
+//! | `series.svg/.png`, `states.svg/.png`, `energy.svg` | plots |
+//! | `calibration.png`, `threshold.png` | diagnostic images (figs. 3.3, 3.7) |
+
+use std::path::Path;
+
+use maud::html;
+use plotters::prelude::*;
+use serde::Serialize;
+
+use super::html::{page, png_figure, svg_figure, table};
+use super::plot::{Panel, time_panels};
+use super::{ReportError, write_atomic, write_csv, write_json};
+use crate::analyse::{EnergyFit, Experiment};
+
+#[derive(Serialize)]
+struct FrameRow {
+    index: usize,
+    t_s: f64,
+    t_capture_s: f64,
+    container_time_s: Option<f64>,
+    z_rim_px: Option<f64>,
+    z_rim_m: Option<f64>,
+    beta_raw_rad: Option<f64>,
+    beta_rad: Option<f64>,
+    beta_smoothed_rad: Option<f64>,
+    beta_dot_rad_s: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct PeakRow {
+    t_s: f64,
+    z_rim_m: f64,
+    phi_rad: f64,
+    sigma_phi_rad: Option<f64>,
+    psi_rad: f64,
+    psi_dot_eq_3_11_rad_s: Option<f64>,
+    psi_dot_central_rad_s: Option<f64>,
+    energy_eq_3_8_j: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct StateRow {
+    index: usize,
+    t_s: f64,
+    phi_rad: f64,
+    sigma_phi_rad: f64,
+    psi_rad: f64,
+    sigma_psi_rad: f64,
+    psi_dot_rad_s: f64,
+    sigma_psi_dot_rad_s: f64,
+    residual_rms_m: f64,
+}
+
+#[derive(Serialize)]
+struct FlagRow {
+    index: usize,
+    t_s: f64,
+    reason: String,
+}
+
+fn plot_error(e: impl std::fmt::Display) -> ReportError {
+    ReportError::Plot(e.to_string())
+}
+
+/// Write every output of an experiment into `dir` (created if missing).
+///
+/// # Errors
+/// A file cannot be written or a plot cannot be drawn.
+pub fn write_experiment(dir: &Path, experiment: &Experiment) -> Result<(), ReportError> {
+    let e = experiment;
+    let strip = e.series.strip.as_ref().map(|s| &s.series);
+    let at = |v: Option<&Vec<f64>>, i: usize| {
+        v.and_then(|v| v.get(i).copied()).filter(|x| x.is_finite())
+    };
+    let frame_rows: Vec<FrameRow> = e
+        .frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| FrameRow {
+            index: f.index,
+            t_s: f.t,
+            t_capture_s: f.t_capture,
+            container_time_s: f.container_time_s,
+            z_rim_px: f.z_rim_px,
+            z_rim_m: f.z_rim_m,
+            beta_raw_rad: f.beta_raw,
+            beta_rad: at(strip.map(|s| &s.beta), i),
+            beta_smoothed_rad: at(strip.map(|s| &s.beta_smoothed), i),
+            beta_dot_rad_s: at(strip.map(|s| &s.beta_dot), i),
+        })
+        .collect();
+    write_csv(&dir.join("frames.csv"), &frame_rows)?;
+
+    let peak_rows: Vec<PeakRow> = e
+        .series
+        .peaks
+        .peaks
+        .iter()
+        .zip(&e.series.peaks.precession)
+        .map(|(p, q)| PeakRow {
+            t_s: p.t,
+            z_rim_m: p.z,
+            phi_rad: p.phi,
+            sigma_phi_rad: p.sigma_phi,
+            psi_rad: q.psi,
+            psi_dot_eq_3_11_rad_s: q.psi_dot_forward,
+            psi_dot_central_rad_s: q.psi_dot_central,
+            energy_eq_3_8_j: e
+                .peaks_fit
+                .samples
+                .iter()
+                .find(|s| s.t == p.t)
+                .map(|s| s.energy),
+        })
+        .collect();
+    write_csv(&dir.join("peaks.csv"), &peak_rows)?;
+
+    let state_rows: Vec<StateRow> = e
+        .series
+        .states
+        .iter()
+        .map(|s| StateRow {
+            index: s.index,
+            t_s: s.t,
+            phi_rad: s.phi,
+            sigma_phi_rad: s.sigma_phi,
+            psi_rad: s.psi,
+            sigma_psi_rad: s.sigma_psi,
+            psi_dot_rad_s: s.psi_dot,
+            sigma_psi_dot_rad_s: s.sigma_psi_dot,
+            residual_rms_m: s.residual_rms,
+        })
+        .collect();
+    write_csv(&dir.join("states.csv"), &state_rows)?;
+
+    let flag_rows: Vec<FlagRow> = e
+        .series
+        .flags
+        .iter()
+        .map(|f| FlagRow {
+            index: f.index,
+            t_s: f.t,
+            reason: format!("{:?}", f.reason),
+        })
+        .collect();
+    write_csv(&dir.join("flags.csv"), &flag_rows)?;
+    write_json(&dir.join("plan.json"), &e.plan)?;
+    write_json(&dir.join("result.json"), e)?;
+    write_atomic(&dir.join("calibration.png"), &e.diagnostics.calibration_png)?;
+    write_atomic(&dir.join("threshold.png"), &e.diagnostics.threshold_png)?;
+
+    // Plots.
+    let t: Vec<f64> = e.frames.iter().map(|f| f.t).collect();
+    let z_mm: Vec<f64> = e
+        .frames
+        .iter()
+        .map(|f| f.z_rim_m.map_or(f64::NAN, |z| z * 1e3))
+        .collect();
+    let mut panels = vec![Panel {
+        label: "z_rim [mm]",
+        values: &z_mm,
+        log_y: false,
+    }];
+    if let Some(s) = strip {
+        panels.push(Panel {
+            label: "β [rad]",
+            values: &s.beta_smoothed,
+            log_y: false,
+        });
+        panels.push(Panel {
+            label: "β̇ [rad/s]",
+            values: &s.beta_dot,
+            log_y: false,
+        });
+    }
+    let title = format!("{}: per-frame series", e.plan.clip.display());
+    time_panels(
+        &dir.join("series"),
+        &title,
+        "t − t_φ [s]",
+        &t,
+        &panels,
+        &[],
+        "",
+    )
+    .map_err(plot_error)?;
+    let st: Vec<f64> = e.series.states.iter().map(|s| s.t).collect();
+    let phi: Vec<f64> = e.series.states.iter().map(|s| s.phi).collect();
+    let psi: Vec<f64> = e.series.states.iter().map(|s| s.psi).collect();
+    let psi_dot: Vec<f64> = e.series.states.iter().map(|s| s.psi_dot).collect();
+    let state_panels = [
+        Panel {
+            label: "φ [rad]",
+            values: &phi,
+            log_y: false,
+        },
+        Panel {
+            label: "ψ [rad]",
+            values: &psi,
+            log_y: false,
+        },
+        Panel {
+            label: "ψ̇ [rad/s]",
+            values: &psi_dot,
+            log_y: false,
+        },
+    ];
+    let states_drawn = !st.is_empty();
+    if states_drawn {
+        let title = format!(
+            "{}: per-frame states (local rim fits)",
+            e.plan.clip.display()
+        );
+        time_panels(
+            &dir.join("states"),
+            &title,
+            "t − t_φ [s]",
+            &st,
+            &state_panels,
+            &[],
+            "",
+        )
+        .map_err(plot_error)?;
+    }
+    let energy_svg = energy_plot_svg(&e.peaks_fit, e.plan.window_s).map_err(plot_error)?;
+    write_atomic(&dir.join("energy.svg"), energy_svg.as_bytes())?;
+
+    write_atomic(
+        &dir.join("index.html"),
+        experiment_page(e, &energy_svg, dir)?.as_bytes(),
+    )
+}
+
+fn fit_row(f: &EnergyFit) -> Vec<String> {
+    let fit = &f.fit;
+    vec![
+        f.method.clone(),
+        format!("{:.4}", fit.n),
+        format!("{:.4} … {:.4}", fit.ci95_n.0, fit.ci95_n.1),
+        format!("{:.3e}", fit.a_e),
+        match fit.ci95_t0 {
+            Some((lo, hi)) => format!("{:.4} ({:.4} … {:.4})", fit.t0, lo, hi),
+            None => format!("{:.4} (fixed)", fit.t0),
+        },
+        format!("{:.5}", fit.r_squared),
+        fit.points.to_string(),
+    ]
+}
+
+fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<String, ReportError> {
+    let read_svg = |name: &str| std::fs::read_to_string(dir.join(name)).ok();
+    let series_svg = read_svg("series.svg");
+    let states_svg = read_svg("states.svg");
+    let plan = &e.plan;
+    let c = &plan.calibration.calibration;
+    let fits: Vec<&EnergyFit> = std::iter::once(&e.peaks_fit)
+        .chain(e.frames_fit.as_ref())
+        .chain(e.full_state_fit.as_ref())
+        .collect();
+    let fit_rows: Vec<Vec<String>> = fits.iter().map(|f| fit_row(f)).collect();
+    let window_rows: Vec<Vec<String>> = e
+        .peaks_fit
+        .windows
+        .iter()
+        .map(|(w, r)| match r {
+            Ok(f) => vec![
+                format!("{w} s"),
+                format!("{:.4}", f.n),
+                format!("{:.4} … {:.4}", f.ci95_n.0, f.ci95_n.1),
+                f.points.to_string(),
+            ],
+            Err(reason) => vec![format!("{w} s"), "–".into(), reason.clone(), "0".into()],
+        })
+        .collect();
+    let plan_rows = vec![
+        vec!["clip".into(), plan.clip.display().to_string()],
+        vec!["BLAKE3 of the clip".into(), plan.clip_hash.clone()],
+        vec!["eulerdisk version".into(), plan.crate_version.clone()],
+        vec![
+            "frames".into(),
+            format!("{} ({} × {} px)", plan.frames, plan.width, plan.height),
+        ],
+        vec![
+            "capture fps".into(),
+            format!("{} ({:?})", plan.fps.fps, plan.fps.source),
+        ],
+        vec![
+            "threshold γ".into(),
+            format!(
+                "{:.1} ({:?})",
+                plan.calibration.threshold.gamma, plan.calibration.threshold.source
+            ),
+        ],
+        vec![
+            "calibration [px]".into(),
+            format!(
+                "x_l = {:.2}, x_r = {:.2}, z_t = {:.2}, z_base = {:.2} ({:?})",
+                c.x_l, c.x_r, c.z_t, c.z_base, plan.calibration.sources
+            ),
+        ],
+        vec![
+            "scale δ".into(),
+            format!("{:.4e} m/px (eq. 3.10)", plan.metres_per_px),
+        ],
+        vec![
+            "band".into(),
+            format!(
+                "±{} px around x_centre = {:.2} px",
+                plan.band_half_width_px,
+                c.x_centre()
+            ),
+        ],
+        vec![
+            "fit window".into(),
+            format!(
+                "last {} s before the halt, t0 {:?}",
+                plan.window_s, plan.halt
+            ),
+        ],
+        vec![
+            "disk".into(),
+            format!(
+                "m = {} kg, R = {} m, H = {} m, A = {:.3e}, C = {:.3e} kg m²",
+                plan.disk.mass,
+                plan.disk.radius,
+                plan.disk.half_thickness,
+                plan.disk.inertia_a,
+                plan.disk.inertia_c
+            ),
+        ],
+    ];
+    let flag_rows: Vec<Vec<String>> = e
+        .series
+        .flags
+        .iter()
+        .map(|f| {
+            vec![
+                f.index.to_string(),
+                format!("{:.5}", f.t),
+                format!("{:?}", f.reason),
+            ]
+        })
+        .collect();
+    let strip = e.series.strip.as_ref();
+    let body = html! {
+        p {
+            "Energy exponent "
+            strong { (format!("n = {:.3}", e.peaks_fit.fit.n)) }
+            (format!(" (95 % CI {:.3} … {:.3}) from {} peaks in the last {} s before the halt.",
+                e.peaks_fit.fit.ci95_n.0, e.peaks_fit.fit.ci95_n.1, e.peaks_fit.fit.points, plan.window_s))
+        }
+        @if let Some(s) = strip {
+            p { (format!("Strip stop t_β − t_φ = {:.4} s (band method, fig. 3.22).", s.rotation_after_flat)) }
+        }
+        @if !e.warnings.is_empty() {
+            h2 { "Warnings" }
+            ul { @for w in &e.warnings { li class="bad" { (w) } } }
+        }
+        h2 { "Power law E = A_e (t0 − t)^n" }
+        (table(&["energy", "n", "95 % CI of n", "A_e [J s^-n]", "t0 [s]", "R²", "points"], &fit_rows, |_, _| false))
+        (svg_figure(energy_svg, "Energy at the peaks (eq. 3.8) with the fitted power law; the band spans n over its 95 % interval."))
+        h2 { "Window sensitivity (eq. 3.8 at peaks)" }
+        (table(&["window", "n", "95 % CI", "points"], &window_rows, |_, _| false))
+        h2 { "Series" }
+        @if let Some(svg) = &series_svg { (svg_figure(svg, "Rim height and, for two-view clips, the strip angle and its rate.")) }
+        @if let Some(svg) = &states_svg { (svg_figure(svg, "Per-frame φ, ψ, ψ̇ from local fits of the rim-height model.")) }
+        h2 { "Diagnostics" }
+        (png_figure(&e.diagnostics.calibration_png, "Rest frame: x_l, x_r (green), z_t (yellow), z_base (red), centre line (blue)."))
+        (png_figure(&e.diagnostics.threshold_png, "Highest-rim frame thresholded at γ: measuring band (blue) and the rim edge found (red)."))
+        h2 { "Flagged frames" }
+        @if flag_rows.is_empty() { p { "None." } } @else {
+            (table(&["frame", "t [s]", "reason"], &flag_rows, |_, _| false))
+        }
+        h2 { "Plan and provenance" }
+        (table(&["", ""], &plan_rows, |_, _| false))
+        p class="note" { "Data: frames.csv, peaks.csv, states.csv, flags.csv, result.json, plan.json in this folder." }
+    };
+    let title = format!(
+        "eulerdisk: {}",
+        plan.clip
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+    );
+    Ok(page(&title, body))
+}
+
+/// Energy samples with the fitted power law and a band of the curves whose n
+/// spans its 95 % interval (A_e re-projected for each), on linear axes.
+fn energy_plot_svg(f: &EnergyFit, window_s: f64) -> Result<String, String> {
+    super::plot::ensure_font()?;
+    let fit = &f.fit;
+    let in_window: Vec<(f64, f64)> = f
+        .samples
+        .iter()
+        .filter(|s| s.t >= -window_s && s.t <= fit.t0)
+        .map(|s| (s.t, s.energy * 1e3))
+        .collect();
+    let t_min = -window_s;
+    let t_max = fit.t0.max(0.0);
+    let e_max = in_window.iter().map(|p| p.1).fold(0.0, f64::max) * 1.1;
+    let curve = |n: f64, a_e: f64| -> Vec<(f64, f64)> {
+        (0..=400)
+            .map(|i| {
+                let t = t_min + (t_max - t_min) * f64::from(i) / 400.0;
+                (t, a_e * (fit.t0 - t).max(0.0).powf(n) * 1e3)
+            })
+            .collect()
+    };
+    // A_e that best fits the window's samples for a given n (linear projection).
+    let project = |n: f64| {
+        let (num, den) = in_window.iter().fold((0.0, 0.0), |(a, b), &(t, e)| {
+            let g = (fit.t0 - t).max(0.0).powf(n);
+            (a + e * 1e-3 * g, b + g * g)
+        });
+        if den > 0.0 { num / den } else { fit.a_e }
+    };
+    let low = curve(fit.ci95_n.0, project(fit.ci95_n.0));
+    let high = curve(fit.ci95_n.1, project(fit.ci95_n.1));
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 520)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!(
+                    "E = A_e (t0 − t)^n: n = {:.3} ({:.3} … {:.3})",
+                    fit.n, fit.ci95_n.0, fit.ci95_n.1
+                ),
+                ("sans-serif", 22),
+            )
+            .margin(12)
+            .x_label_area_size(48)
+            .y_label_area_size(72)
+            .build_cartesian_2d(t_min..t_max, 0.0..e_max.max(1e-12))
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("t − t_φ [s]")
+            .y_desc("E [mJ]")
+            .label_style(("sans-serif", 15))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let band: Vec<(f64, f64)> = low
+            .iter()
+            .copied()
+            .chain(high.iter().rev().copied())
+            .collect();
+        chart
+            .draw_series(std::iter::once(Polygon::new(
+                band,
+                RGBColor(255, 170, 120).mix(0.35),
+            )))
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(LineSeries::new(
+                curve(fit.n, fit.a_e),
+                RGBColor(220, 60, 0).stroke_width(2),
+            ))
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(in_window.iter().map(|&p| Circle::new(p, 3, BLUE.filled())))
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}

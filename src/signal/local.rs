@@ -1,0 +1,235 @@
+//! Local fits of the rim-height model over about one oscillation, and the phase track
+//! (ψ at peaks and troughs) that starts them.
+//!
+//! Over a short window around a centre time t_c the state is taken as
+//! φ(τ) = φ₀ + φ₁ τ and χ(τ) = χ₀ + ω τ (+ ½ ω̇ τ² with `chirp`), τ = t − t_c, and
+//! z_rim(t) = [`RimModel::z_rim`](super::RimModel::z_rim)(φ(τ), χ(τ)) is fitted by
+//! least squares. ω is the precession rate ψ̇ at t_c and χ₀ the phase there. The model is
+//! even in χ, so (χ₀, ω) and (−χ₀, −ω) fit alike; the fit returns ω ≥ 0 (a side view
+//! cannot tell the sense of precession).
+
+use super::RimModel;
+use super::lsq::levenberg_marquardt;
+use std::f64::consts::PI;
+
+/// Starting values of a local fit.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LocalInit {
+    pub phi: f64,
+    pub phi_slope: f64,
+    pub chi: f64,
+    pub omega: f64,
+}
+
+/// A converged local fit, in physical units (rad, rad/s, rad/s²).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LocalFit {
+    pub phi: f64,
+    pub phi_slope: f64,
+    /// Phase at t_c, not wrapped.
+    pub chi: f64,
+    pub omega: f64,
+    /// dω/dt of the chirp (0 without it).
+    pub omega_dot: f64,
+    pub sigma_phi: f64,
+    pub sigma_chi: f64,
+    pub sigma_omega: f64,
+    pub ssr: f64,
+    pub dof: usize,
+    pub points: usize,
+}
+
+/// Fits the local model to the window samples (`t`, `z`, all finite) around `t_c`.
+/// With `shift = Some((t_from, dt))`, samples at or after `t_from` are taken to have
+/// been recorded `dt` later than stamped (the dropped-frame hypothesis of the
+/// frame-skip test). Returns `None` when the fit cannot be made (too few samples, or
+/// a non-finite or non-positive tilt).
+pub(crate) fn fit_local(
+    model: &dyn RimModel,
+    t: &[f64],
+    z: &[f64],
+    t_c: f64,
+    init: LocalInit,
+    chirp: bool,
+    shift: Option<(f64, f64)>,
+) -> Option<LocalFit> {
+    let parameters = if chirp { 5 } else { 4 };
+    if t.len() <= parameters {
+        return None;
+    }
+    let half_width = t
+        .iter()
+        .map(|&x| (x - t_c).abs())
+        .fold(0.0, f64::max)
+        .max(1e-9);
+    // Scaled time u = τ/w, so that every parameter is of order one or φ.
+    let u: Vec<f64> = t
+        .iter()
+        .map(|&x| {
+            let late = shift.map_or(0.0, |(from, dt)| if x >= from { dt } else { 0.0 });
+            (x + late - t_c) / half_width
+        })
+        .collect();
+    let mut p0 = vec![
+        init.phi,
+        init.phi_slope * half_width,
+        init.chi,
+        init.omega * half_width,
+    ];
+    if chirp {
+        p0.push(0.0);
+    }
+    let phi_scale = init.phi.abs().max(1e-6);
+    let mut steps = vec![1e-6 * phi_scale, 1e-6 * phi_scale, 1e-6, 1e-6];
+    if chirp {
+        steps.push(1e-6);
+    }
+    let fit = levenberg_marquardt(
+        |p, out| {
+            for ((o, &ui), &zi) in out.iter_mut().zip(&u).zip(z) {
+                let mut chi = p[2] + p[3] * ui;
+                if chirp {
+                    chi += p[4] * ui * ui;
+                }
+                *o = model.z_rim(p[0] + p[1] * ui, chi) - zi;
+            }
+        },
+        &p0,
+        u.len(),
+        &steps,
+    )?;
+    let p = &fit.params;
+    let cov = fit.covariance.as_ref()?;
+    let sign = if p[3] < 0.0 { -1.0 } else { 1.0 };
+    let result = LocalFit {
+        phi: p[0],
+        phi_slope: p[1] / half_width,
+        chi: sign * p[2],
+        omega: sign * p[3] / half_width,
+        omega_dot: if chirp {
+            sign * 2.0 * p[4] / (half_width * half_width)
+        } else {
+            0.0
+        },
+        sigma_phi: cov[(0, 0)].sqrt(),
+        sigma_chi: cov[(2, 2)].sqrt(),
+        sigma_omega: cov[(3, 3)].sqrt() / half_width,
+        ssr: fit.ssr,
+        dof: fit.dof,
+        points: u.len(),
+    };
+    let finite = [
+        result.phi,
+        result.phi_slope,
+        result.chi,
+        result.omega,
+        result.sigma_phi,
+        result.sigma_chi,
+        result.sigma_omega,
+    ]
+    .iter()
+    .all(|x| x.is_finite());
+    (finite && result.phi > 0.0).then_some(result)
+}
+
+impl LocalFit {
+    /// The time near `t_c` at which the phase is `target` mod 2π (0 for a peak, π for a
+    /// trough), and the tilt φ there: χ₀ + ω τ + ½ ω̇ τ² = target, solved by Newton's
+    /// method from the linear root.
+    pub(crate) fn time_of_phase(&self, t_c: f64, target: f64) -> (f64, f64) {
+        let offset = wrap_pi(self.chi - target);
+        let mut dt = -offset / self.omega;
+        for _ in 0..4 {
+            let f = offset + self.omega * dt + 0.5 * self.omega_dot * dt * dt;
+            let df = self.omega + self.omega_dot * dt;
+            if df <= 0.0 {
+                break;
+            }
+            dt -= f / df;
+        }
+        (t_c + dt, self.phi + self.phi_slope * dt)
+    }
+}
+
+/// x wrapped into (−π, π].
+pub(crate) fn wrap_pi(x: f64) -> f64 {
+    let y = x.rem_euclid(2.0 * PI);
+    if y > PI { y - 2.0 * PI } else { y }
+}
+
+/// ψ(t) and φ(t) known at peaks (ψ = 2πk) and troughs (ψ = 2πk + π), linearly
+/// interpolated between them: the starting values of the per-frame fits.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PhaseTrack {
+    /// (t, ψ) knots, sorted by time.
+    psi: Vec<(f64, f64)>,
+    /// (t, φ) knots at peaks, sorted by time.
+    phi: Vec<(f64, f64)>,
+}
+
+impl PhaseTrack {
+    pub(crate) fn new(mut psi: Vec<(f64, f64)>, mut phi: Vec<(f64, f64)>) -> Self {
+        psi.sort_by(|a, b| a.0.total_cmp(&b.0));
+        phi.sort_by(|a, b| a.0.total_cmp(&b.0));
+        PhaseTrack { psi, phi }
+    }
+
+    /// ψ and ψ̇ at `t` (linear between knots, extrapolated with the end slopes).
+    pub(crate) fn psi_at(&self, t: f64) -> Option<(f64, f64)> {
+        interpolate(&self.psi, t)
+    }
+
+    /// φ and φ̇ at `t`.
+    pub(crate) fn phi_at(&self, t: f64) -> Option<(f64, f64)> {
+        interpolate(&self.phi, t)
+    }
+}
+
+fn interpolate(knots: &[(f64, f64)], t: f64) -> Option<(f64, f64)> {
+    if knots.len() < 2 {
+        return None;
+    }
+    let k = knots.partition_point(|&(tk, _)| tk <= t);
+    let j = k.clamp(1, knots.len() - 1);
+    let ((t0, y0), (t1, y1)) = (knots[j - 1], knots[j]);
+    let slope = (y1 - y0) / (t1 - t0);
+    Some((y0 + slope * (t - t0), slope))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::ThesisRim;
+    use super::*;
+
+    #[test]
+    fn local_fit_recovers_a_drifting_oscillation() {
+        let model = ThesisRim { radius: 0.0381 };
+        let (phi0, phi1, chi0, omega) = (0.01, -0.02, 0.4, 300.0);
+        let t: Vec<f64> = (-6..=6).map(|i| i as f64 / 480.0).collect();
+        let z: Vec<f64> = t
+            .iter()
+            .map(|&x| model.z_rim(phi0 + phi1 * x, chi0 + omega * x))
+            .collect();
+        let init = LocalInit {
+            phi: 0.011,
+            phi_slope: 0.0,
+            chi: 0.2,
+            omega: 280.0,
+        };
+        let fit = fit_local(&model, &t, &z, 0.0, init, false, None).expect("fit");
+        assert!((fit.phi - phi0).abs() < 1e-10, "{fit:?}");
+        assert!((fit.chi - chi0).abs() < 1e-8 && (fit.omega - omega).abs() < 1e-6);
+        let (t_peak, phi_peak) = fit.time_of_phase(0.0, 0.0);
+        assert!((t_peak + chi0 / omega).abs() < 1e-10);
+        assert!((phi_peak - (phi0 - phi1 * chi0 / omega)).abs() < 1e-10);
+    }
+
+    #[test]
+    fn phase_track_interpolates() {
+        let track = PhaseTrack::new(vec![(1.0, 2.0 * PI), (0.0, 0.0)], vec![]);
+        let (psi, rate) = track.psi_at(0.25).expect("ψ");
+        assert!((psi - PI / 2.0).abs() < 1e-12 && (rate - 2.0 * PI).abs() < 1e-12);
+        assert!(track.phi_at(0.5).is_none());
+        assert!((wrap_pi(3.0 * PI) - PI).abs() < 1e-12 && (wrap_pi(-0.5) + 0.5).abs() < 1e-15);
+    }
+}

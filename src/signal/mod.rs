@@ -1,0 +1,601 @@
+//! Signal: per-frame series from `vision` turned into state series for `energy`
+//! (thesis §3.2.4–§3.2.5, §3.3.2–§3.3.3).
+//!
+//! # Role in the data flow
+//!
+//! ```text
+//! vision::  per-frame t_i [s], z_rim_i [m] (NaN: no edge), β_i [rad] mod π (two-view)
+//!   │
+//!   ▼  signal::
+//!   │   halt_time         t_φ: last frame with rim motion above the rest noise; t − t_φ
+//!   │   find_peaks        peaks (sub-frame), φ at peaks (eq. 3.9), ψ by turns, ψ̇ (3.11)
+//!   │   frame_states      φ, ψ, ψ̇ at every frame, with standard errors (local fits)
+//!   │   strip_series      β unwrapped by ±π, 5-point moving average, β̇ (eq. 3.22)
+//!   │   strip_stop_time   t_β by the band method of fig. 3.22; t_β − t_φ
+//!   │   frame_skips       timestamp gaps, β̇ spikes, rim phase steps, with reasons
+//!   │   analyse           all of the above → StateSeries
+//!   ▼
+//! energy::  E from eq. (3.8) with φ, ψ̇; power-law fit
+//! ```
+//!
+//! Everything here is a pure function over slices: no files, no printing. Times are
+//! seconds; after [`halt_time`] they are shifted so that the halt is t = 0 (fields
+//! say which axis they use). Heights are metres above the rest level.
+//!
+//! # What the side camera sees: the rim-height model
+//!
+//! Frames: the global frame G has z up; eq. (3.14) turns it by ψ about z (frame I),
+//! then by φ about y_I (body frame B, symmetry axis z_B). The contact point is at
+//! G + (−R, 0, −H) in B (H the half-thickness), so x_B points from the contact point
+//! through the centre to the highest point of the rim, and its horizontal direction
+//! x_I = (cos ψ, sin ψ, 0) has azimuth ψ. A bottom-rim point at body angle α is
+//!
+//! ```text
+//! p(α) = G + R cos α e_x + R sin α e_y − H e_z,   height  z(α) = R sin φ (1 + cos α),
+//! e_x = (cos φ cos ψ, cos φ sin ψ, sin φ),  e_y = (−sin ψ, cos ψ, 0),
+//! e_z = (−sin φ cos ψ, −sin φ sin ψ, cos φ).
+//! ```
+//!
+//! Under stationary rolling (eq. 3.7) the centre G does not move, so the centre column
+//! of the image (x_l + x_r)/2 of the rest frame (ERRATA, §3.2.4) is the vertical plane
+//! through G facing the camera. Put the camera far away at azimuth ψ_c and write
+//! χ = ψ − ψ_c: χ = 0 when the raised side faces the camera (fig. 3.6). The column
+//! meets the bottom rim where
+//!
+//! ```text
+//! R cos φ sin χ cos α + R cos χ sin α = −H sin φ sin χ,
+//! ```
+//!
+//! twice: near the camera and far from it. The underside of the disk is not wrapped
+//! (§3.2.3), so the white region the vision stage thresholds ends at the **front** rim
+//! point, whichever side of the disk is seen; the far one is hidden or dark. Solving
+//! for the front root and expanding in φ:
+//!
+//! ```text
+//! α = −χ + h φ sin χ + O(φ²),   h = H/R
+//! z_rim = R sin φ (1 + cos χ − h φ sin²χ) − H φ cos χ tan ε + O(R φ³),
+//! ```
+//!
+//! where the last term appears for a camera at elevation ε (image rows measured from
+//! the rest frame's front rim, divided by cos ε: the front rim moves by H φ cos χ
+//! towards or away from the camera). So, to first order in φ, the profile between
+//! peaks is **z_rim = R sin φ (1 + cos χ)**: it peaks at 2R sin φ when the raised side
+//! faces the camera (eq. 3.9 is exact there for a level camera) and touches zero once a
+//! turn, when the contact point faces it. The next terms are relative O(h φ) (h φ ≈
+//! 0.5 % at φ = 0.03 for Euler's disk, and zero at the peaks) and O(h tan ε) (0.8 % of
+//! the oscillating part at ε = 5°). Neglected altogether: perspective (relative depth
+//! changes O(R/D) for a camera at distance D), lateral motion of the centre (the
+//! thesis's reason to keep only the final 0.5 s), the rounded rim, and refraction of
+//! the edge by shadows and reflections (vision's business).
+//!
+//! The model is the [`RimModel`] trait: [`ThesisRim`] is the first-order profile,
+//! [`SideViewRim`] the exact front-rim solution with H and ε. The fits below take any
+//! `&dyn RimModel`, so a corrected geometry (e.g. the renderer's exact camera) drops in.
+//! The model is even in χ: one side view cannot tell the sense of precession, so ψ̇ is
+//! reported positive.
+//!
+//! # Methods
+//!
+//! * **Halt** ([`halt_time`]): the rest tail (last `rest_tail_s`) gives the rest level
+//!   (median) and noise (3σ-clipped RMS from the MAD); t_φ is the last frame beyond
+//!   `motion_sigmas`
+//!   × noise; the tail is checked to be at rest (nothing beyond the threshold, no
+//!   oscillation), the noise re-measured over the whole rest and t_φ found again.
+//! * **Peaks** ([`find_peaks`]): local maxima with prominence above
+//!   `prominence_sigmas` × noise, in the `window_s` before the halt. At 480 fps the last
+//!   oscillations have 5–7 frames, so the highest sample misses the true peak (the
+//!   thesis notes the truncation, §3.2.4). Each peak is refined by fitting the rim model
+//!   over 1.5 oscillations with φ = φ₀ + φ₁τ, χ = χ₀ + ωτ + ½ω̇τ² (ψ̇ ∝ τ^{−1/4}
+//!   grows within a turn; without the chirp the peaks came out up to 0.4 frame early);
+//!   with fewer than nine samples, over one oscillation without the chirp. The peak is
+//!   where χ = 0; the parabola through three samples is the fallback. φ at the peak
+//!   follows from the model (eq. 3.9 for [`ThesisRim`]). ψ grows by 2π per peak, or by
+//!   π per peak and trough, zero at the last; ψ̇ by eq. (3.11) and by central
+//!   differences.
+//! * **Per-frame states** ([`frame_states`]): the same chirped local model fitted over
+//!   `state_window_periods` (1.5) turns centred on every frame, started from the
+//!   peak/trough phase track; standard errors from s² (JᵀJ)⁻¹ with s² = SSR/dof. On
+//!   synthetic data they are somewhat small (83–91 % of truths within 3σ), as the
+//!   residuals also carry the model error.
+//! * **Strip** ([`strip_series`], [`strip_stop_time`]): unwrapping, the 5-point moving
+//!   average and β̇ as §3.3.2; t_β by the band of fig. 3.22.
+//! * **Frame skips** ([`frame_skips`]): see [`SkipReason`].
+//!
+//! # Known limits
+//!
+//! The local model has a linearly changing ψ̇ over its window; in the last ~0.03 s ψ̇
+//! changes faster than that within a turn, and φ, ψ, ψ̇ and the peak times there carry a
+//! model error (peak times up to half a frame) that the residual scaling of the
+//! standard errors only partly shows. Peaks below `prominence_sigmas` ×
+//! noise (the final tiny oscillations) are not found. The phase-step test needs at least
+//! six frames per oscillation and an oscillation well above the noise.
+
+mod halt;
+mod local;
+mod lsq;
+mod peaks;
+mod rim;
+mod skips;
+mod strip;
+#[cfg(test)]
+mod tests;
+
+pub use halt::{Halt, halt_time};
+pub use peaks::{
+    ExtremumMethod, Peak, PeakSeries, PrecessionSample, Trough, find_peaks, precession,
+};
+pub use rim::{RimModel, SideViewRim, ThesisRim};
+pub use skips::{FrameFlag, SkipReason, flags_within, strip_rate_spikes, timestamp_gaps};
+pub use strip::{
+    StripSeries, StripStop, derivative, moving_average, strip_series, strip_stop_time,
+    unwrap_half_turns,
+};
+
+use local::{LocalInit, fit_local};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+use thiserror::Error;
+
+/// Settings of the signal stage; [`Default`] gives the thesis's choices where it has
+/// them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SignalConfig {
+    /// Analysis window before the halt [s]; the thesis keeps the final 0.5 s (§3.2.4).
+    pub window_s: f64,
+    /// Length of the rest tail at the end of the clip that measures the noise [s].
+    pub rest_tail_s: f64,
+    /// A frame moves if |z_rim − rest level| exceeds this many noise σ.
+    pub motion_sigmas: f64,
+    /// Lower bound of the noise σ [m]; for edges quantised to pixels of δ metres
+    /// (eq. 3.10) a constant rest tail has MAD 0, and δ/√12 is a sensible floor.
+    pub noise_floor: f64,
+    /// A peak needs a prominence above this many noise σ.
+    pub prominence_sigmas: f64,
+    /// A peak needs a prominence above this [m] in any case (e.g. one pixel).
+    pub min_prominence: f64,
+    /// Width of the per-frame fit window in oscillation periods.
+    pub state_window_periods: f64,
+    /// Points of the centred moving average of β (5 in the thesis).
+    pub smoothing_points: usize,
+    /// Time [s, caller's axis] after which β has certainly settled (fig. 3.22); `None`:
+    /// the last `strip_settled_tail_s` of the clip.
+    pub strip_settled_after: Option<f64>,
+    /// Length of the settled part of β when `strip_settled_after` is `None` [s].
+    pub strip_settled_tail_s: f64,
+    /// A frame interval above this many nominal periods is a timestamp gap.
+    pub gap_factor: f64,
+    /// A raw β̇ this many robust σ from its local median is a spike.
+    pub strip_spike_sigmas: f64,
+    /// Lower bound of the local β̇ spread in the spike test [rad/s].
+    pub strip_rate_floor: f64,
+    /// The phase-step test runs where the peak height exceeds this many noise σ.
+    pub skip_min_snr: f64,
+    /// F statistic above which a rim phase step is flagged.
+    pub phase_step_statistic: f64,
+}
+
+impl Default for SignalConfig {
+    fn default() -> Self {
+        SignalConfig {
+            window_s: 0.5,
+            rest_tail_s: 0.1,
+            motion_sigmas: 5.0,
+            noise_floor: 0.0,
+            prominence_sigmas: 6.0,
+            min_prominence: 0.0,
+            state_window_periods: 1.5,
+            smoothing_points: 5,
+            strip_settled_after: None,
+            strip_settled_tail_s: 0.1,
+            gap_factor: 1.5,
+            strip_spike_sigmas: 6.0,
+            strip_rate_floor: 1e-3,
+            skip_min_snr: 20.0,
+            phase_step_statistic: 100.0,
+        }
+    }
+}
+
+impl SignalConfig {
+    fn validate(&self) -> Result<(), SignalError> {
+        let positive = [
+            ("window_s", self.window_s),
+            ("rest_tail_s", self.rest_tail_s),
+            ("motion_sigmas", self.motion_sigmas),
+            ("state_window_periods", self.state_window_periods),
+            ("strip_settled_tail_s", self.strip_settled_tail_s),
+            ("gap_factor", self.gap_factor),
+            ("strip_spike_sigmas", self.strip_spike_sigmas),
+            ("phase_step_statistic", self.phase_step_statistic),
+        ];
+        let non_negative = [
+            ("noise_floor", self.noise_floor),
+            ("prominence_sigmas", self.prominence_sigmas),
+            ("min_prominence", self.min_prominence),
+            ("strip_rate_floor", self.strip_rate_floor),
+            ("skip_min_snr", self.skip_min_snr),
+        ];
+        for (field, value) in positive {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(SignalError::InvalidConfig {
+                    field,
+                    value,
+                    expected: "a finite positive number",
+                });
+            }
+        }
+        for (field, value) in non_negative {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(SignalError::InvalidConfig {
+                    field,
+                    value,
+                    expected: "a finite number ≥ 0",
+                });
+            }
+        }
+        if self.smoothing_points == 0 {
+            return Err(SignalError::InvalidConfig {
+                field: "smoothing_points",
+                value: 0.0,
+                expected: "at least 1",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Why the signal stage could not produce a result.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SignalError {
+    /// Times and values differ in length.
+    #[error(
+        "{times} frame times but {values} {series} values: the series must pair up frame by frame"
+    )]
+    LengthMismatch {
+        times: usize,
+        values: usize,
+        series: &'static str,
+    },
+    /// Fewer than two frames.
+    #[error("{frames} frame(s): the signal stage needs a series of frames")]
+    TooShort { frames: usize },
+    /// A frame time is NaN or infinite.
+    #[error("frame {index} has time {t} s, not a finite number")]
+    NonFiniteTime { index: usize, t: f64 },
+    /// Frame times do not increase.
+    #[error("frame {index} at t = {t} s does not come after frame {} at {previous} s", index - 1)]
+    TimesNotIncreasing { index: usize, previous: f64, t: f64 },
+    /// A setting is out of range.
+    #[error("setting {field} = {value} must be {expected}")]
+    InvalidConfig {
+        field: &'static str,
+        value: f64,
+        expected: &'static str,
+    },
+    /// Too few rim heights in the rest tail to measure the noise.
+    #[error(
+        "the last {tail_s} s hold {frames} rim heights, fewer than the {needed} needed to \
+         measure the noise at rest: the clip must run on after the disk has stopped"
+    )]
+    RestTailTooShort {
+        tail_s: f64,
+        frames: usize,
+        needed: usize,
+    },
+    /// The rest tail contains motion beyond the threshold it defines.
+    #[error(
+        "no rest tail: the rim still moves at t = {t_moving} s (|z_rim − rest| = {deviation} m \
+         > threshold {threshold} m), after the tail's start at {tail_start} s; the clip may \
+         end before the halt, or rest_tail_s is longer than the rest"
+    )]
+    TailNotAtRest {
+        tail_start: f64,
+        t_moving: f64,
+        deviation: f64,
+        threshold: f64,
+    },
+    /// The rest tail oscillates.
+    #[error(
+        "no rest tail: z_rim after t = {tail_start} s oscillates (autocorrelation {correlation} \
+         at a lag of {lag} frames); the clip seems to end before the disk stops"
+    )]
+    TailOscillates {
+        tail_start: f64,
+        lag: usize,
+        correlation: f64,
+    },
+    /// Nothing moves beyond the noise.
+    #[error(
+        "no rim motion: z_rim never departs from its rest level by more than the threshold \
+         {threshold} m (largest departure {max_deviation} m)"
+    )]
+    NoMotion { threshold: f64, max_deviation: f64 },
+    /// Fewer than three peaks in the analysis window.
+    #[error(
+        "{found} peak(s) of z_rim in the window [{window_start}, {window_end}] s before the \
+         halt; at least {needed} are needed for φ, ψ and ψ̇ (lengthen window_s or lower \
+         prominence_sigmas)"
+    )]
+    TooFewPeaks {
+        found: usize,
+        needed: usize,
+        window_start: f64,
+        window_end: f64,
+    },
+    /// Too few strip angles after the settling time.
+    #[error(
+        "only {frames} strip angles after t = {settled_after} s, fewer than the {needed} \
+         needed for the band of fig. 3.22"
+    )]
+    SettledTooShort {
+        settled_after: f64,
+        frames: usize,
+        needed: usize,
+    },
+    /// β never leaves the band: no rotation to stop.
+    #[error(
+        "the strip angle never leaves the band [{band_low}, {band_high}] rad (widened by its \
+         width) before t = {settled_after} s: no rotation to stop"
+    )]
+    StripNeverMoves {
+        settled_after: f64,
+        band_low: f64,
+        band_high: f64,
+    },
+}
+
+/// The state of the disk at one frame, from the local rim fit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FrameState {
+    /// Frame index.
+    pub index: usize,
+    /// Time, halt at t = 0 [s].
+    pub t: f64,
+    /// Nutation angle φ [rad].
+    pub phi: f64,
+    /// Standard error of φ [rad].
+    pub sigma_phi: f64,
+    /// Precession angle ψ [rad] on the peak series' scale (2πk at peaks, 0 at the last
+    /// peak of the window).
+    pub psi: f64,
+    /// Standard error of ψ [rad].
+    pub sigma_psi: f64,
+    /// Precession rate ψ̇ [rad/s].
+    pub psi_dot: f64,
+    /// Standard error of ψ̇ [rad/s].
+    pub sigma_psi_dot: f64,
+    /// Root-mean-square residual of the fit [m].
+    pub residual_rms: f64,
+    /// Rim heights in the fit.
+    pub points: usize,
+}
+
+/// φ, ψ and ψ̇ with standard errors at every frame of the peak window that has a rim
+/// height, by fitting `model` over about `state_window_periods` oscillations centred
+/// on the frame (module docs). Frames whose fit fails are left out. Only frames up to
+/// the halt enter the fits.
+pub fn frame_states(
+    t: &[f64],
+    z_rim: &[f64],
+    halt: &Halt,
+    peaks: &PeakSeries,
+    model: &dyn RimModel,
+    config: &SignalConfig,
+) -> Vec<FrameState> {
+    let track = peaks::phase_track(&peaks.peaks, &peaks.troughs);
+    let frame = peaks::nominal_period(t);
+    let ts = &halt.shifted_t;
+    let idx: Vec<usize> = finite_samples(t, z_rim)
+        .into_iter()
+        .filter(|&i| i <= halt.index)
+        .collect();
+    let st: Vec<f64> = idx.iter().map(|&i| ts[i]).collect();
+    let v: Vec<f64> = idx.iter().map(|&i| z_rim[i] - halt.rest_level).collect();
+    let mut states = Vec::new();
+    for (k, &i) in idx.iter().enumerate() {
+        let t_c = st[k];
+        if t_c < peaks.window.0 {
+            continue;
+        }
+        let (Some((psi0, omega)), Some((phi0, phi_slope))) = (track.psi_at(t_c), track.phi_at(t_c))
+        else {
+            continue;
+        };
+        if !(omega > 0.0 && phi0 > 0.0) {
+            continue;
+        }
+        let half = (0.5 * config.state_window_periods * 2.0 * PI / omega).max(3.5 * frame);
+        let (mut lo, mut hi) = (
+            st.partition_point(|&x| x < t_c - half),
+            st.partition_point(|&x| x <= t_c + half),
+        );
+        // At least eight samples (four parameters, four degrees of freedom).
+        while hi - lo < 8 && (lo > 0 || hi < st.len()) {
+            lo = lo.saturating_sub(1);
+            if hi - lo < 8 && hi < st.len() {
+                hi += 1;
+            }
+        }
+        let init = LocalInit {
+            phi: phi0,
+            phi_slope,
+            chi: psi0,
+            omega,
+        };
+        let Some(fit) = fit_local(model, &st[lo..hi], &v[lo..hi], t_c, init, true, None) else {
+            continue;
+        };
+        let psi = fit.chi + 2.0 * PI * ((psi0 - fit.chi) / (2.0 * PI)).round();
+        states.push(FrameState {
+            index: i,
+            t: t_c,
+            phi: fit.phi,
+            sigma_phi: fit.sigma_phi,
+            psi,
+            sigma_psi: fit.sigma_chi,
+            psi_dot: fit.omega,
+            sigma_psi_dot: fit.sigma_omega,
+            residual_rms: (fit.ssr / fit.points as f64).sqrt(),
+            points: fit.points,
+        });
+    }
+    states
+}
+
+/// Frame skips of every kind, sorted by frame: timestamp gaps over the whole clip;
+/// strip-rate spikes over the whole clip (if `beta_unwrapped` is given); rim phase
+/// steps before the halt, where the peaks (found over the whole motion, not only the
+/// window) give a phase track. A frame can carry several flags, one per reason.
+pub fn frame_skips(
+    t: &[f64],
+    z_rim: &[f64],
+    beta_unwrapped: Option<&[f64]>,
+    halt: &Halt,
+    model: &dyn RimModel,
+    config: &SignalConfig,
+) -> Result<Vec<FrameFlag>, SignalError> {
+    check_series(t, z_rim, "z_rim")?;
+    config.validate()?;
+    let mut flags = timestamp_gaps(t, config.gap_factor);
+    if let Some(beta) = beta_unwrapped {
+        check_series(t, beta, "beta")?;
+        flags.extend(strip_rate_spikes(
+            t,
+            beta,
+            config.strip_spike_sigmas,
+            config.strip_rate_floor,
+        ));
+    }
+    let (all_peaks, all_troughs) = peaks::extrema(t, z_rim, halt, model, config, f64::NEG_INFINITY);
+    let track = peaks::phase_track(&all_peaks, &all_troughs);
+    flags.extend(skips::rim_phase_steps(
+        t, z_rim, halt, model, &track, config,
+    ));
+    flags.sort_by_key(|f| f.index);
+    Ok(flags)
+}
+
+/// The strip's side of a two-view clip.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StripAnalysis {
+    /// β unwrapped, smoothed and differentiated.
+    pub series: StripSeries,
+    /// t_β by the band method.
+    pub stop: StripStop,
+    /// t_β − t_φ [s] (§3.3.3: 0.04 s on unlubricated stainless steel).
+    pub rotation_after_flat: f64,
+}
+
+/// Everything the signal stage derives from one clip.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StateSeries {
+    /// t_φ and the rest noise; `halt.shifted_t` is the time axis with the halt at 0.
+    pub halt: Halt,
+    /// Peaks, troughs, φ at peaks, ψ and ψ̇ in the window.
+    pub peaks: PeakSeries,
+    /// Per-frame φ, ψ, ψ̇ with standard errors in the window.
+    pub states: Vec<FrameState>,
+    /// β analysis, for two-view clips.
+    pub strip: Option<StripAnalysis>,
+    /// Frame-skip flags over the whole clip.
+    pub flags: Vec<FrameFlag>,
+}
+
+/// Runs the whole stage on one clip: `t` [s], `z_rim` [m] (NaN: no edge) and, for
+/// two-view clips, `beta` [rad] in (−π/2, π/2] (NaN: no strip), frame by frame.
+pub fn analyse(
+    t: &[f64],
+    z_rim: &[f64],
+    beta: Option<&[f64]>,
+    model: &dyn RimModel,
+    config: &SignalConfig,
+) -> Result<StateSeries, SignalError> {
+    let halt = halt_time(t, z_rim, config)?;
+    let peaks = find_peaks(t, z_rim, &halt, model, config)?;
+    let states = frame_states(t, z_rim, &halt, &peaks, model, config);
+    let strip = match beta {
+        Some(beta) => {
+            let series = strip_series(t, beta, config.smoothing_points)?;
+            let settled_after = config
+                .strip_settled_after
+                .unwrap_or(t[t.len() - 1] - config.strip_settled_tail_s);
+            let stop = strip_stop_time(t, &series.beta, settled_after)?;
+            let rotation_after_flat = stop.t_beta - halt.t_phi;
+            Some(StripAnalysis {
+                series,
+                stop,
+                rotation_after_flat,
+            })
+        }
+        None => None,
+    };
+    let flags = frame_skips(
+        t,
+        z_rim,
+        strip.as_ref().map(|s| s.series.beta.as_slice()),
+        &halt,
+        model,
+        config,
+    )?;
+    Ok(StateSeries {
+        halt,
+        peaks,
+        states,
+        strip,
+        flags,
+    })
+}
+
+/// Checks that `t` and `values` pair up and that `t` is finite and increasing.
+fn check_series(t: &[f64], values: &[f64], series: &'static str) -> Result<(), SignalError> {
+    if t.len() != values.len() {
+        return Err(SignalError::LengthMismatch {
+            times: t.len(),
+            values: values.len(),
+            series,
+        });
+    }
+    if t.len() < 2 {
+        return Err(SignalError::TooShort { frames: t.len() });
+    }
+    if let Some(index) = t.iter().position(|x| !x.is_finite()) {
+        return Err(SignalError::NonFiniteTime { index, t: t[index] });
+    }
+    if let Some(index) = (1..t.len()).find(|&i| t[i] <= t[i - 1]) {
+        return Err(SignalError::TimesNotIncreasing {
+            index,
+            previous: t[index - 1],
+            t: t[index],
+        });
+    }
+    Ok(())
+}
+
+/// Indices of frames with a finite value.
+fn finite_samples(t: &[f64], values: &[f64]) -> Vec<usize> {
+    (0..t.len().min(values.len()))
+        .filter(|&i| values[i].is_finite())
+        .collect()
+}
+
+/// Median of a non-empty slice (NaN for an empty one).
+fn median(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// 1.4826 × the median absolute deviation from `level`: σ for Gaussian noise.
+fn mad_sigma(values: &[f64], level: f64) -> f64 {
+    let deviations: Vec<f64> = values.iter().map(|x| (x - level).abs()).collect();
+    1.4826 * median(&deviations)
+}

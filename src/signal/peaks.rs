@@ -1,0 +1,457 @@
+//! Peaks and troughs of z_rim with sub-frame interpolation, φ at peaks (eq. 3.9), ψ by
+//! counting turns and ψ̇ (eq. 3.11) (thesis §3.2.5).
+
+use super::local::{LocalInit, PhaseTrack, fit_local};
+use super::{Halt, RimModel, SignalConfig, SignalError, finite_samples};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// How a peak or trough was located between frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ExtremumMethod {
+    /// The rim model fitted over about one oscillation (trough to trough): the peak is
+    /// where its phase χ is 0 (π for a trough). Not limited by truncated samples.
+    LocalFit,
+    /// A parabola through the extreme sample and its two neighbours (too few samples
+    /// for the local fit, or it disagreed with the parabola by more than a frame).
+    Parabolic,
+}
+
+/// A peak of z_rim: the raised side of the disk faces the camera (fig. 3.6).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Peak {
+    /// Frame of the highest sample.
+    pub index: usize,
+    /// Interpolated peak time, halt at t = 0 [s].
+    pub t: f64,
+    /// Interpolated peak height above the rest level [m].
+    pub z: f64,
+    /// Nutation angle at the peak [rad]: eq. (3.9) (corrected, φ = arcsin(z/2R)) for
+    /// [`ThesisRim`](super::ThesisRim), its analogue for other rim models.
+    pub phi: f64,
+    /// Standard error of φ from the local fit [rad]; `None` for a parabolic peak.
+    pub sigma_phi: Option<f64>,
+    /// Precession rate ω = ψ̇ of the local fit and its standard error [rad/s].
+    pub psi_dot_local: Option<(f64, f64)>,
+    /// Time [s] and height [m] of the highest sample (no interpolation).
+    pub sample: (f64, f64),
+    /// Time [s] and height [m] of the parabolic vertex through three samples.
+    pub parabolic: (f64, f64),
+    /// Topographic prominence of the peak [m].
+    pub prominence: f64,
+    /// How `t` and `z` were found.
+    pub method: ExtremumMethod,
+}
+
+/// A trough of z_rim: the contact point faces the camera.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Trough {
+    /// Frame of the lowest sample between two peaks.
+    pub index: usize,
+    /// Interpolated trough time, halt at t = 0 [s].
+    pub t: f64,
+    /// How `t` was found.
+    pub method: ExtremumMethod,
+}
+
+/// ψ and ψ̇ at the turning points of z_rim (thesis §3.2.5).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PrecessionSample {
+    /// Time, halt at t = 0 [s].
+    pub t: f64,
+    /// Precession angle ψ [rad], zero at the last turning point (the thesis zeroes ψ
+    /// where the motion ends) and increasing.
+    pub psi: f64,
+    /// ψ̇ by eq. (3.11), the slope of the succeeding segment [rad/s]; `None` at the last.
+    pub psi_dot_forward: Option<f64>,
+    /// ψ̇ by central differences over the neighbouring samples [rad/s]; `None` at the
+    /// ends.
+    pub psi_dot_central: Option<f64>,
+}
+
+/// Peaks in the analysis window before the halt, with φ and ψ.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PeakSeries {
+    /// Analysis window (start, end), halt at t = 0 [s].
+    pub window: (f64, f64),
+    /// Peaks in the window, in time order.
+    pub peaks: Vec<Peak>,
+    /// Troughs between consecutive peaks of the window.
+    pub troughs: Vec<Trough>,
+    /// ψ advanced by 2π per peak (the thesis's method), with ψ̇.
+    pub precession: Vec<PrecessionSample>,
+    /// ψ advanced by π per peak and per trough (the thesis's doubled resolution).
+    pub precession_half_turns: Vec<PrecessionSample>,
+}
+
+/// Finds the peaks of z_rim in the window of [`SignalConfig::window_s`] seconds
+/// before the halt, interpolates them between frames, and derives φ at each peak
+/// (eq. 3.9) and ψ, ψ̇ (eq. 3.11 and central differences).
+///
+/// Peaks are local maxima (a plateau counts once, at its middle) of z_rim − rest
+/// level whose prominence exceeds `prominence_sigmas` × the rest noise (and
+/// `min_prominence`). Each is refined by the local fit of `model` over one oscillation
+/// (module docs), falling back to the parabola through three samples.
+///
+/// Errors with [`SignalError::TooFewPeaks`] when fewer than three peaks lie in the
+/// window.
+pub fn find_peaks(
+    t: &[f64],
+    z_rim: &[f64],
+    halt: &Halt,
+    model: &dyn RimModel,
+    config: &SignalConfig,
+) -> Result<PeakSeries, SignalError> {
+    super::check_series(t, z_rim, "z_rim")?;
+    config.validate()?;
+    let window = (-config.window_s, 0.0);
+    let (peaks, troughs) = extrema(t, z_rim, halt, model, config, window.0);
+    if peaks.len() < 3 {
+        return Err(SignalError::TooFewPeaks {
+            found: peaks.len(),
+            needed: 3,
+            window_start: window.0,
+            window_end: window.1,
+        });
+    }
+    let peak_times: Vec<f64> = peaks.iter().map(|p| p.t).collect();
+    let mut turning: Vec<f64> = peak_times
+        .iter()
+        .chain(troughs.iter().map(|tr| &tr.t))
+        .copied()
+        .collect();
+    turning.sort_by(f64::total_cmp);
+    Ok(PeakSeries {
+        window,
+        precession: precession(&peak_times, 2.0 * PI),
+        precession_half_turns: precession(&turning, PI),
+        peaks,
+        troughs,
+    })
+}
+
+/// ψ advanced by `step` at each of the sorted `times`, zero at the last, with ψ̇ by
+/// eq. (3.11) (forward) and by central differences (non-uniform spacing).
+pub fn precession(times: &[f64], step: f64) -> Vec<PrecessionSample> {
+    let n = times.len();
+    (0..n)
+        .map(|k| PrecessionSample {
+            t: times[k],
+            psi: step * (k as f64 - (n as f64 - 1.0)),
+            psi_dot_forward: (k + 1 < n).then(|| step / (times[k + 1] - times[k])),
+            psi_dot_central: (k > 0 && k + 1 < n)
+                .then(|| 2.0 * step / (times[k + 1] - times[k - 1])),
+        })
+        .collect()
+}
+
+/// The peaks (and the troughs between them) at shifted times ≥ `from` up to the halt.
+pub(crate) fn extrema(
+    t: &[f64],
+    z_rim: &[f64],
+    halt: &Halt,
+    model: &dyn RimModel,
+    config: &SignalConfig,
+    from: f64,
+) -> (Vec<Peak>, Vec<Trough>) {
+    let ts = &halt.shifted_t;
+    // Samples up to one past the halt (so the last moving frame can be a maximum).
+    let idx: Vec<usize> = finite_samples(t, z_rim)
+        .into_iter()
+        .filter(|&i| i <= halt.index + 1)
+        .collect();
+    let v: Vec<f64> = idx.iter().map(|&i| z_rim[i] - halt.rest_level).collect();
+    let min_prominence = (config.prominence_sigmas * halt.noise).max(config.min_prominence);
+    let frame = nominal_period(t);
+    let raw: Vec<(usize, f64)> = local_maxima(&v)
+        .into_iter()
+        .map(|k| (k, prominence(&v, k)))
+        .filter(|&(k, p)| p > min_prominence && ts[idx[k]] >= from && idx[k] <= halt.index)
+        .collect();
+    let sample_times: Vec<f64> = idx.iter().map(|&i| ts[i]).collect();
+    // Motion samples only (through the halt) for the local fits.
+    let fit_end = idx.partition_point(|&i| i <= halt.index);
+    let mut peaks = Vec::with_capacity(raw.len());
+    for (n, &(k, prom)) in raw.iter().enumerate() {
+        let period = local_period(&raw, &sample_times, n);
+        let parabolic = parabolic_vertex(&sample_times, &v, k);
+        let refined = period.and_then(|period| {
+            refine(
+                model,
+                &sample_times[..fit_end],
+                &v[..fit_end],
+                k,
+                period,
+                parabolic,
+                0.0,
+                frame,
+            )
+        });
+        let (t_peak, z_peak, phi, sigma_phi, psi_dot_local, method) = match refined {
+            Some((tp, phi, fit)) => (
+                tp,
+                model.z_rim(phi, 0.0),
+                phi,
+                Some(fit.sigma_phi),
+                Some((fit.omega, fit.sigma_omega)),
+                ExtremumMethod::LocalFit,
+            ),
+            None => (
+                parabolic.0,
+                parabolic.1,
+                model.phi_from_peak(parabolic.1),
+                None,
+                None,
+                ExtremumMethod::Parabolic,
+            ),
+        };
+        peaks.push(Peak {
+            index: idx[k],
+            t: t_peak,
+            z: z_peak,
+            phi,
+            sigma_phi,
+            psi_dot_local,
+            sample: (sample_times[k], v[k]),
+            parabolic,
+            prominence: prom,
+            method,
+        });
+    }
+    let mut troughs = Vec::new();
+    for pair in raw.windows(2) {
+        let (a, b) = (pair[0].0, pair[1].0);
+        let Some(k) = (a + 1..b).min_by(|&x, &y| v[x].total_cmp(&v[y])) else {
+            continue;
+        };
+        let period = sample_times[b] - sample_times[a];
+        // A parabola through the lowest sample: its vertex is the minimum.
+        let parabolic = parabolic_vertex(&sample_times, &v, k);
+        let refined = refine(
+            model,
+            &sample_times[..fit_end],
+            &v[..fit_end],
+            k,
+            period,
+            parabolic,
+            PI,
+            frame,
+        );
+        let (t_trough, method) = match refined {
+            Some((tt, _, _)) => (tt, ExtremumMethod::LocalFit),
+            None => (parabolic.0, ExtremumMethod::Parabolic),
+        };
+        troughs.push(Trough {
+            index: idx[k],
+            t: t_trough,
+            method,
+        });
+    }
+    (peaks, troughs)
+}
+
+/// The ψ track through peaks (2πk) and troughs (2πk + π), zero at the last peak, and φ
+/// at the peaks: starting values for the per-frame fits and the frame-skip test.
+pub(crate) fn phase_track(peaks: &[Peak], troughs: &[Trough]) -> PhaseTrack {
+    let last = peaks.len() as f64 - 1.0;
+    let mut psi: Vec<(f64, f64)> = peaks
+        .iter()
+        .enumerate()
+        .map(|(k, p)| (p.t, 2.0 * PI * (k as f64 - last)))
+        .collect();
+    // Trough k lies between peaks k and k + 1 (one per consecutive pair).
+    psi.extend(
+        troughs
+            .iter()
+            .enumerate()
+            .map(|(k, tr)| (tr.t, 2.0 * PI * (k as f64 - last) + PI)),
+    );
+    let phi = peaks.iter().map(|p| (p.t, p.phi)).collect();
+    PhaseTrack::new(psi, phi)
+}
+
+/// Median frame interval [s] (the nominal period of the footage).
+pub(crate) fn nominal_period(t: &[f64]) -> f64 {
+    let dt: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    if dt.is_empty() {
+        f64::NAN
+    } else {
+        super::median(&dt)
+    }
+}
+
+/// Indices of local maxima; a plateau counts once, at its middle.
+fn local_maxima(v: &[f64]) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut i = 1;
+    while i + 1 < v.len() {
+        if v[i] > v[i - 1] {
+            let mut j = i;
+            while j + 1 < v.len() && v[j + 1] == v[i] {
+                j += 1;
+            }
+            if j + 1 < v.len() && v[j + 1] < v[i] {
+                out.push((i + j) / 2);
+            }
+            i = j + 1;
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+/// Topographic prominence of the maximum at `k`: its height above the higher of the two
+/// lowest points between it and the nearest higher sample on each side (or the end).
+fn prominence(v: &[f64], k: usize) -> f64 {
+    let peak = v[k];
+    let mut left = peak;
+    for &x in v[..k].iter().rev() {
+        if x > peak {
+            break;
+        }
+        left = left.min(x);
+    }
+    let mut right = peak;
+    for &x in &v[k + 1..] {
+        if x > peak {
+            break;
+        }
+        right = right.min(x);
+    }
+    peak - left.max(right)
+}
+
+/// Vertex (time, value) of the parabola through samples k − 1, k, k + 1 (non-uniform
+/// times), kept between the outer two; the sample itself when the three are collinear
+/// or k is at an end.
+fn parabolic_vertex(t: &[f64], v: &[f64], k: usize) -> (f64, f64) {
+    if k == 0 || k + 1 >= v.len() {
+        return (t[k], v[k]);
+    }
+    let (t0, t1, t2) = (t[k - 1], t[k], t[k + 1]);
+    let (y0, y1, y2) = (v[k - 1], v[k], v[k + 1]);
+    let d01 = (y1 - y0) / (t1 - t0);
+    let d12 = (y2 - y1) / (t2 - t1);
+    let curvature = (d12 - d01) / (t2 - t0); // second divided difference
+    if curvature == 0.0 || !curvature.is_finite() {
+        return (t1, y1);
+    }
+    // y = y1 + d (t − t1) + c (t − t1)(t − t0'), written about t1.
+    let slope_at_t1 = d01 + curvature * (t1 - t0);
+    let dt = (-slope_at_t1 / (2.0 * curvature)).clamp(t0 - t1, t2 - t1);
+    (t1 + dt, y1 + slope_at_t1 * dt + curvature * dt * dt)
+}
+
+/// Width of the chirped local fit at a peak or trough, in turns.
+const CHIRP_WINDOW_PERIODS: f64 = 1.5;
+/// Fewest samples for the chirped (five-parameter) local fit.
+const MIN_CHIRP_SAMPLES: usize = 9;
+
+/// Local oscillation period at the n-th raw peak: the mean spacing to its neighbours.
+fn local_period(raw: &[(usize, f64)], t: &[f64], n: usize) -> Option<f64> {
+    let spacing = |a: usize, b: usize| t[raw[b].0] - t[raw[a].0];
+    match (n > 0, n + 1 < raw.len()) {
+        (true, true) => Some(0.5 * (spacing(n - 1, n) + spacing(n, n + 1))),
+        (true, false) => Some(spacing(n - 1, n)),
+        (false, true) => Some(spacing(n, n + 1)),
+        (false, false) => None,
+    }
+}
+
+/// Local fit over one period centred on sample k (motion samples `t`, `v`); returns the
+/// time nearest the parabolic vertex where the phase is `target` (0 peak, π trough), φ
+/// there and the fit, if the fit converged and lands within a frame of the parabola.
+#[allow(clippy::too_many_arguments)]
+fn refine(
+    model: &dyn RimModel,
+    t: &[f64],
+    v: &[f64],
+    k: usize,
+    period: f64,
+    parabolic: (f64, f64),
+    target: f64,
+    frame: f64,
+) -> Option<(f64, f64, super::local::LocalFit)> {
+    if k >= t.len() {
+        return None;
+    }
+    let t_c = t[k];
+    let window = |periods: f64| {
+        let half = 0.5 * periods * period;
+        (
+            t.partition_point(|&x| x < t_c - half),
+            t.partition_point(|&x| x <= t_c + half),
+        )
+    };
+    // ψ̇ grows within a turn near the halt: with a chirp over 1.5 turns where there are
+    // samples enough, else constant ψ̇ over one turn.
+    let (lo, hi) = window(CHIRP_WINDOW_PERIODS);
+    let (chirp, lo, hi) = if hi - lo >= MIN_CHIRP_SAMPLES {
+        (true, lo, hi)
+    } else {
+        let (lo, hi) = window(1.0);
+        (false, lo, hi)
+    };
+    if hi - lo < 6 {
+        return None;
+    }
+    let omega = 2.0 * PI / period;
+    let phi_guess = if target == 0.0 {
+        model.phi_from_peak(parabolic.1)
+    } else {
+        // At a trough the height says little; the mean over the window is R φ.
+        let mean = v[lo..hi].iter().sum::<f64>() / (hi - lo) as f64;
+        model.phi_from_peak(2.0 * mean)
+    };
+    if !(phi_guess.is_finite() && phi_guess > 0.0) {
+        return None;
+    }
+    let init = LocalInit {
+        phi: phi_guess,
+        phi_slope: 0.0,
+        chi: target + omega * (t_c - parabolic.0),
+        omega,
+    };
+    let fit = fit_local(model, &t[lo..hi], &v[lo..hi], t_c, init, chirp, None)?;
+    let (t_x, phi_x) = fit.time_of_phase(t_c, target);
+    let plausible = (t_x - parabolic.0).abs() <= frame
+        && phi_x > 0.0
+        && fit.omega > 0.5 * omega
+        && fit.omega < 2.0 * omega;
+    plausible.then_some((t_x, phi_x, fit))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plateaus_and_prominence() {
+        let v = [0.0, 1.0, 3.0, 3.0, 3.0, 1.0, 2.0, 1.5, 5.0, 0.0];
+        assert_eq!(local_maxima(&v), vec![3, 6, 8]);
+        assert_eq!(prominence(&v, 3), 2.0); // down to 1.0 on the right before 5.0
+        assert_eq!(prominence(&v, 6), 0.5);
+        assert_eq!(prominence(&v, 8), 5.0);
+    }
+
+    #[test]
+    fn parabola_vertex_on_uneven_times() {
+        let t = [0.0, 1.0, 3.0];
+        let v: Vec<f64> = t.iter().map(|&x: &f64| 4.0 - (x - 1.4).powi(2)).collect();
+        let (tv, yv) = parabolic_vertex(&t, &v, 1);
+        assert!((tv - 1.4).abs() < 1e-12 && (yv - 4.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn precession_counts_turns_and_differentiates() {
+        let times = [0.0, 0.1, 0.3];
+        let samples = precession(&times, 2.0 * PI);
+        assert_eq!(samples[2].psi, 0.0);
+        assert!((samples[0].psi + 4.0 * PI).abs() < 1e-12);
+        assert!((samples[0].psi_dot_forward.expect("3.11") - 20.0 * PI).abs() < 1e-9);
+        assert!((samples[1].psi_dot_central.expect("central") - 4.0 * PI / 0.3).abs() < 1e-9);
+        assert!(samples[2].psi_dot_forward.is_none() && samples[0].psi_dot_central.is_none());
+    }
+}

@@ -1,0 +1,756 @@
+//! Tests of the signal stage against series built analytically with a known truth.
+//!
+//! The synthetic disk follows the thesis's power laws near the halt t0 (§3.2):
+//! φ = φ_a (τ/τ_a)^{1/2} (E ≈ m g R φ ∝ τ^{1/2}, n = 1/2) and ψ̇ = Ω_a (τ/τ_a)^{−1/4}
+//! (stationary rolling, ψ̇² ∝ 1/φ), τ = t0 − t, τ_a = 0.5 s, with φ_a = 0.03 and
+//! Ω_a = 188 rad/s: about 20 oscillations in the final 0.5 s, the last at ~90 Hz, as
+//! §3.2.4 describes. z_rim = R sin φ (1 + cos ψ), sampled at 480 fps, plus Gaussian noise.
+
+use super::*;
+use std::f64::consts::PI;
+
+const R: f64 = 0.0381;
+const H: f64 = 0.00635;
+const FPS: f64 = 480.0;
+const FRAME: f64 = 1.0 / FPS;
+const PHI_A: f64 = 0.03;
+const OMEGA_A: f64 = 188.0;
+const TAU_A: f64 = 0.5;
+
+/// SplitMix64 with Box–Muller: deterministic noise for every run.
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    fn gaussian(&mut self) -> f64 {
+        let (u1, u2) = (self.uniform(), self.uniform());
+        (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
+    }
+}
+
+/// The synthetic disk: analytic φ(t), ψ(t), with t0 the halt.
+struct Truth {
+    t0: f64,
+    psi_end: f64,
+}
+
+impl Truth {
+    /// Halt half a frame after the frame at `t_last`, with a peak (ψ = 2πK) exactly at
+    /// that frame.
+    fn new(t_last: f64) -> Self {
+        let tau_last = 0.5 * FRAME;
+        let t0 = t_last + tau_last;
+        let psi_end = 2.0 * PI * 40.0 + Self::remaining(tau_last);
+        Truth { t0, psi_end }
+    }
+
+    /// Precession still to come at τ before the halt: ∫₀^τ ψ̇ = Ω_a τ_a^{1/4} τ^{3/4}/(3/4).
+    fn remaining(tau: f64) -> f64 {
+        OMEGA_A * TAU_A.powf(0.25) * tau.powf(0.75) / 0.75
+    }
+
+    fn phi(&self, t: f64) -> f64 {
+        let tau = self.t0 - t;
+        if tau > 0.0 {
+            PHI_A * (tau / TAU_A).sqrt()
+        } else {
+            0.0
+        }
+    }
+
+    fn psi(&self, t: f64) -> f64 {
+        self.psi_end - Self::remaining((self.t0 - t).max(0.0))
+    }
+
+    fn psi_dot(&self, t: f64) -> f64 {
+        OMEGA_A * ((self.t0 - t) / TAU_A).powf(-0.25)
+    }
+
+    /// Time at which ψ = `psi` (before the halt).
+    fn time_of_psi(&self, psi: f64) -> f64 {
+        let left = self.psi_end - psi;
+        self.t0 - (0.75 * left / (OMEGA_A * TAU_A.powf(0.25))).powf(4.0 / 3.0)
+    }
+
+    /// Peak times (ψ = 2πk) in [from, t0).
+    fn peaks_after(&self, from: f64) -> Vec<f64> {
+        let k_last = (self.psi_end / (2.0 * PI)).floor() as i64;
+        let k_first = (self.psi(from) / (2.0 * PI)).ceil() as i64;
+        (k_first..=k_last)
+            .map(|k| self.time_of_psi(2.0 * PI * k as f64))
+            .filter(|&tp| tp < self.t0)
+            .collect()
+    }
+
+    fn z_rim(&self, t: f64) -> f64 {
+        R * self.phi(t).sin() * (1.0 + self.psi(t).cos())
+    }
+}
+
+/// A clip from 1 s before the halt to 0.3 s after it: (t, z_rim, truth).
+fn clip(noise: f64, seed: u64) -> (Vec<f64>, Vec<f64>, Truth) {
+    let n_motion = 480;
+    let n = n_motion + 144;
+    let t: Vec<f64> = (0..n).map(|i| 2.0 + i as f64 * FRAME).collect();
+    let truth = Truth::new(t[n_motion - 1]);
+    let mut rng = Rng(seed);
+    let z = t
+        .iter()
+        .map(|&x| truth.z_rim(x) + noise * rng.gaussian())
+        .collect();
+    (t, z, truth)
+}
+
+/// Sub-pixel edge noise of 2 μm (3 % of the thesis's 66 μm pixel, eq. 3.10).
+const NOISE: f64 = 2e-6;
+
+fn thesis_model() -> ThesisRim {
+    ThesisRim { radius: R }
+}
+
+#[test]
+fn halt_is_found_within_a_frame() {
+    let (t, z, truth) = clip(NOISE, 1);
+    let halt = halt_time(&t, &z, &SignalConfig::default()).expect("halt");
+    // The last frame before t0 carries a peak far above the noise; 480 fps: ±1 frame.
+    assert!(
+        (halt.t_phi - (truth.t0 - 0.5 * FRAME)).abs() <= FRAME + 1e-12,
+        "t_φ = {}, t0 = {}",
+        halt.t_phi,
+        truth.t0
+    );
+    // The MAD of 144 Gaussian samples estimates σ to about ±15 % (2 standard errors).
+    assert!(
+        (halt.noise / NOISE - 1.0).abs() < 0.3,
+        "noise {}",
+        halt.noise
+    );
+    assert_eq!(halt.shifted_t[halt.index], 0.0);
+    assert!((halt.shifted_t[0] - (t[0] - halt.t_phi)).abs() < 1e-12);
+}
+
+/// How far a peak time may be from the truth: a tenth of a frame by the local fit
+/// (observed < 0.05) while ψ̇ changes slowly; half a frame by the parabola (the last,
+/// tiny peak, 5 frames a turn), or in the last 0.03 s, where ψ̇ ∝ τ^{−1/4} changes by
+/// a quarter within the fit's 1.5 turns and the chirp (linear ω) cannot follow.
+fn timing_tolerance(peak: &Peak) -> f64 {
+    match peak.method {
+        ExtremumMethod::LocalFit if peak.t < -0.03 => 0.1 * FRAME,
+        _ => 0.5 * FRAME,
+    }
+}
+
+#[test]
+fn peaks_count_phi_and_precession_match_the_truth() {
+    for seed in [2, 21, 22] {
+        check_peaks(seed);
+    }
+}
+
+fn check_peaks(seed: u64) {
+    let (t, z, truth) = clip(NOISE, seed);
+    let config = SignalConfig::default();
+    let halt = halt_time(&t, &z, &config).expect("halt");
+    let series = find_peaks(&t, &z, &halt, &thesis_model(), &config).expect("peaks");
+    let true_peaks = truth.peaks_after(halt.t_phi - config.window_s);
+    // The count is only a fair test if no true peak sits within two frames of the
+    // window's start (where a frame of timing decides in or out).
+    let window_start = halt.t_phi - config.window_s;
+    assert!(
+        true_peaks
+            .iter()
+            .all(|&tp| (tp - window_start).abs() > 2.0 * FRAME)
+    );
+    assert_eq!(series.peaks.len(), true_peaks.len(), "{:?}", series.peaks);
+
+    let mut fitted_error2 = 0.0;
+    let mut sample_error2 = 0.0;
+    let mut compared = 0;
+    for (peak, &tp) in series.peaks.iter().zip(&true_peaks) {
+        let t_abs = peak.t + halt.t_phi;
+        // Sub-frame timing: a tenth of a frame.
+        assert!(
+            (t_abs - tp).abs() < timing_tolerance(peak),
+            "peak at {t_abs}, truth {tp}: {peak:?}"
+        );
+        let phi_true = truth.phi(tp);
+        if phi_true > 0.002 {
+            // 2 %: what eq. (3.9) needs for E ∝ φ to 2 % (the brief's requirement).
+            let rel = (peak.phi - phi_true).abs() / phi_true;
+            assert!(rel < 0.02, "φ {} vs {phi_true} at {tp}", peak.phi);
+            assert_eq!(peak.method, ExtremumMethod::LocalFit);
+            let phi_sample = thesis_model().phi_from_peak(peak.sample.1);
+            fitted_error2 += rel * rel;
+            sample_error2 += ((phi_sample - phi_true) / phi_true).powi(2);
+            compared += 1;
+        }
+    }
+    assert!(compared > 15, "{compared}");
+    // The local fit beats the highest sample (which truncates the peak).
+    assert!(
+        fitted_error2 < 0.25 * sample_error2,
+        "rms {} vs raw {}",
+        (fitted_error2 / compared as f64).sqrt(),
+        (sample_error2 / compared as f64).sqrt()
+    );
+
+    // ψ: 2π per peak, zero at the last; the half-turn variant interleaves troughs.
+    let psi = &series.precession;
+    assert_eq!(psi.last().map(|s| s.psi), Some(0.0));
+    assert_eq!(
+        series.precession_half_turns.len(),
+        2 * series.peaks.len() - 1
+    );
+    for (k, pair) in series.precession_half_turns.windows(2).enumerate() {
+        assert!((pair[1].psi - pair[0].psi - PI).abs() < 1e-12, "{k}");
+        assert!(pair[1].t > pair[0].t);
+    }
+    for trough in &series.troughs {
+        // Troughs are where ψ = π mod 2π: a tenth of a frame; half a frame in the last
+        // 0.02 s (5–6 frames a turn, ψ̇ changing by 10 % within one).
+        let psi_true = truth.psi(trough.t + halt.t_phi);
+        let offset = local::wrap_pi(psi_true - PI);
+        let dt = offset / truth.psi_dot(trough.t + halt.t_phi);
+        let tol = if trough.t < -0.02 { 0.1 } else { 0.5 } * FRAME;
+        assert!(dt.abs() < tol, "trough at {}: {dt}", trough.t);
+    }
+
+    for (k, s) in psi.iter().enumerate() {
+        let t_abs = s.t + halt.t_phi;
+        let tau = truth.t0 - t_abs;
+        if let Some(forward) = s.psi_dot_forward {
+            // Eq. (3.11) is the mean rate over the next turn, 2π/Δt with the true
+            // peak times, up to the timing errors of both peaks over Δt.
+            let dt_true = true_peaks[k + 1] - true_peaks[k];
+            let rel = (forward * dt_true / (2.0 * PI) - 1.0).abs();
+            let tol = (timing_tolerance(&series.peaks[k]) + timing_tolerance(&series.peaks[k + 1]))
+                / dt_true;
+            assert!(rel < tol, "3.11 at {t_abs}: {rel} > {tol}");
+        }
+        if let (Some(central), true) = (s.psi_dot_central, tau > 0.05) {
+            // Central differences on uneven spacing: error ≈ Δ²/(32τ²) from the
+            // spacing's change plus Δ²ψ⃛/(6ψ̇) = (5/96)Δ²/τ² for ψ̇ ∝ τ^{−1/4},
+            // together < 0.085 (Δ/τ)²; plus 0.2 frame of timing over 2Δ.
+            let spacing = 2.0 * PI / truth.psi_dot(t_abs);
+            let tol = 0.085 * (spacing / tau).powi(2) + 0.1 * FRAME / spacing;
+            let rel = (central / truth.psi_dot(t_abs) - 1.0).abs();
+            assert!(rel < tol, "central ψ̇ at {t_abs}: {rel} > {tol}");
+        }
+    }
+    // The local fit's ω is the instantaneous rate at the fit's centre (the highest
+    // sample), held constant over the turn; it is within 5 sub-frame σ or the change
+    // of ψ̇ over half a frame (ψ̈ = ψ̇/(4τ)).
+    for peak in &series.peaks {
+        let t_abs = peak.sample.0 + halt.t_phi;
+        let tau = truth.t0 - t_abs;
+        if let (Some((omega, sigma)), true) = (peak.psi_dot_local, tau > 0.05) {
+            let truth_rate = truth.psi_dot(t_abs);
+            let period = 2.0 * PI / truth_rate;
+            // Over a turn, constant ω misses the curvature of ψ: a relative bias of
+            // about (period/τ)²/16 besides the noise.
+            let tol = 5.0 * sigma + truth_rate * (period / tau).powi(2) / 16.0;
+            assert!(
+                (omega - truth_rate).abs() < tol,
+                "ω {omega} vs {truth_rate} ± {tol} at τ = {tau}"
+            );
+        }
+    }
+}
+
+#[test]
+fn frame_states_follow_the_truth_with_honest_errors() {
+    for seed in [3, 31, 111] {
+        check_states(seed);
+    }
+}
+
+fn check_states(seed: u64) {
+    let (t, z, truth) = clip(NOISE, seed);
+    let config = SignalConfig::default();
+    let model = thesis_model();
+    let halt = halt_time(&t, &z, &config).expect("halt");
+    let peaks = find_peaks(&t, &z, &halt, &model, &config).expect("peaks");
+    let states = frame_states(&t, &z, &halt, &peaks, &model, &config);
+    let last_peak = peaks.peaks.last().expect("peak").t + halt.t_phi;
+    let psi_offset = 2.0 * PI * (truth.psi(last_peak) / (2.0 * PI)).round();
+    let in_window = (0..t.len())
+        .filter(|&i| halt.shifted_t[i] >= -config.window_s && i <= halt.index)
+        .count();
+    // Every frame of the window has a state (the fits do not fail on clean data).
+    assert!(
+        states.len() >= in_window - 2,
+        "{} of {in_window}",
+        states.len()
+    );
+    let mut covered = 0;
+    let mut judged = 0;
+    for s in &states {
+        let t_abs = s.t + halt.t_phi;
+        let tau = truth.t0 - t_abs;
+        if tau < 0.05 {
+            continue; // the last oscillations: ψ̇ changes within a window (module docs)
+        }
+        let phi_true = truth.phi(t_abs);
+        // 1.5 %: noise gives σ_φ/φ ≈ 0.1 %; the model holds φ linear and ψ̈ constant
+        // over 1.5 turns against τ^{1/2} and τ^{−1/4} (observed ≤ 0.5 %).
+        assert!(
+            (s.phi / phi_true - 1.0).abs() < 0.015,
+            "φ {} vs {phi_true} at τ = {tau}",
+            s.phi
+        );
+        // ψ on the peak scale (0 at the window's last peak, a true 2πK) is the truth
+        // minus 2πK; 0.03 rad is 0.5 % of a turn (typical errors ≤ 0.016 rad), plus
+        // 4σ for the few windows whose phase is poorly determined (σ_ψ up to 0.02 rad
+        // where the fit says so).
+        let psi_err = s.psi - (truth.psi(t_abs) - psi_offset);
+        assert!(
+            psi_err.abs() < 0.03 + 4.0 * s.sigma_psi,
+            "ψ error {psi_err} ± {} at τ = {tau}",
+            s.sigma_psi
+        );
+        // 1.5 % (observed ≤ 0.5 %).
+        let rate_err = s.psi_dot / truth.psi_dot(t_abs) - 1.0;
+        assert!(rate_err.abs() < 0.015, "ψ̇ error {rate_err} at τ = {tau}");
+        judged += 1;
+        if (s.phi - phi_true).abs() < 3.0 * s.sigma_phi {
+            covered += 1;
+        }
+    }
+    // The standard errors are of the right size, if small: the residuals of a window
+    // carry the model error too, so 83–91 % of the truths lie within 3σ over 100 seeds
+    // (not 99.7 %); at least 80 %.
+    assert!(judged > 150, "{judged}");
+    assert!(covered * 100 >= judged * 80, "{covered}/{judged}");
+}
+
+/// The exact side-view geometry (H, camera elevation) fitted with its own model gives
+/// φ at the peaks as well as the thesis model does on its own data; the thesis model
+/// on the same data is off by the O(h tan ε) term in the oscillating part.
+#[test]
+fn exact_geometry_is_a_drop_in_model() {
+    let exact = SideViewRim {
+        radius: R,
+        half_thickness: H,
+        camera_elevation: 0.1,
+    };
+    let (t, _, truth) = clip(0.0, 4);
+    let mut rng = Rng(5);
+    let z: Vec<f64> = t
+        .iter()
+        .map(|&x| exact.z_rim(truth.phi(x), truth.psi(x)) + NOISE * rng.gaussian())
+        .collect();
+    let config = SignalConfig::default();
+    let halt = halt_time(&t, &z, &config).expect("halt");
+    let series = find_peaks(&t, &z, &halt, &exact, &config).expect("peaks");
+    for peak in &series.peaks {
+        let phi_true = truth.phi(peak.t + halt.t_phi);
+        if phi_true > 0.002 {
+            // The same 2 % as for the thesis model on thesis data.
+            assert!(
+                (peak.phi / phi_true - 1.0).abs() < 0.02,
+                "{peak:?}: truth {phi_true} at {}",
+                truth.time_of_psi(2.0 * PI * (truth.psi(peak.t + halt.t_phi) / (2.0 * PI)).round())
+            );
+        }
+    }
+}
+
+#[test]
+fn too_few_peaks_and_missing_rest_are_errors() {
+    let (t, z, _) = clip(NOISE, 6);
+    let model = thesis_model();
+    let short = SignalConfig {
+        window_s: 0.01,
+        ..SignalConfig::default()
+    };
+    let halt = halt_time(&t, &z, &short).expect("halt");
+    match find_peaks(&t, &z, &halt, &model, &short) {
+        Err(SignalError::TooFewPeaks {
+            found,
+            needed: 3,
+            window_start,
+            window_end,
+        }) => {
+            assert!(found < 3 && window_start == -0.01 && window_end == 0.0);
+        }
+        other => panic!("{other:?}"),
+    }
+    // A clip cut before the halt: the tail oscillates or moves beyond its threshold.
+    let cut = 400;
+    let result = halt_time(&t[..cut], &z[..cut], &SignalConfig::default());
+    assert!(
+        matches!(
+            result,
+            Err(SignalError::TailOscillates { .. } | SignalError::TailNotAtRest { .. })
+        ),
+        "{result:?}"
+    );
+    // A clip cut 0.05 s after the halt, with the default 0.1 s tail: motion in the tail.
+    let result = halt_time(&t[..504], &z[..504], &SignalConfig::default());
+    assert!(
+        matches!(result, Err(SignalError::TailNotAtRest { .. })),
+        "{result:?}"
+    );
+    // Nothing but noise: no motion.
+    let mut rng = Rng(7);
+    let flat: Vec<f64> = t.iter().map(|_| NOISE * rng.gaussian()).collect();
+    let result = halt_time(&t, &flat, &SignalConfig::default());
+    assert!(
+        matches!(result, Err(SignalError::NoMotion { .. })),
+        "{result:?}"
+    );
+    // A tail too short to measure.
+    let result = halt_time(&t[..5], &z[..5], &SignalConfig::default());
+    assert!(
+        matches!(result, Err(SignalError::RestTailTooShort { frames: 5, .. })),
+        "{result:?}"
+    );
+    assert!(matches!(
+        halt_time(&t, &z[..5], &SignalConfig::default()),
+        Err(SignalError::LengthMismatch { .. })
+    ));
+    let message = SignalError::TooFewPeaks {
+        found: 2,
+        needed: 3,
+        window_start: -0.5,
+        window_end: 0.0,
+    }
+    .to_string();
+    assert!(
+        message.contains("2 peak") && message.contains("[-0.5, 0]"),
+        "{message}"
+    );
+}
+
+/// β of a constructed strip: turning at 20 rad/s, slowing to 1 rad/s, then a Coulomb
+/// stop at constant deceleration over 7 ms (eq. 4.113: R|β̇₀|/(2μg) with μ = 0.134).
+struct StripTruth {
+    t_stop: f64,
+}
+
+const BETA_DOT_END: f64 = 1.0;
+const STOP_DURATION: f64 = 0.007;
+
+impl StripTruth {
+    fn beta(&self, t: f64) -> f64 {
+        let decel_start = self.t_stop - STOP_DURATION;
+        let a = BETA_DOT_END / STOP_DURATION;
+        let before = |s: f64| {
+            // β̇ = 1 + 19 e^{−s/0.2} for s = decel_start − t ≥ 0 (fast early, 1 rad/s late).
+            -(s + 19.0 * 0.2 * (1.0 - (-s / 0.2).exp()))
+        };
+        let at_decel = BETA_DOT_END * STOP_DURATION - 0.5 * a * STOP_DURATION.powi(2);
+        if t <= decel_start {
+            before(decel_start - t)
+        } else if t < self.t_stop {
+            let u = t - decel_start;
+            BETA_DOT_END * u - 0.5 * a * u * u
+        } else {
+            at_decel
+        }
+    }
+}
+
+fn wrap_half_turn(b: f64) -> f64 {
+    // Into (−π/2, π/2], as the PCA angle of eq. (3.24).
+    let w = b.rem_euclid(PI);
+    if w > PI / 2.0 { w - PI } else { w }
+}
+
+const BETA_NOISE: f64 = 1e-4;
+
+fn strip_clip(seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>, StripTruth) {
+    let t: Vec<f64> = (0..720).map(|i| i as f64 * FRAME).collect();
+    let truth = StripTruth {
+        t_stop: 1.2 + 0.3 * FRAME,
+    };
+    let mut rng = Rng(seed);
+    let clean: Vec<f64> = t.iter().map(|&x| truth.beta(x)).collect();
+    let measured = clean
+        .iter()
+        .map(|&b| wrap_half_turn(b + BETA_NOISE * rng.gaussian()))
+        .collect();
+    (t, clean, measured, truth)
+}
+
+#[test]
+fn strip_unwraps_smooths_and_stops_by_the_band() {
+    let (t, clean, measured, truth) = strip_clip(8);
+    let series = strip_series(&t, &measured, 5).expect("strip");
+    // Unwrapping restores the angle up to one constant multiple of π.
+    let offset = series.beta[0] - clean[0];
+    assert!((offset / PI - (offset / PI).round()).abs() < 1e-2);
+    for (b, c) in series.beta.iter().zip(&clean) {
+        // 6 noise σ.
+        assert!((b - c - offset).abs() < 6.0 * BETA_NOISE);
+    }
+    // The 5-point average halves... β̇ from it follows the true rate where the rate
+    // changes slowly: noise 1e-4 rad over 2 frames / √5 ≈ 0.02 rad/s, a 0.1 rad/s
+    // tolerance is 5σ.
+    for i in 100..500 {
+        let rate = (clean[i + 1] - clean[i - 1]) / (2.0 * FRAME);
+        assert!(
+            (series.beta_dot[i] - rate).abs() < 0.1,
+            "{i}: {} vs {rate}",
+            series.beta_dot[i]
+        );
+    }
+    let stop = strip_stop_time(&t, &series.beta, 1.3).expect("band");
+    // The band method enters the band when the remaining turn ½ a (t_stop − t)² falls to
+    // the band's half-width (~2.5σ): √(2 · 2.5e-4 / 143) = 1.9 ms < 1 frame early;
+    // plus one frame of sampling: two frames.
+    assert!(
+        (stop.t_beta - truth.t_stop).abs() <= 2.0 * FRAME,
+        "t_β = {} vs {}",
+        stop.t_beta,
+        truth.t_stop
+    );
+    assert!(stop.band.1 - stop.band.0 < 12.0 * BETA_NOISE && stop.settled_frames > 40);
+    // No motion before the settled time: an error, not a stop time.
+    let still = vec![0.1; t.len()];
+    assert!(matches!(
+        strip_stop_time(&t, &still, 1.3),
+        Err(SignalError::StripNeverMoves { .. })
+    ));
+    assert!(matches!(
+        strip_stop_time(&t, &still, 2.0),
+        Err(SignalError::SettledTooShort { frames: 0, .. })
+    ));
+}
+
+#[test]
+fn moving_average_and_derivative_on_uneven_times() {
+    let v = [1.0, 2.0, 3.0, f64::NAN, 5.0, 6.0];
+    let m = moving_average(&v, 5);
+    // Ends shrink to 1 and 3 points; NaN is left out.
+    assert_eq!(m[0], 1.0);
+    assert_eq!(m[1], 2.0);
+    assert!((m[2] - (1.0 + 2.0 + 3.0 + 5.0) / 4.0).abs() < 1e-12);
+    let t = [0.0, 0.1, 0.3, 0.35, 0.6];
+    let y: Vec<f64> = t.iter().map(|&x: &f64| 3.0 * x * x - x).collect();
+    let d = derivative(&t, &y);
+    for i in 1..4 {
+        // Exact for a quadratic on any spacing.
+        assert!((d[i] - (6.0 * t[i] - 1.0)).abs() < 1e-12, "{i}");
+    }
+}
+
+/// The two-view clip: rim and strip on the same frames.
+fn two_view(seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let (t, z, truth) = clip(NOISE, seed);
+    let mut rng = Rng(seed + 100);
+    // The strip turns at β̇ ≈ ψ̇ + θ̇ ≈ 2 rad/s before the halt and stops 0.03 s after,
+    // slowing at constant rate over the last 7 ms (a Coulomb stop, eq. 4.113).
+    let beta_true = |x: f64| {
+        let left = (truth.t0 + 0.03 - x).max(0.0);
+        if left > STOP_DURATION {
+            -2.0 * (left - 0.5 * STOP_DURATION)
+        } else {
+            -2.0 * left * left / (2.0 * STOP_DURATION)
+        }
+    };
+    let beta = t
+        .iter()
+        .map(|&x| wrap_half_turn(beta_true(x) + BETA_NOISE * rng.gaussian()))
+        .collect();
+    (t, z, beta)
+}
+
+fn all_flags(t: &[f64], z: &[f64], beta: &[f64]) -> Vec<FrameFlag> {
+    let model = thesis_model();
+    let config = SignalConfig::default();
+    let halt = halt_time(t, z, &config).expect("halt");
+    let unwrapped = unwrap_half_turns(beta);
+    frame_skips(t, z, Some(&unwrapped), &halt, &model, &config).expect("flags")
+}
+
+#[test]
+fn clean_series_has_no_flags() {
+    for seed in [9, 10] {
+        let (t, z, beta) = two_view(seed);
+        let flags = all_flags(&t, &z, &beta);
+        assert!(flags.is_empty(), "seed {seed}: {flags:?}");
+    }
+}
+
+/// Dropped frames, first with honest timestamps (gaps), then renumbered as if the
+/// camera had not noticed (the motion must show them).
+#[test]
+fn dropped_frames_are_flagged() {
+    check_dropped(11);
+}
+
+fn check_dropped(seed: u64) {
+    let (t, z, beta) = two_view(seed);
+    let dropped = [150usize, 260, 330, 420];
+    let keep: Vec<usize> = (0..t.len()).filter(|i| !dropped.contains(i)).collect();
+    let pick = |v: &[f64]| keep.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+    let (zs, bs) = (pick(&z), pick(&beta));
+    // The frame after each drop, in the shortened series.
+    let expected: Vec<usize> = dropped.iter().enumerate().map(|(k, &d)| d - k).collect();
+
+    let stamped = pick(&t);
+    let flags = all_flags(&stamped, &zs, &bs);
+    for &e in &expected {
+        assert!(
+            flags.iter().any(|f| f.index == e
+                && matches!(
+                    f.reason,
+                    SkipReason::TimestampGap {
+                        missing_frames: 1,
+                        ..
+                    }
+                )),
+            "gap before {e}: {flags:?}"
+        );
+    }
+    // Honest timestamps: the motion is consistent, so only the gaps are flagged.
+    assert!(
+        flags
+            .iter()
+            .all(|f| matches!(f.reason, SkipReason::TimestampGap { .. })),
+        "{flags:?}"
+    );
+
+    let renumbered: Vec<f64> = (0..keep.len()).map(|i| t[0] + i as f64 * FRAME).collect();
+    let flags = all_flags(&renumbered, &zs, &bs);
+    for &e in &expected {
+        let rim = flags
+            .iter()
+            .any(|f| f.index == e && matches!(f.reason, SkipReason::RimPhaseStep { .. }));
+        let strip = flags
+            .iter()
+            .any(|f| f.index == e && matches!(f.reason, SkipReason::StripRateSpike { .. }));
+        assert!(
+            rim && strip,
+            "drop before {e}: rim {rim}, strip {strip}: {flags:?}"
+        );
+    }
+    assert!(
+        flags.iter().all(|f| expected.contains(&f.index)),
+        "false flags: {flags:?}"
+    );
+    let first = &flags[0];
+    assert!(first.within(first.t - 1e-9, first.t + 1e-9));
+    assert_eq!(flags_within(&flags, 0.0, 1.0).len(), 0);
+}
+
+#[test]
+fn analyse_runs_the_stage_end_to_end() {
+    let (t, z, beta) = two_view(12);
+    let result = analyse(
+        &t,
+        &z,
+        Some(&beta),
+        &thesis_model(),
+        &SignalConfig::default(),
+    )
+    .expect("analyse");
+    let strip = result.strip.expect("strip");
+    // The strip stops 0.03 s after t0, t_φ is within a frame of t0 (above), the band
+    // method within two frames (above): 3 frames in all.
+    assert!(
+        (strip.rotation_after_flat - 0.03).abs() < 3.0 * FRAME,
+        "{}",
+        strip.rotation_after_flat
+    );
+    assert!(result.flags.is_empty() && result.peaks.peaks.len() > 15);
+    assert!(!result.states.is_empty());
+}
+
+/// Robustness sweep: the seeded checks above over 100 further noise seeds
+/// (`cargo test --release signal -- --ignored`); all passed when written.
+#[test]
+#[ignore]
+fn sweep_seeds() {
+    let mut failures = Vec::new();
+    for seed in 140..240u64 {
+        for (name, f) in [
+            ("peaks", check_peaks as fn(u64)),
+            ("states", check_states),
+            ("dropped", check_dropped),
+            ("clean", |s| {
+                let (t, z, beta) = two_view(s);
+                let flags = all_flags(&t, &z, &beta);
+                assert!(flags.is_empty(), "{flags:?}");
+            }),
+            ("halt", |s| {
+                let (t, z, truth) = clip(NOISE, s);
+                let halt = halt_time(&t, &z, &SignalConfig::default()).expect("halt");
+                assert!((halt.t_phi - (truth.t0 - 0.5 * FRAME)).abs() <= FRAME + 1e-12);
+            }),
+        ] {
+            if std::panic::catch_unwind(|| f(seed)).is_err() {
+                failures.push((name, seed));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
+}
+
+/// Thesis-like data: edges on whole pixels of δ = 6.58e-5 m (§3.2.4), with 0.3 px of
+/// noise before rounding. The caller sets the noise floor δ/√12 and a one-pixel
+/// prominence, as the config documents.
+#[test]
+fn pixel_quantised_rim_heights() {
+    let delta = 6.58e-5;
+    let (t, clean, truth) = clip(0.0, 13);
+    let mut rng = Rng(14);
+    let z: Vec<f64> = clean
+        .iter()
+        .map(|&x| ((x / delta + 0.3 * rng.gaussian()).round()) * delta)
+        .collect();
+    let config = SignalConfig {
+        noise_floor: delta / 12f64.sqrt(),
+        min_prominence: delta,
+        ..SignalConfig::default()
+    };
+    let halt = halt_time(&t, &z, &config).expect("halt");
+    // Motion shows until the peaks fall below ~2 px (φ ≈ 1.7e-3, 1.5 ms before t0 on
+    // τ^{1/2}); the last such peak may fall on a trough frame: 3 frames.
+    assert!(
+        truth.t0 - halt.t_phi < 3.0 * FRAME && halt.t_phi < truth.t0,
+        "t_φ {} vs t0 {}",
+        halt.t_phi,
+        truth.t0
+    );
+    let series = find_peaks(&t, &z, &halt, &thesis_model(), &config).expect("peaks");
+    let mut matched = 0;
+    for &tp in &truth.peaks_after(halt.t_phi - config.window_s) {
+        let phi_true = truth.phi(tp);
+        if phi_true < 0.004 {
+            continue;
+        }
+        // Every peak above 5 px is found.
+        let peak = series
+            .peaks
+            .iter()
+            .find(|p| (p.t + halt.t_phi - tp).abs() < 0.5 * FRAME)
+            .unwrap_or_else(|| panic!("no peak near {tp}: {:?}", series.peaks));
+        // Rounding with only 0.3 px of dither leaves a bias that averaging does not
+        // remove, up to half a pixel of peak height: φ within 0.6 px of 2Rφ/δ, plus
+        // 1 % (observed: 0.5–2.6 % above 10 px, 11 % at 5 px).
+        let tol = 0.6 * delta / (2.0 * R * phi_true) + 0.01;
+        assert!(
+            (peak.phi / phi_true - 1.0).abs() < tol,
+            "φ {} vs {phi_true} (±{tol})",
+            peak.phi
+        );
+        matched += 1;
+    }
+    assert!(
+        matched > 15 && series.peaks.len() <= matched + 3,
+        "{matched}"
+    );
+}
