@@ -317,7 +317,20 @@ pub fn analyse_clip(
     let calibration =
         vision::calibrate_at_rest(&rest_sides, rest[0].index, &side_config, given.as_ref())
             .map_err(vision_err)?;
-    let metres_per_px = calibration.calibration.metres_per_px(params.half_thickness);
+    // Scale from the disk's diameter, 2R / (x_r − x_l): elevation-independent and
+    // a baseline six times longer than the thesis's 2H / (z_base − z_t) (eq. 3.10),
+    // which is also computed and compared.
+    let cal = calibration.calibration;
+    let metres_per_px = 2.0 * params.radius / (cal.x_r - cal.x_l);
+    let thickness_scale = cal.metres_per_px(params.half_thickness);
+    if (thickness_scale / metres_per_px - 1.0).abs() > 0.05 {
+        warnings.push(format!(
+            "scale from the thickness, 2H/(z_base − z_t) = {thickness_scale:.4e} m/px (eq. 3.10), \
+             differs from the scale from the diameter, 2R/(x_r − x_l) = {metres_per_px:.4e} m/px, \
+             which is used: the camera looks down on the top face (z_t is then its far rim), \
+             or the disk parameters do not match the disk filmed"
+        ));
+    }
     let side0 = &rest_sides[0];
     let gauge = RimGauge::new(
         &calibration.calibration,
@@ -419,9 +432,11 @@ pub fn analyse_clip(
     let window_s = config.window_s();
     let signal_config = SignalConfig {
         window_s,
-        // Edges quantised to pixels: a constant rest tail has zero spread.
-        noise_floor: metres_per_px / 12f64.sqrt(),
-        min_prominence: metres_per_px,
+        // The rim edge is located to a few hundredths of a pixel, so a clean rest
+        // tail can have almost no spread: floor the noise at 0.05 px, and ask a
+        // peak to stand 0.2 px above its surroundings.
+        noise_floor: 0.05 * metres_per_px,
+        min_prominence: 0.2 * metres_per_px,
         ..SignalConfig::default()
     };
     let model = ThesisRim {

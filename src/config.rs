@@ -22,7 +22,7 @@
 //! half_thickness_m = 0.00635
 //!
 //! [vision]
-//! gamma = 128                    # threshold on mean RGB intensity, 0–255; default Otsu
+//! gamma = 0.45                   # threshold on mean RGB intensity, 0–1; default Otsu
 //! band_half_width_px = 3         # columns each side of the centre line
 //! split_row = 640                # two-view: first row of the plan view [px]
 //! roi = [0, 0, 720, 1280]        # x, y, width, height [px]
@@ -96,7 +96,7 @@ pub struct DiskConfig {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct VisionConfig {
-    /// Threshold γ on the mean RGB intensity, 0–255 (thesis §3.2.4).
+    /// Threshold γ on the mean RGB intensity as a fraction of white, 0–1 (thesis §3.2.4).
     pub gamma: Option<f64>,
     /// Columns each side of the centre line searched for the rim edge [px].
     pub band_half_width_px: Option<u32>,
@@ -225,8 +225,11 @@ impl ExperimentConfig {
             positive("disk.inertia_c_kg_m2", disk.inertia_c_kg_m2)?;
         }
         if let Some(gamma) = self.vision.as_ref().and_then(|v| v.gamma) {
-            if !(0.0..=255.0).contains(&gamma) {
-                return Err(format!("`vision.gamma` = {gamma} must lie in 0–255"));
+            if !(gamma > 0.0 && gamma < 1.0) {
+                return Err(format!(
+                    "`vision.gamma` = {gamma} must lie strictly between 0 and 1 \
+                     (a fraction of full white, as MATLAB's im2bw level)"
+                ));
             }
         }
         if let Some(c) = &self.calibration {
@@ -314,7 +317,7 @@ mod tests {
         for text in [
             "fps = -480",
             "fps = 0",
-            "[vision]\ngamma = 300",
+            "[vision]\ngamma = 1.5",
             "[calibration]\nx_l = 10\nx_r = 5\nz_t = 1\nz_base = 2",
             "[calibration]\nx_l = 1\nx_r = 5\nz_t = 3\nz_base = 2",
             "[fit]\nwindow_s = -1",
@@ -334,19 +337,19 @@ mod tests {
         std::fs::create_dir_all(&material).unwrap();
         std::fs::write(
             root.path().join(FOLDER_CONFIG),
-            "fps = 480\n[vision]\ngamma = 100\nband_half_width_px = 4\n",
+            "fps = 480\n[vision]\ngamma = 0.4\nband_half_width_px = 4\n",
         )
         .unwrap();
         std::fs::write(material.join(FOLDER_CONFIG), "material = \"steel\"\n").unwrap();
         let clip = material.join("run07.mp4");
-        std::fs::write(material.join("run07.toml"), "[vision]\ngamma = 120\n").unwrap();
+        std::fs::write(material.join("run07.toml"), "[vision]\ngamma = 0.5\n").unwrap();
         let layers = ExperimentConfig::layers_for(root.path(), &clip);
         assert_eq!(layers.len(), 4, "{layers:?}");
         let config = ExperimentConfig::load_layered(&layers).unwrap();
         assert_eq!(config.fps, Some(480.0));
         assert_eq!(config.material.as_deref(), Some("steel"));
         let vision = config.vision.unwrap();
-        assert_eq!(vision.gamma, Some(120.0), "the clip's own file wins");
+        assert_eq!(vision.gamma, Some(0.5), "the clip's own file wins");
         assert_eq!(
             vision.band_half_width_px,
             Some(4),

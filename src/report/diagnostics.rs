@@ -7,6 +7,7 @@ use image::{Rgb, RgbImage};
 
 use crate::footage::FrameView;
 use crate::vision::Calibration;
+use crate::vision::INTENSITY_SCALE;
 
 const RED: Rgb<u8> = Rgb([230, 30, 30]);
 const GREEN: Rgb<u8> = Rgb([40, 200, 60]);
@@ -61,7 +62,7 @@ pub fn calibration_image(frame: &FrameView, calibration: &Calibration) -> RgbIma
     image
 }
 
-/// A frame thresholded at γ on the mean RGB intensity (white above, black below),
+/// A frame thresholded at γ (a fraction of white) on the mean RGB intensity (white above, black below),
 /// with the measuring band around the centre line (blue) and the rim edge found
 /// (red), as in figs. 3.7–3.8.
 pub fn threshold_image(
@@ -72,7 +73,7 @@ pub fn threshold_image(
     edge_row: Option<f64>,
 ) -> RgbImage {
     let mut image = RgbImage::from_fn(frame.width as u32, frame.height as u32, |x, y| {
-        if f64::from(frame.intensity(x as usize, y as usize)) > gamma {
+        if f64::from(frame.intensity(x as usize, y as usize)) > gamma * INTENSITY_SCALE {
             Rgb([255, 255, 255])
         } else {
             Rgb([0, 0, 0])

@@ -314,6 +314,9 @@ const MIRROR_STEP_FRACTION: f32 = 0.2;
 /// less, and the "disk" is a clump of noise.
 const MIN_CONTRAST: f32 = 20.0;
 
+/// Longest dark gap inside the disk's bright run that is bridged (a strip).
+const MAX_BRIDGED_GAP_PX: usize = 8;
+
 /// Finds x_l, x_r, z_t and z_base on one frame of the disk at rest, with the
 /// band of columns 2·half_width + 1 wide (see the module docs for the method).
 pub fn calibrate_frame(
@@ -402,7 +405,25 @@ fn vertical_points(
     let top = p.iter().position(|&v| v > level).filter(|&k| k > 0);
     let top = top.ok_or_else(|| missing("z_t"))?;
     let z_t = half_level_crossing(&p, top - 1, REACH, origin).ok_or_else(|| missing("z_t"))?;
-    let run_len = p[top..].iter().take_while(|&&v| v > level).count();
+    // The bright run from the top down, bridging short dark gaps: a coloured
+    // strip on the top face (two-view set-ups, fig. 3.19) crosses the centre
+    // column as a thin line darker than γ.
+    let mut run_len = 0;
+    let mut k = top;
+    while k < p.len() {
+        if p[k] > level {
+            k += 1;
+            run_len = k - top;
+            continue;
+        }
+        let gap = p[k..].iter().take_while(|&&v| v <= level).count();
+        // Only gaps inside the disk's own blob: never bridge a light plate's shadow.
+        let inside_disk = y0 + k + gap <= disk.row_max;
+        if gap > MAX_BRIDGED_GAP_PX || k + gap >= p.len() || !inside_disk {
+            break;
+        }
+        k += gap;
+    }
     let bottom = top + run_len - 1;
     if bottom + 1 >= p.len() {
         return Err(missing("z_base"));
@@ -444,47 +465,55 @@ fn vertical_points(
     Ok((z_t, z_base))
 }
 
-/// x_l and x_r: the ends of the bright run through the centre column, on the
-/// mean of the (up to three) whole rows just above the plate line.
+/// x_l and x_r: the ends of the disk, the outermost half-level crossings of the
+/// bright runs through the centre column over the rows from the disk's top down
+/// to the plate line. Seen from a small elevation the bottom rim curves up
+/// towards the sides, so the rows just above z_base are narrower than the disk;
+/// the widest row is where the rim's silhouette reaches its ends.
 fn horizontal_points(
     frame: &FrameView,
     index: usize,
     level: f32,
     disk: &Component,
     x_centre: f64,
-    z_t: f64,
+    _z_t: f64,
     z_base: f64,
 ) -> Result<(f64, f64), VisionError> {
     let missing = |point| VisionError::CalibrationPointNotFound {
         frame: index,
         point,
     };
-    let rows_end = z_base.floor().max(0.0) as usize;
-    let rows = (((z_base - z_t) / 4.0).floor() as usize).clamp(1, 3);
-    let rows_start = rows_end.checked_sub(rows).ok_or_else(|| missing("x_l"))?;
     let c0 = disk.col_min.saturating_sub(REACH + 1);
     let c1 = (disk.col_max + REACH + 2).min(frame.width);
-    let q: Vec<f32> = (c0..c1)
-        .map(|x| column_band_mean(frame, x, rows_start, rows_end))
-        .collect();
     let origin = c0 as f64;
-    let kc = (x_centre.floor() as usize)
-        .checked_sub(c0)
-        .filter(|&k| k < q.len() && q[k] > level)
-        .ok_or_else(|| missing("x_l"))?;
-    let left = q[..=kc].iter().rev().take_while(|&&v| v > level).count();
-    let k_left = kc + 1 - left;
-    let x_l = k_left
-        .checked_sub(1)
-        .and_then(|i| half_level_crossing(&q, i, REACH, origin))
-        .ok_or_else(|| missing("x_l"))?;
-    let right = q[kc..].iter().take_while(|&&v| v > level).count();
-    let k_right = kc + right - 1;
-    let x_r = (k_right + 1 < q.len())
-        .then(|| half_level_crossing(&q, k_right, REACH, origin))
-        .flatten()
-        .ok_or_else(|| missing("x_r"))?;
-    Ok((x_l, x_r))
+    let rows_end = (z_base.floor().max(0.0) as usize).min(frame.height);
+    let mut ends: Option<(f64, f64)> = None;
+    for y in disk.row_min..rows_end {
+        let q: Vec<f32> = (c0..c1).map(|x| column_band_mean(frame, x, y, y + 1)).collect();
+        let Some(kc) = (x_centre.floor() as usize)
+            .checked_sub(c0)
+            .filter(|&k| k < q.len() && q[k] > level)
+        else {
+            continue;
+        };
+        let left = q[..=kc].iter().rev().take_while(|&&v| v > level).count();
+        let right = q[kc..].iter().take_while(|&&v| v > level).count();
+        let k_left = kc + 1 - left;
+        let k_right = kc + right - 1;
+        let x_l = k_left
+            .checked_sub(1)
+            .and_then(|i| half_level_crossing(&q, i, REACH, origin));
+        let x_r = (k_right + 1 < q.len())
+            .then(|| half_level_crossing(&q, k_right, REACH, origin))
+            .flatten();
+        if let (Some(x_l), Some(x_r)) = (x_l, x_r) {
+            ends = Some(match ends {
+                Some((l, r)) => (l.min(x_l), r.max(x_r)),
+                None => (x_l, x_r),
+            });
+        }
+    }
+    ends.ok_or_else(|| missing("x_l"))
 }
 
 #[cfg(test)]

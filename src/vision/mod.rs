@@ -49,7 +49,7 @@ pub use calibration::{
 };
 pub use error::VisionError;
 pub use rim::{RimGauge, RimHeight};
-pub use threshold::{GammaSource, Threshold};
+pub use threshold::{GammaSource, INTENSITY_SCALE, Threshold};
 pub use two_view::{
     ColourThresholds, Strip, StripFinder, ThresholdSource, auto_colour_thresholds, find_split_row,
     split_views,
