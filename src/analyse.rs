@@ -49,12 +49,12 @@ pub enum AnalyseError {
     Footage(#[from] FootageError),
     #[error("{}: {reason}", path.display())]
     Fps { path: PathBuf, reason: String },
-    #[error("{}: {source}", path.display())]
-    Vision { path: PathBuf, source: VisionError },
-    #[error("{}: {source}", path.display())]
-    Signal { path: PathBuf, source: SignalError },
-    #[error("{}: energy fit: {source}", path.display())]
-    Fit { path: PathBuf, source: FitError },
+    #[error("{}: {error}", path.display())]
+    Vision { path: PathBuf, error: VisionError },
+    #[error("{}: {error}", path.display())]
+    Signal { path: PathBuf, error: SignalError },
+    #[error("{}: energy fit: {error}", path.display())]
+    Fit { path: PathBuf, error: FitError },
     #[error("{}: {reason}", path.display())]
     Clip { path: PathBuf, reason: String },
 }
@@ -239,9 +239,9 @@ pub fn analyse_clip(
     config: &ExperimentConfig,
     progress: &dyn Fn(usize, Option<usize>),
 ) -> Result<Experiment, AnalyseError> {
-    let vision_err = |source| AnalyseError::Vision {
+    let vision_err = |error| AnalyseError::Vision {
         path: clip.to_path_buf(),
-        source,
+        error,
     };
     let info = footage::probe(clip)?;
     let fps = footage::resolve_capture_fps(
@@ -442,9 +442,9 @@ pub fn analyse_clip(
     let model = ThesisRim {
         radius: params.radius,
     };
-    let signal_err = |source| AnalyseError::Signal {
+    let signal_err = |error| AnalyseError::Signal {
         path: clip.to_path_buf(),
-        source,
+        error,
     };
     let series =
         signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;
@@ -464,9 +464,9 @@ pub fn analyse_clip(
         HaltChoice::Measured => HaltTime::Fixed(0.0),
         HaltChoice::Free => HaltTime::Free,
     };
-    let fit_err = |source| AnalyseError::Fit {
+    let fit_err = |error| AnalyseError::Fit {
         path: clip.to_path_buf(),
-        source,
+        error,
     };
     let peak_samples = peak_energies(&params, &series);
     let peaks_fit =
@@ -562,22 +562,36 @@ fn frame_energies(
     series: &StateSeries,
     strip: Option<&signal::StripAnalysis>,
 ) -> Vec<EnergySample> {
+    // A state whose local fit window was cut short (at the window's edges) rests
+    // on too few rim heights to trust: keep fits with at least 80 % of the
+    // median number of points.
+    let mut counts: Vec<usize> = series.states.iter().map(|s| s.points).collect();
+    counts.sort_unstable();
+    let full = counts.get(counts.len() / 2).copied().unwrap_or(0);
     series
         .states
         .iter()
+        .filter(|s| 5 * s.points >= 4 * full)
         .filter_map(|s| {
-            let theta_dot = match strip {
-                Some(strip) => Some(strip.series.beta_dot.get(s.index)? - s.psi_dot),
-                None => None,
+            // The side view gives |ψ̇| only. Near stationary rolling β̇ = ψ̇ + θ̇ =
+            // ψ̇ (1 − cos φ + h sin φ) (eqs. 3.7, 3.22) has the sign of ψ̇, so the
+            // strip supplies the sense of precession.
+            let (psi_dot, theta_dot) = match strip {
+                Some(strip) => {
+                    let beta_dot = *strip.series.beta_dot.get(s.index)?;
+                    let psi_dot = s.psi_dot.abs().copysign(beta_dot);
+                    (psi_dot, Some(beta_dot - psi_dot))
+                }
+                None => (s.psi_dot, None),
             };
             let energy = match theta_dot {
-                Some(theta_dot) => energy::rolling_energy(params, s.phi, 0.0, s.psi_dot, theta_dot),
-                None => energy::stationary_rolling_energy(params, s.phi, s.psi_dot),
+                Some(theta_dot) => energy::rolling_energy(params, s.phi, 0.0, psi_dot, theta_dot),
+                None => energy::stationary_rolling_energy(params, s.phi, psi_dot),
             };
             energy.is_finite().then_some(EnergySample {
                 t: s.t,
                 phi: s.phi,
-                psi_dot: s.psi_dot,
+                psi_dot,
                 theta_dot,
                 energy,
             })

@@ -146,7 +146,7 @@ impl FrameSource {
                 let decoded = image::open(file)
                     .map_err(|e| FootageError::unreadable(file, format!("frame {index}: {e}")))?
                     .into_rgb8();
-                if index > 0 && decoded.dimensions() != frame.dimensions() {
+                if frame.width() > 0 && decoded.dimensions() != frame.dimensions() {
                     let (w, h) = decoded.dimensions();
                     let (w0, h0) = frame.dimensions();
                     return Err(FootageError::unreadable(
