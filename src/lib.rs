@@ -1,6 +1,7 @@
 //! eulerdisk: slow-motion footage of spinning disks turned into physics.
 pub mod analyse;
 pub mod config;
+pub mod demo;
 pub mod energy;
 pub mod footage;
 pub mod model;

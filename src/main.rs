@@ -6,7 +6,6 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
-use rayon::prelude::*;
 
 use eulerdisk::model::dissipation::{Dissipation, ModelKind};
 use eulerdisk::model::params::Preset;
@@ -21,7 +20,7 @@ use eulerdisk::report::simulation::write_simulation;
 use eulerdisk::report::study::{StudyReportOptions, write_published_report, write_study_report};
 use eulerdisk::stats::VarianceModel;
 use eulerdisk::study::{self, Outcome, StudyEvent};
-use eulerdisk::{analyse, footage, reproduce};
+use eulerdisk::{analyse, demo, footage, reproduce};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 
@@ -83,7 +82,8 @@ enum Command {
         #[arg(long)]
         skip_table_4_1: bool,
     },
-    /// Run the built-in demonstration: the reproduction table and simulator plots.
+    /// Run the built-in demonstration: render a small study with known exponents,
+    /// analyse it, and write out/demo/index.html (recovered n beside true n).
     Demo {
         /// Output folder.
         #[arg(short, long, default_value = "out/demo")]
@@ -554,7 +554,7 @@ fn run_render(args: &RenderArgs) -> Result<()> {
 
 fn run_reproduce(out: &Path, include_table_4_1: bool) -> Result<()> {
     if include_table_4_1 {
-        eprintln!("reproducing the thesis's numbers, Table 4.1 included (a few minutes)…");
+        eprintln!("reproducing the thesis's numbers, Table 4.1 included (about ten seconds)…");
     }
     let table = reproduce::reproduce(include_table_4_1);
     println!("{}", table.to_markdown());
@@ -564,37 +564,38 @@ fn run_reproduce(out: &Path, include_table_4_1: bool) -> Result<()> {
     Ok(())
 }
 
-/// The demo at this stage: the reproduction table (without the slow Table 4.1, which
-/// `eulerdisk reproduce` computes) plus the simulator panels of the thesis's Coulomb,
-/// contour and augmented-contour runs (figs. 4.3, 4.12, 4.16).
+/// The demo: render a small study with known exponents, analyse it as a study,
+/// recompute the thesis's numbers, and write `OUT/index.html`.
 fn run_demo(out: &Path) -> Result<()> {
-    run_reproduce(&out.join("reproduce"), false)?;
-    let params = Preset::EulerDisk.params();
-    let runs = [
-        ("contour", ModelKind::Contour, 2.43e-4),
-        ("augmented-contour", ModelKind::AugmentedContour, 1.1e-5),
-        ("coulomb-only", ModelKind::None, 0.0),
-    ];
-    eprintln!("simulating {} thesis runs in parallel…", runs.len());
-    let written: Vec<Vec<PathBuf>> = runs
-        .par_iter()
-        .map(|&(name, kind, eta)| -> Result<Vec<PathBuf>> {
-            let mut spec = SimulationSpec::thesis_default(params, Dissipation::new(kind), eta);
-            spec.t_end = 1.0;
-            let trajectory =
-                simulate(&spec).with_context(|| format!("demo simulation `{name}`"))?;
-            let title = format!("Euler's disk, {name}, η = {eta:.3e}");
-            Ok(write_simulation(
-                &out.join(name),
-                &title,
-                &spec,
-                &trajectory,
-            )?)
-        })
-        .collect::<Result<_>>()?;
-    for path in written.iter().flatten() {
-        println!("wrote {}", path.display());
-    }
-    println!("demo finished: see {}", out.display());
+    let started = std::time::Instant::now();
+    let footage = out.join("footage");
+    let clips = demo::demo_clips();
+    eprintln!(
+        "demo: rendering {} clips with known n into {}…",
+        clips.len(),
+        footage.display()
+    );
+    demo::render_demo_footage(&footage, &clips)?;
+    eprintln!("demo: analysing them as a study…");
+    let study_out = out.join("study");
+    run_study(&StudyArgs {
+        root: Some(footage.clone()),
+        out: study_out.clone(),
+        shard: None,
+        resume: false,
+        welch: false,
+        published: false,
+    })?;
+    let bytes = std::fs::read(study_out.join(study::STUDY_FILE))?;
+    let results: study::StudyResults = serde_json::from_slice(&bytes)?;
+    eprintln!("demo: recomputing the thesis's published numbers…");
+    let table = reproduce::reproduce(true);
+    table.write(&out.join("reproduce"))?;
+    demo::write_demo_index(out, &clips, &results, "study")?;
+    println!(
+        "demo finished in {:.0} s: open {}",
+        started.elapsed().as_secs_f64(),
+        out.join("index.html").display()
+    );
     Ok(())
 }

@@ -40,7 +40,8 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    from 1.4826 × MAD (floored at `noise_floor`); the motion threshold is
 ///    `motion_sigmas` × σ.
 /// 2. The tail must be at rest: no frame in it beyond the threshold, and no
-///    oscillation (autocorrelation above 0.6 at any lag up to 24 frames).
+///    oscillation (autocorrelation above 0.6 at any lag up to 24 frames, checked
+///    when the tail's spread exceeds twice `noise_floor`).
 /// 3. t_φ is the last frame beyond the threshold; the noise is then re-measured over
 ///    every frame after t_φ, and t_φ found again with it.
 ///
@@ -75,7 +76,10 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             threshold,
         });
     }
-    if let Some((lag, correlation)) = oscillation(z_rim, &tail, level) {
+    // A correlated tail whose spread stays within twice the noise floor is codec
+    // or sensor texture on a still frame, not a disk still rocking.
+    let oscillating = noise > 2.0 * config.noise_floor;
+    if let Some((lag, correlation)) = oscillation(z_rim, &tail, level).filter(|_| oscillating) {
         return Err(SignalError::TailOscillates {
             tail_start,
             lag,
