@@ -1,5 +1,6 @@
 //! eulerdisk: slow-motion footage of spinning disks turned into physics.
 pub mod analyse;
+pub mod compare;
 pub mod config;
 pub mod demo;
 pub mod energy;

@@ -73,6 +73,10 @@ enum Command {
         #[arg(short, long, default_value = "out/study")]
         out: PathBuf,
     },
+    /// Overlay a simulated model on a measured experiment (thesis §4.7.1, §4.8):
+    /// initial state from the footage, η tuned to the halt or fitted, error table,
+    /// residual spin and post-flat prediction, in EXPERIMENT_OUT/compare-<model>/.
+    Compare(CompareArgs),
     /// Recompute the thesis's published numbers and show them side by side.
     Reproduce {
         /// Output folder for the table (Markdown, CSV, JSON).
@@ -138,6 +142,34 @@ struct SimulateArgs {
     /// Output folder.
     #[arg(short, long, default_value = "out/simulate")]
     out: PathBuf,
+}
+
+#[derive(Args)]
+struct CompareArgs {
+    /// An experiment folder written by `eulerdisk analyse` (holds result.json).
+    experiment: PathBuf,
+    /// Dissipation model (thesis §4.4–4.7).
+    #[arg(long, value_enum, required_unless_present = "all_models")]
+    model: Option<ModelKind>,
+    /// Fit η (and p for augmented contour) by least squares on φ, ψ̇ and β̇ instead
+    /// of tuning η to the measured halt.
+    #[arg(long)]
+    fit: bool,
+    /// Rank every dissipation model on this experiment (in compare-all/).
+    #[arg(long)]
+    all_models: bool,
+    /// Time of the initial state before the halt [s] (eq. 4.43: 0.5).
+    #[arg(long, default_value_t = eulerdisk::compare::DEFAULT_LEAD_S)]
+    lead: f64,
+    /// Exponent p of augmented contour friction (start value with --fit).
+    #[arg(long, default_value_t = 0.722)]
+    p: f64,
+    /// Coulomb friction μ (default: Table 3.1 for the experiment's material).
+    #[arg(long)]
+    mu: Option<f64>,
+    /// Gap at which the air film of eq. 4.104 gives way to contact [m].
+    #[arg(long, default_value_t = eulerdisk::compare::DEFAULT_CONTACT_GAP_M)]
+    contact_gap: f64,
 }
 
 #[derive(Args)]
@@ -267,6 +299,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Analyse { clip, config, out } => run_analyse(&clip, config.as_deref(), out),
         Command::Study(args) => run_study(&args),
         Command::Merge { shards, out } => run_merge(&shards, &out),
+        Command::Compare(args) => run_compare(&args),
         Command::Reproduce {
             out,
             skip_table_4_1,
@@ -549,6 +582,68 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         written.frames
     );
     println!("wrote {}", written.truth.display());
+    Ok(())
+}
+
+fn run_compare(args: &CompareArgs) -> Result<()> {
+    use eulerdisk::compare::{self, CompareOptions, EtaMethod};
+    use eulerdisk::report::compare::{comparison_dir, write_comparison, write_ranking};
+    let experiment = compare::load_experiment(&args.experiment)?;
+    let options = CompareOptions {
+        model: args.model.unwrap_or(ModelKind::AugmentedContour),
+        method: if args.fit {
+            EtaMethod::LeastSquares
+        } else {
+            EtaMethod::TunedToHalt
+        },
+        lead_s: args.lead,
+        augmented_exponent: args.p,
+        mu: args.mu,
+        contact_gap_m: args.contact_gap,
+    };
+    let print = |c: &compare::Comparison| {
+        for w in &c.warnings {
+            eprintln!("warning: {w}");
+        }
+        println!(
+            "{:?}: η = {:.4e}{}, misfit {:.4}, end {:+.4} s from the measured halt, n(model E) = {}",
+            c.options.model,
+            c.eta,
+            if c.options.model == ModelKind::AugmentedContour {
+                format!(", p = {:.3}", c.dissipation.augmented_exponent)
+            } else {
+                String::new()
+            },
+            c.misfit,
+            c.end_time_error_s,
+            c.energy_exponent
+                .map_or_else(|| "—".into(), |n| format!("{n:.3}"))
+        );
+    };
+    if args.all_models {
+        let models = compare::rankable_models();
+        eprintln!("comparing {} models…", models.len());
+        let ranked = compare::rank_models(&experiment, &args.experiment, &options, &models);
+        for (i, r) in ranked.iter().enumerate() {
+            match &r.outcome {
+                Ok(c) => {
+                    print!("{:>2}. ", i + 1);
+                    print(c);
+                    write_comparison(&comparison_dir(&args.experiment, r.model), c)?;
+                }
+                Err(e) => println!("{:>2}. {:?}: failed: {e}", i + 1, r.model),
+            }
+        }
+        let dir = args.experiment.join("compare-all");
+        write_ranking(&dir, &args.experiment, options.method, &ranked)?;
+        println!("report: {}", dir.join("index.html").display());
+        return Ok(());
+    }
+    let comparison = compare::compare(&experiment, &args.experiment, &options)?;
+    print(&comparison);
+    let dir = comparison_dir(&args.experiment, options.model);
+    write_comparison(&dir, &comparison)?;
+    println!("report: {}", dir.join("index.html").display());
     Ok(())
 }
 

@@ -3,6 +3,7 @@
 //! leaves a half-written result (DESIGN.md, conventions).
 
 pub mod diagnostics;
+pub mod compare;
 pub mod experiment;
 pub mod html;
 pub mod plot;
