@@ -213,18 +213,30 @@ impl OwnedFrame {
     }
 }
 
-/// The side view of a frame: the whole frame, or its top part in a two-view clip.
+/// The side view of a frame: the region of interest (or the whole frame), or its
+/// top part in a two-view clip; and the plan view below the split.
 fn side_view<'a>(
     frame: &FrameView<'a>,
+    roi: Option<[u32; 4]>,
     split: Option<usize>,
     index: usize,
 ) -> Result<(FrameView<'a>, Option<FrameView<'a>>), VisionError> {
+    let frame = match roi {
+        Some([x, y, w, h]) => frame
+            .crop(x as usize, y as usize, w as usize, h as usize)
+            .ok_or(VisionError::InvalidSetting {
+                name: "roi",
+                value: f64::from(x + w).max(f64::from(y + h)),
+                reason: "the region of interest [x, y, width, height] reaches outside the frame",
+            })?,
+        None => *frame,
+    };
     match split {
         Some(row) => {
-            let (side, plan) = vision::split_views(frame, row, index)?;
+            let (side, plan) = vision::split_views(&frame, row, index)?;
             Ok((side, Some(plan)))
         }
-        None => Ok((*frame, None)),
+        None => Ok((frame, None)),
     }
 }
 
@@ -257,6 +269,7 @@ pub fn analyse_clip(
     let params = config.disk_params();
     let vision_config = config.vision.clone().unwrap_or_default();
     let two_view = config.two_view.unwrap_or(false);
+    let roi = vision_config.roi;
 
     // Pass 1: the rest frames at the end.
     let mut source = FrameSource::open(clip)?;
@@ -281,11 +294,14 @@ pub fn analyse_clip(
         });
     }
     let last = &rest[rest.len() - 1];
+    let last_view = side_view(&last.view(), roi, None, last.index)
+        .map_err(vision_err)?
+        .0;
     let split_row = if two_view {
         Some(match vision_config.split_row {
             Some(row) => (row as usize, true),
             None => (
-                vision::find_split_row(&last.view(), last.index).map_err(vision_err)?,
+                vision::find_split_row(&last_view, last.index).map_err(vision_err)?,
                 false,
             ),
         })
@@ -309,7 +325,7 @@ pub fn analyse_clip(
     let mut rest_sides = Vec::new();
     for frame in &rest {
         rest_sides.push(
-            side_view(&frame.view(), split, frame.index)
+            side_view(&frame.view(), roi, split, frame.index)
                 .map_err(vision_err)?
                 .0,
         );
@@ -342,8 +358,7 @@ pub fn analyse_clip(
     .map_err(vision_err)?;
     let colour_thresholds = match split {
         Some(row) => {
-            let (_, plan) =
-                vision::split_views(&last.view(), row, last.index).map_err(vision_err)?;
+            let (_, plan) = vision::split_views(&last_view, row, last.index).map_err(vision_err)?;
             let thresholds =
                 vision::auto_colour_thresholds(&plan, last.index).map_err(vision_err)?;
             Some((thresholds, ThresholdSource::Automatic))
@@ -368,7 +383,7 @@ pub fn analyse_clip(
     // The frame with the highest rim so far, kept for the threshold diagnostic.
     let mut highest: Option<(f64, f64, OwnedFrame)> = None;
     while let Some(frame) = source.next_frame()? {
-        let (side, plan) = side_view(&frame.view, split, frame.index).map_err(vision_err)?;
+        let (side, plan) = side_view(&frame.view, roi, split, frame.index).map_err(vision_err)?;
         let z_rim_px = match gauge.measure(&side, frame.index).map_err(vision_err)? {
             RimHeight::Edge { z_rim_px, edge_row } => {
                 if highest.as_ref().is_none_or(|(z, _, _)| z_rim_px > *z) {

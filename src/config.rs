@@ -14,7 +14,7 @@
 //! fps = 480                      # capture frame rate [1/s]
 //! plate = "dark"                 # dark (reflective) | light (shadow contrast)
 //! two_view = false               # mirror side view above, plan view below
-//! material = "stainless-steel"   # base plate, thesis Table 3.1 name
+//! material = "stainless steel"   # base plate; Table 3.1 names give μ and the trends
 //!
 //! [disk]
 //! preset = "euler-disk"          # euler-disk | brass-disk | food-can

@@ -5,7 +5,9 @@
 //!    different true exponents n, and one two-view clip (figs. 3.3, 3.19);
 //! 2. `study`: analyse every clip (calibration, rim height, peaks, energy, power
 //!    law), per-material tables, box plot, t-test, trends;
-//! 3. an index page with the recovered n beside the true n for every clip.
+//! 3. `compare`: the two-view clip against the simulator (augmented contour
+//!    friction, thesis §4.7.1);
+//! 4. an index page with the recovered n beside the true n for every clip.
 //!
 //! Clips are small (480 × 320 px, 0.65 s at 480 fps) so the demo runs in well
 //! under two minutes on two cores.
@@ -114,6 +116,7 @@ pub fn write_demo_index(
     clips: &[DemoClip],
     results: &StudyResults,
     study_dir: &str,
+    comparison: Option<&Path>,
 ) -> Result<(), ReportError> {
     let rows: Vec<Vec<String>> = clips
         .iter()
@@ -168,6 +171,9 @@ pub fn write_demo_index(
                 li {
                     a href=(format!("{study_dir}/experiments/{}/index.html", e.clip.trim_end_matches(".mp4"))) { (e.clip) }
                 }
+            }
+            @if let Some(link) = comparison {
+                li { a href=(link.display().to_string()) { "The two-view clip against the simulator" } " (augmented contour friction, η tuned to the measured halt; thesis §4.7.1)" }
             }
             li { a href="reproduce/reproduce.md" { "The thesis's published numbers, recomputed" } " (" code { "eulerdisk reproduce" } ")" }
         }

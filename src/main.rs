@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 
+use eulerdisk::compare::CompareOptions;
 use eulerdisk::model::dissipation::{Dissipation, ModelKind};
 use eulerdisk::model::params::Preset;
 use eulerdisk::model::simulate::{InitialState, SimulationSpec, simulate};
@@ -15,6 +16,7 @@ use eulerdisk::render::{
     Effects, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Timing, power_law_motion,
     trajectory_motion, write_clip,
 };
+use eulerdisk::report::compare::{comparison_dir, write_comparison};
 use eulerdisk::report::experiment::write_experiment;
 use eulerdisk::report::simulation::write_simulation;
 use eulerdisk::report::study::{StudyReportOptions, write_published_report, write_study_report};
@@ -683,10 +685,29 @@ fn run_demo(out: &Path) -> Result<()> {
     })?;
     let bytes = std::fs::read(study_out.join(study::STUDY_FILE))?;
     let results: study::StudyResults = serde_json::from_slice(&bytes)?;
+    // One comparison with the simulator: the two-view clip (true n = 0.45) against
+    // augmented contour friction, whose p = 0.722 the thesis chose for n = 0.45.
+    let experiment_dir = study_out.join("experiments/two-view/stainless steel/run1");
+    let model = ModelKind::AugmentedContour;
+    eprintln!("demo: comparing the two-view clip with {model:?} friction…");
+    let compared = eulerdisk::compare::load_experiment(&experiment_dir).and_then(|e| {
+        eulerdisk::compare::compare(&e, &experiment_dir, &CompareOptions::new(model))
+    });
+    let compare_link = match compared {
+        Ok(c) => {
+            let dir = comparison_dir(&experiment_dir, model);
+            write_comparison(&dir, &c)?;
+            Some(dir.strip_prefix(out).unwrap_or(&dir).join("index.html"))
+        }
+        Err(e) => {
+            eprintln!("demo: the comparison failed: {e}");
+            None
+        }
+    };
     eprintln!("demo: recomputing the thesis's published numbers…");
     let table = reproduce::reproduce(true);
     table.write(&out.join("reproduce"))?;
-    demo::write_demo_index(out, &clips, &results, "study")?;
+    demo::write_demo_index(out, &clips, &results, "study", compare_link.as_deref())?;
     println!(
         "demo finished in {:.0} s: open {}",
         started.elapsed().as_secs_f64(),

@@ -39,6 +39,21 @@ impl<'a> FrameView<'a> {
         }
     }
 
+    /// The region `width × height` at column `x`, row `y` (a region of interest),
+    /// sharing this view's buffer; `None` when it does not fit inside the frame.
+    pub fn crop(&self, x: usize, y: usize, width: usize, height: usize) -> Option<Self> {
+        if width == 0 || height == 0 || x + width > self.width || y + height > self.height {
+            return None;
+        }
+        Some(Self {
+            width,
+            height,
+            stride: self.stride,
+            order: self.order,
+            data: &self.data[y * self.stride + 3 * x..],
+        })
+    }
+
     /// The bytes of row `y` (3 · width of them, in this view's channel order).
     pub fn row(&self, y: usize) -> &'a [u8] {
         let start = y * self.stride;
@@ -80,5 +95,8 @@ mod tests {
         };
         assert_eq!(bgr_view.rgb(1, 1), [10, 20, 7]);
         assert_eq!(bgr_view.intensity(1, 0), (10.0 + 0.0 + 7.0) / 3.0);
+        let corner = view.crop(1, 1, 1, 1).unwrap();
+        assert_eq!(corner.rgb(0, 0), [10, 20, 7]);
+        assert!(view.crop(1, 1, 2, 1).is_none(), "outside the frame");
     }
 }

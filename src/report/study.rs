@@ -62,6 +62,18 @@ fn groups_by(
         .collect()
 }
 
+/// Material names match ignoring case, spaces, `-` and `_`: the folder
+/// `stainless-steel` is Table 3.1's "stainless steel".
+fn same_material(a: &str, b: &str) -> bool {
+    let norm = |s: &str| {
+        s.chars()
+            .filter(|c| !matches!(c, '-' | '_' | ' '))
+            .flat_map(char::to_lowercase)
+            .collect::<String>()
+    };
+    norm(a) == norm(b)
+}
+
 fn fmt(x: f64, digits: usize) -> String {
     if x.is_finite() {
         format!("{x:.digits$}")
@@ -293,9 +305,9 @@ pub fn write_study_report(
             .experiments
             .iter()
             .filter_map(|e| {
-                let m = known
-                    .iter()
-                    .find(|k| Some(&k.material) == e.meta.material.as_ref())?;
+                let m = known.iter().find(|k| {
+                    same_material(&k.material, e.meta.material.as_deref().unwrap_or(""))
+                })?;
                 Some((m.material.clone(), property.of(m), e.n))
             })
             .collect();
