@@ -24,9 +24,10 @@ use serde::{Deserialize, Serialize};
 
 use super::VisionError;
 use super::components::{Component, Labeller};
-use super::profile::{check_frame, column_band_mean, half_level_crossing, row_band_mean};
+use super::profile::{area_edge, check_frame, column_band_mean, row_band_mean};
 use super::rim::RimGauge;
 use super::threshold::Threshold;
+use crate::config::Plate;
 use crate::footage::FrameView;
 
 /// Settings of the side-view stage (calibration and rim height).
@@ -45,6 +46,9 @@ pub struct SideViewConfig {
     /// Largest movement of a calibration point (or of the rim edge) across the
     /// rest frames that still counts as at rest, px.
     pub rest_tolerance_px: f64,
+    /// The plate's look: on a light plate the disk is found above its shadow
+    /// (fig. 3.9), on a dark one as a bright blob inside the frame.
+    pub plate: Plate,
 }
 
 impl Default for SideViewConfig {
@@ -55,6 +59,7 @@ impl Default for SideViewConfig {
             search_below_px: 2.0,
             max_rim_px: None,
             rest_tolerance_px: 0.5,
+            plate: Plate::Dark,
         }
     }
 }
@@ -231,7 +236,7 @@ pub fn calibrate_at_rest(
     let (calibration, detected) = match given.complete() {
         Some(c) => (c, None),
         None => {
-            let d = calibrate_frame(reference, ref_index, &threshold, config.half_width_px)?;
+            let d = calibrate_frame(reference, ref_index, &threshold, config)?;
             (given.apply(d), Some(d))
         }
     };
@@ -249,7 +254,7 @@ pub fn calibrate_at_rest(
     for (k, f) in others.iter().enumerate() {
         let index = first_index + k;
         if let Some(d) = detected {
-            let here = calibrate_frame(f, index, &threshold, config.half_width_px)?;
+            let here = calibrate_frame(f, index, &threshold, config)?;
             let pairs = [
                 (here.x_l, d.x_l),
                 (here.x_r, d.x_r),
@@ -318,14 +323,16 @@ const MIN_CONTRAST: f32 = 20.0;
 const MAX_BRIDGED_GAP_PX: usize = 8;
 
 /// Finds x_l, x_r, z_t and z_base on one frame of the disk at rest, with the
-/// band of columns 2·half_width + 1 wide (see the module docs for the method).
+/// band of columns 2·half_width + 1 wide and the plate of `config` (see the
+/// module docs for the method).
 pub fn calibrate_frame(
     frame: &FrameView,
     index: usize,
     threshold: &Threshold,
-    half_width: usize,
+    config: &SideViewConfig,
 ) -> Result<Calibration, VisionError> {
     check_frame(frame, index)?;
+    let half_width = config.half_width_px;
     let level = threshold.level();
     let (w, h) = (frame.width, frame.height);
     let sum_level = 3.0 * level;
@@ -338,13 +345,20 @@ pub fn calibrate_frame(
                 .map(|p| (u32::from(p[0]) + u32::from(p[1]) + u32::from(p[2])) as f32 > sum_level),
         );
     }
-    let blobs = Labeller::default().components(&mask, w, h, |c| {
-        !c.touches_border && c.pixels >= MIN_DISK_PIXELS
-    });
-    let disk = blobs.first().ok_or(VisionError::NoDisk {
+    let no_disk = VisionError::NoDisk {
         frame: index,
         gamma: threshold.gamma,
-    })?;
+    };
+    let disk = match config.plate {
+        Plate::Dark => {
+            let blobs = Labeller::default().components(&mask, w, h, |c| {
+                !c.touches_border && c.pixels >= MIN_DISK_PIXELS
+            });
+            *blobs.first().ok_or(no_disk)?
+        }
+        Plate::Light => disk_above_shadow(frame, &mask, level, half_width).ok_or(no_disk)?,
+    };
+    let disk = &disk;
 
     let mut x_centre = (disk.col_min + disk.col_max + 1) as f64 / 2.0;
     let mut last = None;
@@ -370,6 +384,48 @@ pub fn calibrate_frame(
     last.ok_or(VisionError::CalibrationPointNotFound {
         frame: index,
         point: "x_centre",
+    })
+}
+
+/// The disk on a light plate (thesis fig. 3.9): the plate is as bright as the
+/// disk and surrounds it, so no bright blob stands alone; the dark shadow the disk
+/// casts in front of itself does. The shadow is the largest dark blob inside the
+/// frame, its columns are the disk's, and on its centre band the disk is the
+/// bright run directly above it (short dark gaps, a strip, bridged). Returns the
+/// disk's bounding box: the shadow's columns, the run's rows.
+fn disk_above_shadow(
+    frame: &FrameView,
+    mask: &[bool],
+    level: f32,
+    half_width: usize,
+) -> Option<Component> {
+    let (w, h) = (frame.width, frame.height);
+    let dark: Vec<bool> = mask.iter().map(|&b| !b).collect();
+    let shadows = Labeller::default().components(&dark, w, h, |c| {
+        !c.touches_border && c.pixels >= MIN_DISK_PIXELS
+    });
+    let shadow = shadows.first()?;
+    let x_centre = (shadow.col_min + shadow.col_max + 1) as f64 / 2.0;
+    let (x0, x1) = band(x_centre, half_width, w);
+    let mean = |y: usize| row_band_mean(frame, y, x0, x1);
+    // The shadow's top on the centre band, then the bright run above it.
+    let shadow_top = (shadow.row_min..=shadow.row_max).find(|&y| mean(y) <= level)?;
+    let mut top = shadow_top;
+    let mut y = shadow_top;
+    while y > 0 {
+        if mean(y - 1) > level {
+            y -= 1;
+            top = y;
+            continue;
+        }
+        let gap = (0..y).rev().take_while(|&r| mean(r) <= level).count();
+        if gap > MAX_BRIDGED_GAP_PX || gap == y || top == shadow_top {
+            break;
+        }
+        y -= gap;
+    }
+    (top < shadow_top).then(|| {
+        Component::bounding_box(shadow.col_min, shadow.col_max, top, shadow_top - 1)
     })
 }
 
@@ -404,7 +460,7 @@ fn vertical_points(
 
     let top = p.iter().position(|&v| v > level).filter(|&k| k > 0);
     let top = top.ok_or_else(|| missing("z_t"))?;
-    let z_t = half_level_crossing(&p, top - 1, REACH, origin).ok_or_else(|| missing("z_t"))?;
+    let z_t = area_edge(&p, top - 1, REACH, origin).ok_or_else(|| missing("z_t"))?;
     // The bright run from the top down, bridging short dark gaps: a coloured
     // strip on the top face (two-view set-ups, fig. 3.19) crosses the centre
     // column as a thin line darker than γ.
@@ -429,7 +485,7 @@ fn vertical_points(
         return Err(missing("z_base"));
     }
     let z_bottom =
-        half_level_crossing(&p, bottom, REACH, origin).ok_or_else(|| missing("z_base"))?;
+        area_edge(&p, bottom, REACH, origin).ok_or_else(|| missing("z_base"))?;
 
     // A dimmer mirror image above γ: look for the step down near the middle.
     let run = &p[top..=bottom];
@@ -458,7 +514,7 @@ fn vertical_points(
             } else {
                 j
             };
-            half_level_crossing(&p, i, REACH, origin).ok_or_else(|| missing("z_base"))?
+            area_edge(&p, i, REACH, origin).ok_or_else(|| missing("z_base"))?
         }
         None => z_bottom,
     };
@@ -483,8 +539,11 @@ fn horizontal_points(
         frame: index,
         point,
     };
-    let c0 = disk.col_min.saturating_sub(REACH + 1);
-    let c1 = (disk.col_max + REACH + 2).min(frame.width);
+    // A blob's box holds its rows' runs; a box found from the shadow (light
+    // plate) may be a little narrower than the disk: a margin of 1/8 of its width.
+    let margin = (disk.col_max - disk.col_min) / 8 + REACH + 1;
+    let c0 = disk.col_min.saturating_sub(margin);
+    let c1 = (disk.col_max + margin + 1).min(frame.width);
     let origin = c0 as f64;
     let rows_end = (z_base.floor().max(0.0) as usize).min(frame.height);
     let mut ends: Option<(f64, f64)> = None;
@@ -502,9 +561,9 @@ fn horizontal_points(
         let k_right = kc + right - 1;
         let x_l = k_left
             .checked_sub(1)
-            .and_then(|i| half_level_crossing(&q, i, REACH, origin));
+            .and_then(|i| area_edge(&q, i, REACH, origin));
         let x_r = (k_right + 1 < q.len())
-            .then(|| half_level_crossing(&q, k_right, REACH, origin))
+            .then(|| area_edge(&q, k_right, REACH, origin))
             .flatten();
         if let (Some(x_l), Some(x_r)) = (x_l, x_r) {
             ends = Some(match ends {

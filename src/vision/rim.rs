@@ -37,7 +37,7 @@ use std::ops::Range;
 
 use super::VisionError;
 use super::calibration::{Calibration, SideViewConfig, band};
-use super::profile::{check_frame, half_level_crossing, row_band_mean};
+use super::profile::{area_edge, check_frame, row_band_mean};
 use super::threshold::Threshold;
 use crate::footage::FrameView;
 
@@ -182,7 +182,7 @@ impl RimGauge {
         for (k, v) in p.iter_mut().enumerate() {
             *v = row_band_mean(frame, ys + k, self.columns.start, self.columns.end);
         }
-        let edge_row = half_level_crossing(p, y - ys, REACH, ys as f64).unwrap_or_else(|| {
+        let edge_row = area_edge(p, y - ys, REACH, ys as f64).unwrap_or_else(|| {
             // Flat sides: interpolate the γ crossing itself.
             y as f64 + 0.5 + f64::from((bright - self.level) / (bright - dark))
         });
