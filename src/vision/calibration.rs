@@ -5,20 +5,28 @@
 //!
 //! # How the points are found
 //!
-//! Everything brighter than γ is labelled; the disk is the largest bright blob
-//! that lies wholly inside the frame. Anything bright that touches the frame
-//! border (a light plate, a lit wall) is taken not to be the disk, so the disk
-//! must rest wholly inside the view. On a band of columns around the blob's
-//! centre, z_t is the first dark-to-bright step going down and the bright run
-//! below it ends at the disk's bottom, except on a dark, mirror-like plate whose
-//! reflection is brighter than γ: the run then holds the disk *and* its mirror
-//! image, about equally tall, and the plate line is the step down from the disk
-//! to its dimmer reflection near the middle of the run. A reflection as bright
-//! as the disk itself shows no such step and cannot be told from a thicker
-//! disk; give z_base in the [`CalibrationOverride`] then. x_l and x_r are the
-//! ends of the bright run along the rows just above z_base. Every point is
-//! placed at the local half level between the two sides of its step
-//! (sub-pixel).
+//! Everything brighter than γ is labelled. On a dark plate
+//! ([`Plate::Dark`]) the disk is the largest bright blob that lies wholly
+//! inside the frame. Anything bright that touches the frame border (a lit
+//! wall) is taken not to be the disk, so the disk must rest wholly inside the
+//! view. On a light plate ([`Plate::Light`], fig. 3.9) the plate is as bright
+//! as the disk and joins it at its ends, so no bright blob stands alone; the
+//! shadow the disk casts in front of itself does: the largest dark blob inside
+//! the frame gives the disk's columns, and on its centre band the disk is the
+//! bright run directly above it (its bottom is the second edge from the
+//! bottom of the frame, §3.2.4).
+//!
+//! On a band of columns around the disk's centre, z_t is the first
+//! dark-to-bright step going down and the bright run below it ends at the
+//! disk's bottom, except on a dark, mirror-like plate whose reflection is
+//! brighter than γ: the run then holds the disk *and* its mirror image, about
+//! equally tall, and the plate line is the step down from the disk to its
+//! dimmer reflection near the middle of the run. A reflection as bright as the
+//! disk itself shows no such step and cannot be told from a thicker disk; give
+//! z_base in the [`CalibrationOverride`] then. x_l and x_r are the ends of the
+//! bright run along the rows just above z_base. Every point is placed
+//! sub-pixel by the area of its step (`profile::area_edge`), and averaged over
+//! the rest frames.
 
 use serde::{Deserialize, Serialize};
 
@@ -188,7 +196,8 @@ pub struct CalibrationReport {
     pub threshold: Threshold,
     /// Sources of x_l, x_r, z_t, z_base, in that order.
     pub sources: [PointSource; 4],
-    /// Index of the rest frame the points were taken from (the last one given).
+    /// Index of the reference rest frame (the last one given); the detected
+    /// points are the mean over all the rest frames checked.
     pub frame: usize,
     /// How many frames the rest check compared (including the rest frame).
     pub frames_checked: usize,
@@ -196,10 +205,11 @@ pub struct CalibrationReport {
 
 const POINT_NAMES: [&str; 4] = ["x_l", "x_r", "z_t", "z_base"];
 
-/// Calibrates on the last of `frames` (frames from the end of the clip, after
-/// the halt; `frames[0]` has clip index `first_index`) and checks that all of
-/// them show the disk at rest: every detected point, and the rim edge on the
-/// centre line, must stay within `config.rest_tolerance_px` of the last frame's.
+/// Calibrates on `frames` (frames from the end of the clip, after the halt;
+/// `frames[0]` has clip index `first_index`) and checks that all of them show
+/// the disk at rest: every detected point, and the rim edge on the centre line,
+/// must stay within `config.rest_tolerance_px` of the last frame's. Each
+/// detected point is then the mean over the frames.
 ///
 /// γ is `config.gamma`, or Otsu's on the last frame.
 pub fn calibrate_at_rest(
@@ -251,6 +261,8 @@ pub fn calibrate_at_rest(
     let ref_rim = gauge.measure(reference, ref_index)?;
 
     let tol = config.rest_tolerance_px;
+    // Detected points summed over the rest frames: their mean is the calibration.
+    let mut sum = detected.map(|d| [d.x_l, d.x_r, d.z_t, d.z_base]);
     for (k, f) in others.iter().enumerate() {
         let index = first_index + k;
         if let Some(d) = detected {
@@ -266,6 +278,11 @@ pub fn calibrate_at_rest(
                     return Err(not_at_rest(index, ref_index, POINT_NAMES[p], a - b, tol));
                 }
             }
+            if let Some(sum) = sum.as_mut() {
+                for (s, (a, _)) in sum.iter_mut().zip(pairs) {
+                    *s += a;
+                }
+            }
         }
         let rim = gauge.measure(f, index)?;
         let shift = match (rim.z_rim_px(), ref_rim.z_rim_px()) {
@@ -277,6 +294,22 @@ pub fn calibrate_at_rest(
             return Err(not_at_rest(index, ref_index, "the rim edge", shift, tol));
         }
     }
+    // The frames agree within the tolerance; their mean beats the sensor noise
+    // and the coding noise of one frame (tenths of a pixel on a noisy MP4).
+    let calibration = match sum {
+        Some(sum) => {
+            let n = frames.len() as f64;
+            let [x_l, x_r, z_t, z_base] = sum.map(|s| s / n);
+            given.apply(Calibration {
+                x_l,
+                x_r,
+                z_t,
+                z_base,
+            })
+        }
+        None => calibration,
+    };
+    calibration.validate(reference.width, reference.height)?;
     Ok(CalibrationReport {
         calibration,
         threshold,
@@ -424,9 +457,8 @@ fn disk_above_shadow(
         }
         y -= gap;
     }
-    (top < shadow_top).then(|| {
-        Component::bounding_box(shadow.col_min, shadow.col_max, top, shadow_top - 1)
-    })
+    (top < shadow_top)
+        .then(|| Component::bounding_box(shadow.col_min, shadow.col_max, top, shadow_top - 1))
 }
 
 /// Columns `x0..x1` of the band of half-width `half_width` around `x_centre`,
@@ -484,8 +516,7 @@ fn vertical_points(
     if bottom + 1 >= p.len() {
         return Err(missing("z_base"));
     }
-    let z_bottom =
-        area_edge(&p, bottom, REACH, origin).ok_or_else(|| missing("z_base"))?;
+    let z_bottom = area_edge(&p, bottom, REACH, origin).ok_or_else(|| missing("z_base"))?;
 
     // A dimmer mirror image above γ: look for the step down near the middle.
     let run = &p[top..=bottom];
@@ -548,7 +579,9 @@ fn horizontal_points(
     let rows_end = (z_base.floor().max(0.0) as usize).min(frame.height);
     let mut ends: Option<(f64, f64)> = None;
     for y in disk.row_min..rows_end {
-        let q: Vec<f32> = (c0..c1).map(|x| column_band_mean(frame, x, y, y + 1)).collect();
+        let q: Vec<f32> = (c0..c1)
+            .map(|x| column_band_mean(frame, x, y, y + 1))
+            .collect();
         let Some(kc) = (x_centre.floor() as usize)
             .checked_sub(c0)
             .filter(|&k| k < q.len() && q[k] > level)
@@ -632,6 +665,49 @@ mod tests {
         let s = SideScene::standard();
         let report = calibrate_one(&s.light_plate(0.0, 3.0));
         assert_points(&report.calibration, &s);
+    }
+
+    #[test]
+    fn light_plate_joined_to_the_disk_is_found_by_its_shadow() {
+        // The plate reaches up beside the disk's ends (as behind a disk standing on
+        // a light plate), so the disk is no bright blob of its own: the dark-plate
+        // rule finds nothing, the light-plate rule finds it above its shadow.
+        let s = SideScene::standard();
+        let (w, h) = (s.w as f64, s.h as f64);
+        let top = s.z_base - 10.0;
+        let rects = [
+            (0.0, top, w, h, grey(210.0)),
+            (
+                s.x_l - 4.0,
+                s.z_base,
+                s.x_r + 4.0,
+                s.z_base + 3.0,
+                grey(40.0),
+            ),
+            (s.x_l, s.z_t(), s.x_r, s.z_base, grey(s.disk)),
+        ];
+        let c = Canvas::from_rects(s.w, s.h, grey(s.background), &rects);
+        let bytes = c.to_bgr(5);
+        let view = c.view(&bytes, 5);
+        let dark = SideViewConfig::default();
+        assert!(matches!(
+            calibrate_at_rest(&[view], 0, &dark, None),
+            Err(VisionError::NoDisk { .. })
+        ));
+        let light = SideViewConfig {
+            plate: Plate::Light,
+            ..Default::default()
+        };
+        let report = calibrate_at_rest(&[view], 0, &light, None).unwrap();
+        assert_points(&report.calibration, &s);
+        // A plain light frame has no shadow and no disk.
+        let blank = Canvas::new(64, 48, grey(210.0));
+        let bytes = blank.to_bgr(0);
+        let mut noisy = blank.clone();
+        noisy.noise(6.0, 1);
+        let nb = noisy.to_bgr(0);
+        assert!(calibrate_at_rest(&[blank.view(&bytes, 0)], 0, &light, None).is_err());
+        assert!(calibrate_at_rest(&[noisy.view(&nb, 0)], 0, &light, None).is_err());
     }
 
     #[test]
