@@ -314,6 +314,7 @@ pub fn analyse_clip(
         half_width_px: vision_config
             .band_half_width_px
             .map_or(SideViewConfig::default().half_width_px, |w| w as usize),
+        plate: config.plate.unwrap_or_default(),
         ..SideViewConfig::default()
     };
     let given = config.calibration.map(|c| CalibrationOverride {

@@ -5,28 +5,37 @@
 //!
 //! # How the points are found
 //!
-//! Everything brighter than γ is labelled; the disk is the largest bright blob
-//! that lies wholly inside the frame. Anything bright that touches the frame
-//! border (a light plate, a lit wall) is taken not to be the disk, so the disk
-//! must rest wholly inside the view. On a band of columns around the blob's
-//! centre, z_t is the first dark-to-bright step going down and the bright run
-//! below it ends at the disk's bottom, except on a dark, mirror-like plate whose
-//! reflection is brighter than γ: the run then holds the disk *and* its mirror
-//! image, about equally tall, and the plate line is the step down from the disk
-//! to its dimmer reflection near the middle of the run. A reflection as bright
-//! as the disk itself shows no such step and cannot be told from a thicker
-//! disk; give z_base in the [`CalibrationOverride`] then. x_l and x_r are the
-//! ends of the bright run along the rows just above z_base. Every point is
-//! placed at the local half level between the two sides of its step
-//! (sub-pixel).
+//! Everything brighter than γ is labelled. On a dark plate
+//! ([`Plate::Dark`]) the disk is the largest bright blob that lies wholly
+//! inside the frame. Anything bright that touches the frame border (a lit
+//! wall) is taken not to be the disk, so the disk must rest wholly inside the
+//! view. On a light plate ([`Plate::Light`], fig. 3.9) the plate is as bright
+//! as the disk and joins it at its ends, so no bright blob stands alone; the
+//! shadow the disk casts in front of itself does: the largest dark blob inside
+//! the frame gives the disk's columns, and on its centre band the disk is the
+//! bright run directly above it (its bottom is the second edge from the
+//! bottom of the frame, §3.2.4).
+//!
+//! On a band of columns around the disk's centre, z_t is the first
+//! dark-to-bright step going down and the bright run below it ends at the
+//! disk's bottom, except on a dark, mirror-like plate whose reflection is
+//! brighter than γ: the run then holds the disk *and* its mirror image, about
+//! equally tall, and the plate line is the step down from the disk to its
+//! dimmer reflection near the middle of the run. A reflection as bright as the
+//! disk itself shows no such step and cannot be told from a thicker disk; give
+//! z_base in the [`CalibrationOverride`] then. x_l and x_r are the ends of the
+//! bright run along the rows just above z_base. Every point is placed
+//! sub-pixel by the area of its step (`profile::area_edge`), and averaged over
+//! the rest frames.
 
 use serde::{Deserialize, Serialize};
 
 use super::VisionError;
 use super::components::{Component, Labeller};
-use super::profile::{check_frame, column_band_mean, half_level_crossing, row_band_mean};
+use super::profile::{area_edge, check_frame, column_band_mean, row_band_mean};
 use super::rim::RimGauge;
 use super::threshold::Threshold;
+use crate::config::Plate;
 use crate::footage::FrameView;
 
 /// Settings of the side-view stage (calibration and rim height).
@@ -45,6 +54,9 @@ pub struct SideViewConfig {
     /// Largest movement of a calibration point (or of the rim edge) across the
     /// rest frames that still counts as at rest, px.
     pub rest_tolerance_px: f64,
+    /// The plate's look: on a light plate the disk is found above its shadow
+    /// (fig. 3.9), on a dark one as a bright blob inside the frame.
+    pub plate: Plate,
 }
 
 impl Default for SideViewConfig {
@@ -55,6 +67,7 @@ impl Default for SideViewConfig {
             search_below_px: 2.0,
             max_rim_px: None,
             rest_tolerance_px: 0.5,
+            plate: Plate::Dark,
         }
     }
 }
@@ -183,7 +196,8 @@ pub struct CalibrationReport {
     pub threshold: Threshold,
     /// Sources of x_l, x_r, z_t, z_base, in that order.
     pub sources: [PointSource; 4],
-    /// Index of the rest frame the points were taken from (the last one given).
+    /// Index of the reference rest frame (the last one given); the detected
+    /// points are the mean over all the rest frames checked.
     pub frame: usize,
     /// How many frames the rest check compared (including the rest frame).
     pub frames_checked: usize,
@@ -191,10 +205,11 @@ pub struct CalibrationReport {
 
 const POINT_NAMES: [&str; 4] = ["x_l", "x_r", "z_t", "z_base"];
 
-/// Calibrates on the last of `frames` (frames from the end of the clip, after
-/// the halt; `frames[0]` has clip index `first_index`) and checks that all of
-/// them show the disk at rest: every detected point, and the rim edge on the
-/// centre line, must stay within `config.rest_tolerance_px` of the last frame's.
+/// Calibrates on `frames` (frames from the end of the clip, after the halt;
+/// `frames[0]` has clip index `first_index`) and checks that all of them show
+/// the disk at rest: every detected point, and the rim edge on the centre line,
+/// must stay within `config.rest_tolerance_px` of the last frame's. Each
+/// detected point is then the mean over the frames.
 ///
 /// γ is `config.gamma`, or Otsu's on the last frame.
 pub fn calibrate_at_rest(
@@ -231,7 +246,7 @@ pub fn calibrate_at_rest(
     let (calibration, detected) = match given.complete() {
         Some(c) => (c, None),
         None => {
-            let d = calibrate_frame(reference, ref_index, &threshold, config.half_width_px)?;
+            let d = calibrate_frame(reference, ref_index, &threshold, config)?;
             (given.apply(d), Some(d))
         }
     };
@@ -246,10 +261,12 @@ pub fn calibrate_at_rest(
     let ref_rim = gauge.measure(reference, ref_index)?;
 
     let tol = config.rest_tolerance_px;
+    // Detected points summed over the rest frames: their mean is the calibration.
+    let mut sum = detected.map(|d| [d.x_l, d.x_r, d.z_t, d.z_base]);
     for (k, f) in others.iter().enumerate() {
         let index = first_index + k;
         if let Some(d) = detected {
-            let here = calibrate_frame(f, index, &threshold, config.half_width_px)?;
+            let here = calibrate_frame(f, index, &threshold, config)?;
             let pairs = [
                 (here.x_l, d.x_l),
                 (here.x_r, d.x_r),
@@ -259,6 +276,11 @@ pub fn calibrate_at_rest(
             for (p, ((a, b), is_given)) in pairs.iter().zip(given_flags).enumerate() {
                 if !is_given && (a - b).abs() > tol {
                     return Err(not_at_rest(index, ref_index, POINT_NAMES[p], a - b, tol));
+                }
+            }
+            if let Some(sum) = sum.as_mut() {
+                for (s, (a, _)) in sum.iter_mut().zip(pairs) {
+                    *s += a;
                 }
             }
         }
@@ -272,6 +294,22 @@ pub fn calibrate_at_rest(
             return Err(not_at_rest(index, ref_index, "the rim edge", shift, tol));
         }
     }
+    // The frames agree within the tolerance; their mean beats the sensor noise
+    // and the coding noise of one frame (tenths of a pixel on a noisy MP4).
+    let calibration = match sum {
+        Some(sum) => {
+            let n = frames.len() as f64;
+            let [x_l, x_r, z_t, z_base] = sum.map(|s| s / n);
+            given.apply(Calibration {
+                x_l,
+                x_r,
+                z_t,
+                z_base,
+            })
+        }
+        None => calibration,
+    };
+    calibration.validate(reference.width, reference.height)?;
     Ok(CalibrationReport {
         calibration,
         threshold,
@@ -318,14 +356,16 @@ const MIN_CONTRAST: f32 = 20.0;
 const MAX_BRIDGED_GAP_PX: usize = 8;
 
 /// Finds x_l, x_r, z_t and z_base on one frame of the disk at rest, with the
-/// band of columns 2·half_width + 1 wide (see the module docs for the method).
+/// band of columns 2·half_width + 1 wide and the plate of `config` (see the
+/// module docs for the method).
 pub fn calibrate_frame(
     frame: &FrameView,
     index: usize,
     threshold: &Threshold,
-    half_width: usize,
+    config: &SideViewConfig,
 ) -> Result<Calibration, VisionError> {
     check_frame(frame, index)?;
+    let half_width = config.half_width_px;
     let level = threshold.level();
     let (w, h) = (frame.width, frame.height);
     let sum_level = 3.0 * level;
@@ -338,13 +378,20 @@ pub fn calibrate_frame(
                 .map(|p| (u32::from(p[0]) + u32::from(p[1]) + u32::from(p[2])) as f32 > sum_level),
         );
     }
-    let blobs = Labeller::default().components(&mask, w, h, |c| {
-        !c.touches_border && c.pixels >= MIN_DISK_PIXELS
-    });
-    let disk = blobs.first().ok_or(VisionError::NoDisk {
+    let no_disk = VisionError::NoDisk {
         frame: index,
         gamma: threshold.gamma,
-    })?;
+    };
+    let disk = match config.plate {
+        Plate::Dark => {
+            let blobs = Labeller::default().components(&mask, w, h, |c| {
+                !c.touches_border && c.pixels >= MIN_DISK_PIXELS
+            });
+            *blobs.first().ok_or(no_disk)?
+        }
+        Plate::Light => disk_above_shadow(frame, &mask, level, half_width).ok_or(no_disk)?,
+    };
+    let disk = &disk;
 
     let mut x_centre = (disk.col_min + disk.col_max + 1) as f64 / 2.0;
     let mut last = None;
@@ -371,6 +418,47 @@ pub fn calibrate_frame(
         frame: index,
         point: "x_centre",
     })
+}
+
+/// The disk on a light plate (thesis fig. 3.9): the plate is as bright as the
+/// disk and surrounds it, so no bright blob stands alone; the dark shadow the disk
+/// casts in front of itself does. The shadow is the largest dark blob inside the
+/// frame, its columns are the disk's, and on its centre band the disk is the
+/// bright run directly above it (short dark gaps, a strip, bridged). Returns the
+/// disk's bounding box: the shadow's columns, the run's rows.
+fn disk_above_shadow(
+    frame: &FrameView,
+    mask: &[bool],
+    level: f32,
+    half_width: usize,
+) -> Option<Component> {
+    let (w, h) = (frame.width, frame.height);
+    let dark: Vec<bool> = mask.iter().map(|&b| !b).collect();
+    let shadows = Labeller::default().components(&dark, w, h, |c| {
+        !c.touches_border && c.pixels >= MIN_DISK_PIXELS
+    });
+    let shadow = shadows.first()?;
+    let x_centre = (shadow.col_min + shadow.col_max + 1) as f64 / 2.0;
+    let (x0, x1) = band(x_centre, half_width, w);
+    let mean = |y: usize| row_band_mean(frame, y, x0, x1);
+    // The shadow's top on the centre band, then the bright run above it.
+    let shadow_top = (shadow.row_min..=shadow.row_max).find(|&y| mean(y) <= level)?;
+    let mut top = shadow_top;
+    let mut y = shadow_top;
+    while y > 0 {
+        if mean(y - 1) > level {
+            y -= 1;
+            top = y;
+            continue;
+        }
+        let gap = (0..y).rev().take_while(|&r| mean(r) <= level).count();
+        if gap > MAX_BRIDGED_GAP_PX || gap == y || top == shadow_top {
+            break;
+        }
+        y -= gap;
+    }
+    (top < shadow_top)
+        .then(|| Component::bounding_box(shadow.col_min, shadow.col_max, top, shadow_top - 1))
 }
 
 /// Columns `x0..x1` of the band of half-width `half_width` around `x_centre`,
@@ -404,7 +492,7 @@ fn vertical_points(
 
     let top = p.iter().position(|&v| v > level).filter(|&k| k > 0);
     let top = top.ok_or_else(|| missing("z_t"))?;
-    let z_t = half_level_crossing(&p, top - 1, REACH, origin).ok_or_else(|| missing("z_t"))?;
+    let z_t = area_edge(&p, top - 1, REACH, origin).ok_or_else(|| missing("z_t"))?;
     // The bright run from the top down, bridging short dark gaps: a coloured
     // strip on the top face (two-view set-ups, fig. 3.19) crosses the centre
     // column as a thin line darker than γ.
@@ -428,8 +516,7 @@ fn vertical_points(
     if bottom + 1 >= p.len() {
         return Err(missing("z_base"));
     }
-    let z_bottom =
-        half_level_crossing(&p, bottom, REACH, origin).ok_or_else(|| missing("z_base"))?;
+    let z_bottom = area_edge(&p, bottom, REACH, origin).ok_or_else(|| missing("z_base"))?;
 
     // A dimmer mirror image above γ: look for the step down near the middle.
     let run = &p[top..=bottom];
@@ -458,7 +545,7 @@ fn vertical_points(
             } else {
                 j
             };
-            half_level_crossing(&p, i, REACH, origin).ok_or_else(|| missing("z_base"))?
+            area_edge(&p, i, REACH, origin).ok_or_else(|| missing("z_base"))?
         }
         None => z_bottom,
     };
@@ -483,13 +570,18 @@ fn horizontal_points(
         frame: index,
         point,
     };
-    let c0 = disk.col_min.saturating_sub(REACH + 1);
-    let c1 = (disk.col_max + REACH + 2).min(frame.width);
+    // A blob's box holds its rows' runs; a box found from the shadow (light
+    // plate) may be a little narrower than the disk: a margin of 1/8 of its width.
+    let margin = (disk.col_max - disk.col_min) / 8 + REACH + 1;
+    let c0 = disk.col_min.saturating_sub(margin);
+    let c1 = (disk.col_max + margin + 1).min(frame.width);
     let origin = c0 as f64;
     let rows_end = (z_base.floor().max(0.0) as usize).min(frame.height);
     let mut ends: Option<(f64, f64)> = None;
     for y in disk.row_min..rows_end {
-        let q: Vec<f32> = (c0..c1).map(|x| column_band_mean(frame, x, y, y + 1)).collect();
+        let q: Vec<f32> = (c0..c1)
+            .map(|x| column_band_mean(frame, x, y, y + 1))
+            .collect();
         let Some(kc) = (x_centre.floor() as usize)
             .checked_sub(c0)
             .filter(|&k| k < q.len() && q[k] > level)
@@ -502,9 +594,9 @@ fn horizontal_points(
         let k_right = kc + right - 1;
         let x_l = k_left
             .checked_sub(1)
-            .and_then(|i| half_level_crossing(&q, i, REACH, origin));
+            .and_then(|i| area_edge(&q, i, REACH, origin));
         let x_r = (k_right + 1 < q.len())
-            .then(|| half_level_crossing(&q, k_right, REACH, origin))
+            .then(|| area_edge(&q, k_right, REACH, origin))
             .flatten();
         if let (Some(x_l), Some(x_r)) = (x_l, x_r) {
             ends = Some(match ends {
@@ -573,6 +665,49 @@ mod tests {
         let s = SideScene::standard();
         let report = calibrate_one(&s.light_plate(0.0, 3.0));
         assert_points(&report.calibration, &s);
+    }
+
+    #[test]
+    fn light_plate_joined_to_the_disk_is_found_by_its_shadow() {
+        // The plate reaches up beside the disk's ends (as behind a disk standing on
+        // a light plate), so the disk is no bright blob of its own: the dark-plate
+        // rule finds nothing, the light-plate rule finds it above its shadow.
+        let s = SideScene::standard();
+        let (w, h) = (s.w as f64, s.h as f64);
+        let top = s.z_base - 10.0;
+        let rects = [
+            (0.0, top, w, h, grey(210.0)),
+            (
+                s.x_l - 4.0,
+                s.z_base,
+                s.x_r + 4.0,
+                s.z_base + 3.0,
+                grey(40.0),
+            ),
+            (s.x_l, s.z_t(), s.x_r, s.z_base, grey(s.disk)),
+        ];
+        let c = Canvas::from_rects(s.w, s.h, grey(s.background), &rects);
+        let bytes = c.to_bgr(5);
+        let view = c.view(&bytes, 5);
+        let dark = SideViewConfig::default();
+        assert!(matches!(
+            calibrate_at_rest(&[view], 0, &dark, None),
+            Err(VisionError::NoDisk { .. })
+        ));
+        let light = SideViewConfig {
+            plate: Plate::Light,
+            ..Default::default()
+        };
+        let report = calibrate_at_rest(&[view], 0, &light, None).unwrap();
+        assert_points(&report.calibration, &s);
+        // A plain light frame has no shadow and no disk.
+        let blank = Canvas::new(64, 48, grey(210.0));
+        let bytes = blank.to_bgr(0);
+        let mut noisy = blank.clone();
+        noisy.noise(6.0, 1);
+        let nb = noisy.to_bgr(0);
+        assert!(calibrate_at_rest(&[blank.view(&bytes, 0)], 0, &light, None).is_err());
+        assert!(calibrate_at_rest(&[noisy.view(&nb, 0)], 0, &light, None).is_err());
     }
 
     #[test]

@@ -21,6 +21,19 @@ pub(crate) struct Component {
 }
 
 impl Component {
+    /// A component known only by its bounding box (no pixels or moments): the
+    /// region searched for a disk found some other way than by labelling.
+    pub fn bounding_box(col_min: usize, col_max: usize, row_min: usize, row_max: usize) -> Self {
+        Self {
+            pixels: (col_max + 1 - col_min) * (row_max + 1 - row_min),
+            col_min,
+            col_max,
+            row_min,
+            row_max,
+            ..Self::default()
+        }
+    }
+
     /// Centroid (x, y) in image coordinates (y grows downward).
     pub fn centroid(&self) -> (f64, f64) {
         let n = self.pixels as f64;

@@ -48,54 +48,42 @@ pub(crate) fn column_band_mean(frame: &FrameView, x: usize, y0: usize, y1: usize
 }
 
 /// Sub-pixel position of the step between samples `i` and `i + 1` of a profile
-/// whose sample `k` sits at position `origin + k + ½` (a pixel centre).
+/// whose sample `k` covers [origin + k, origin + k + 1), by its area: the
+/// transition is the monotone run of samples through the step, at most `reach`
+/// either side, from level `a` (its first sample) to level `b` (its last), and
+/// the edge lies `Σ (p_k − b)/(a − b)` px after the start of the run.
 ///
-/// The step is located where the profile crosses the *local* half level
-/// (hi + lo)/2, with hi and lo the extremes of the `reach` samples on either
-/// side, interpolated linearly between the two samples that straddle it. For
-/// an ideal edge sampled by area (anti-aliased) this is within 0.09 px of the
-/// true edge whatever γ was used to find it; a global γ that is not halfway
-/// between the two levels would bias the edge by up to half a pixel.
-pub(crate) fn half_level_crossing(p: &[f32], i: usize, reach: usize, origin: f64) -> Option<f64> {
-    if i + 1 >= p.len() {
+/// For a step sampled by area (anti-aliased), blurred by any symmetric kernel
+/// narrower than the run, this is exact whatever the edge's sub-pixel phase,
+/// where linear interpolation of the crossing of the local half level is off by
+/// up to ±0.086 px depending on it (a bias, not noise, for an edge that barely moves,
+/// such as the plate line). Only the run's monotone part counts, so a rise
+/// beyond the step (a mirror image below a narrow gap) is not taken for part of
+/// it. `None` when the run is flat.
+pub(crate) fn area_edge(p: &[f32], i: usize, reach: usize, origin: f64) -> Option<f64> {
+    if i + 1 >= p.len() || reach == 0 {
         return None;
     }
-    let before = i.saturating_sub(reach - 1)..=i;
-    let after = i + 1..=(i + reach).min(p.len() - 1);
     let falling = p[i] > p[i + 1];
-    let (a, b) = (
-        before
-            .map(|k| p[k])
-            .fold(f32::NAN, |m, v| if falling { m.max(v) } else { m.min(v) }),
-        after
-            .map(|k| p[k])
-            .fold(f32::NAN, |m, v| if falling { m.min(v) } else { m.max(v) }),
-    );
-    if (a - b).abs() < 1e-3 {
+    // `towards_a(x, y)`: x lies at or beyond y on the side of level a.
+    let towards_a = |x: f32, y: f32| if falling { x >= y } else { x <= y };
+    let mut a = i;
+    while a > 0 && i + 1 - a < reach && towards_a(p[a - 1], p[a]) {
+        a -= 1;
+    }
+    let mut b = i + 1;
+    while b + 1 < p.len() && b - i < reach && towards_a(p[b], p[b + 1]) {
+        b += 1;
+    }
+    let (hi, lo) = (p[a], p[b]);
+    if (hi - lo).abs() < 1e-3 {
         return None;
     }
-    let level = 0.5 * (a + b);
-    // The straddling pair nearest the coarse step, searching outward from it.
-    let lo = i.saturating_sub(reach - 1);
-    let hi = (i + reach).min(p.len() - 1);
-    for d in 0..reach {
-        for j in [i.checked_sub(d), i.checked_add(d)].into_iter().flatten() {
-            if j < lo || j + 1 > hi {
-                continue;
-            }
-            let (u, v) = (p[j], p[j + 1]);
-            let straddles = if falling {
-                u >= level && v < level
-            } else {
-                u < level && v >= level
-            };
-            if straddles {
-                let t = f64::from((u - level) / (u - v));
-                return Some(origin + j as f64 + 0.5 + t);
-            }
-        }
-    }
-    None
+    let sum: f64 = p[a..=b]
+        .iter()
+        .map(|&v| f64::from((v - lo) / (hi - lo)))
+        .sum();
+    Some(origin + a as f64 + sum)
 }
 
 #[cfg(test)]
@@ -112,16 +100,65 @@ mod tests {
             .collect()
     }
 
+    /// As `step`, blurred by a Gaussian of `sigma` px, sampled by area (finely).
+    fn blurred_step(e: f64, hi: f32, lo: f32, n: usize, sigma: f64) -> Vec<f32> {
+        (0..n)
+            .map(|k| {
+                let sub = 64;
+                let cover: f64 = (0..sub)
+                    .map(|s| {
+                        let x = k as f64 + (s as f64 + 0.5) / sub as f64;
+                        // Φ((e − x)/σ) by erf's series-free approximation (A&S 7.1.26).
+                        let z = (e - x) / (sigma * std::f64::consts::SQRT_2);
+                        let t = 1.0 / (1.0 + 0.3275911 * z.abs());
+                        let poly = t
+                            * (0.254829592
+                                + t * (-0.284496736
+                                    + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+                        let erf = 1.0 - poly * (-z * z).exp();
+                        0.5 * (1.0 + erf.copysign(z))
+                    })
+                    .sum::<f64>()
+                    / sub as f64;
+                lo + (hi - lo) * cover as f32
+            })
+            .collect()
+    }
+
     #[test]
-    fn half_level_crossing_of_area_sampled_step() {
+    fn area_edge_is_exact_at_any_phase() {
         for e in [10.0, 10.1, 10.25, 10.5, 10.707, 10.9] {
+            // Falling (bright above) and rising (dark above), γ far from halfway.
             let p = step(e, 200.0, 30.0, 20);
-            // Coarse step as a γ far from halfway would find it: γ = 60.
             let i = (0..19).find(|&k| p[k] > 60.0 && p[k + 1] <= 60.0).unwrap();
-            let x = half_level_crossing(&p, i, 3, 0.0).unwrap();
-            // Linear interpolation of an area-sampled step: worst case 0.086 px
-            // (at a coverage of 1/√2).
-            assert!((x - e).abs() < 0.09, "edge {e}: found {x}");
+            let x = area_edge(&p, i, 3, 0.0).unwrap();
+            assert!((x - e).abs() < 1e-5, "edge {e}: found {x}");
+            let q: Vec<f32> = p.iter().map(|v| 230.0 - v).collect();
+            let i = (0..19).find(|&k| q[k] <= 60.0 && q[k + 1] > 60.0).unwrap();
+            let x = area_edge(&q, i, 3, 5.0).unwrap();
+            assert!((x - 5.0 - e).abs() < 1e-5, "rising edge {e}: found {x}");
+            // Blurred (σ = 0.6 px, as the light fixture): the three samples either
+            // side hold all but 1e-3 of the transition.
+            let b = blurred_step(e, 200.0, 30.0, 20, 0.6);
+            let i = (0..19)
+                .find(|&k| b[k] > 115.0 && b[k + 1] <= 115.0)
+                .unwrap();
+            let x = area_edge(&b, i, 3, 0.0).unwrap();
+            assert!((x - e).abs() < 0.01, "blurred edge {e}: found {x}");
         }
+    }
+
+    #[test]
+    fn area_edge_stops_at_a_rise_beyond_the_step() {
+        // Bright disk, a 2.5 px dark gap, then a mirror image: the mirror is not
+        // part of the step.
+        let mut p = step(10.3, 220.0, 20.0, 20);
+        for v in &mut p[13..] {
+            *v = 80.0;
+        }
+        p[12] = 20.0 + 60.0 * 0.2;
+        let x = area_edge(&p, 10, 3, 0.0).unwrap();
+        assert!((x - 10.3).abs() < 1e-5, "found {x}");
+        assert_eq!(area_edge(&[50.0; 8], 3, 3, 0.0), None);
     }
 }

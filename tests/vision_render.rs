@@ -1,0 +1,145 @@
+//! Vision against the renderer's ray-cast ground truth (`scripts/make-fixtures`):
+//! the light plate of fig. 3.9 with camera artefacts, and the rim-edge bias on
+//! the dark plate.
+//!
+//! Coordinates: the renderer puts pixel centres at integers, vision at c + ½
+//! (`vision` module docs), so a truth point p is p + ½ in vision's coordinates.
+//! z_rim is a difference of rows and needs no shift.
+
+use std::path::{Path, PathBuf};
+
+use eulerdisk::analyse::{Experiment, analyse_clip};
+use eulerdisk::config::ExperimentConfig;
+use serde_json::Value;
+
+/// Renderer → vision coordinates.
+const HALF: f64 = 0.5;
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(name)
+}
+
+fn truth(name: &str) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(fixture(name)).unwrap()).unwrap()
+}
+
+fn analyse(name: &str, toml: &str) -> Experiment {
+    let config = ExperimentConfig::parse(toml, Path::new("test.toml")).unwrap();
+    analyse_clip(&fixture(name), &config, &|_, _| {}).unwrap()
+}
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap()
+}
+
+/// Errors measured − truth of z_rim on every frame with an edge, and at the
+/// truth's peaks (local maxima above 0.2 px).
+fn z_rim_errors(e: &Experiment, truth: &Value) -> (Vec<f64>, Vec<f64>) {
+    let frames = truth["frames"].as_array().unwrap();
+    assert_eq!(e.frames.len(), frames.len());
+    let z: Vec<f64> = frames.iter().map(|t| f(&t["z_rim_px"])).collect();
+    let (mut all, mut peaks) = (Vec::new(), Vec::new());
+    for (i, (m, t)) in e.frames.iter().zip(frames).enumerate() {
+        assert_eq!(m.index, t["file_index"].as_u64().unwrap() as usize);
+        let Some(zm) = m.z_rim_px else { continue };
+        let err = zm - z[i];
+        all.push(err);
+        let peak = i > 0 && i + 1 < z.len() && z[i] > z[i - 1] && z[i] >= z[i + 1] && z[i] > 0.2;
+        if peak {
+            peaks.push(err);
+        }
+    }
+    (all, peaks)
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+#[test]
+fn light_plate_clip_calibrates_on_the_shadow_and_tracks_the_rim() {
+    let name = "side-light-n067-artefacts";
+    let truth = truth(&format!("{name}.truth.json"));
+    let e = analyse(&format!("{name}.mp4"), "fps = 480\nplate = \"light\"\n");
+    let cal = &e.plan.calibration.calibration;
+    let tc = &truth["calibration"];
+    // Ends of the disk: sub-pixel area edges, averaged over the 5 rest frames;
+    // measured within 0.04 px. The shading falls off towards the ends (grazing
+    // light), which pulls an edge inwards by up to ≈ 0.12 px: 0.2 px.
+    for (name, got) in [("x_l", cal.x_l), ("x_r", cal.x_r)] {
+        let want = f(&tc[name]) + HALF;
+        assert!((got - want).abs() < 0.2, "{name}: {got} vs {want}");
+    }
+    // Plate line: the rim above the shadow (the second edge from the bottom).
+    // Rendered losslessly (PNG) it is within 0.01 px; MPEG-4 coding of the noisy,
+    // blurred edge moves it by 0.12 px up on these rest frames (varying by
+    // ±0.1 px between frames, hence the average over them): 0.2 px.
+    let want = f(&tc["z_base"]) + HALF;
+    assert!(
+        (cal.z_base - want).abs() < 0.2,
+        "z_base {} vs {want}",
+        cal.z_base
+    );
+    // Dropped frames 40 and 171 are missing from the clip (313 captured); the
+    // truth skips their capture indices, and the frames are compared in file order.
+    assert_eq!(e.frames.len(), 311);
+    let captured: Vec<u64> = truth["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t["index"].as_u64().unwrap())
+        .collect();
+    assert!(!captured.contains(&40) && !captured.contains(&171));
+
+    // z_rim on every frame: noise σ = 2, blur σ = 0.6 px, 5 % flicker, drift and
+    // MPEG-4 coding. The same frames lossless give 0.015 px RMS; the coding adds
+    // ≈ 0.10 px per frame and the plate line's 0.12 px: measured 0.14 px RMS.
+    // 0.2 px (the issue asks 0.3 px).
+    let (all, peaks) = z_rim_errors(&e, &truth);
+    assert!(all.len() > 300, "{} frames with an edge", all.len());
+    assert!(rms(&all) < 0.2, "z_rim RMS error {} px", rms(&all));
+    assert!(peaks.len() > 25);
+    assert!(
+        rms(&peaks) < 0.25,
+        "z_rim RMS error at peaks {}",
+        rms(&peaks)
+    );
+
+    // n with the measured halt (t0 = 0): 0.655 for the true 0.667. A lossless
+    // render of the same motion without artefacts reads z_rim to 0.012 px RMS and
+    // still gives 0.628: the rest of the error is sampling the peaks at 480 fps
+    // near the halt (signal stage), not vision. ±0.05.
+    let n = e.peaks_fit.fit.n;
+    assert!((n - f(&truth["true_n"])).abs() < 0.05, "n = {n}");
+}
+
+#[test]
+fn dark_plate_rim_edge_has_no_bias_at_the_peaks() {
+    let truth = truth("side-dark-n050.truth.json");
+    let e = analyse("side-dark-n050.mp4", "fps = 480\n[fit]\nhalt = \"free\"\n");
+    let cal = &e.plan.calibration.calibration;
+    // Plate line: the disk → reflection step by its area, −0.01 px (the half-level
+    // crossing read +0.07 px, a bias of every z_rim). 0.1 px.
+    let want = f(&truth["calibration"]["z_base"]) + HALF;
+    assert!(
+        (cal.z_base - want).abs() < 0.1,
+        "z_base {} vs {want}",
+        cal.z_base
+    );
+    let (all, peaks) = z_rim_errors(&e, &truth);
+    // At the peaks (25): mean +0.004 px (was +0.09 px), RMS 0.056 px, the
+    // spread being the MPEG-4 coding (lossless: RMS 0.03 px). A bias of
+    // 0.05 px is 5 σ of the mean of 25 peaks.
+    assert_eq!(peaks.len(), 25);
+    let bias = mean(&peaks);
+    assert!(bias.abs() < 0.05, "z_rim bias at peaks {bias} px");
+    assert!(rms(&peaks) < 0.1, "z_rim RMS at peaks {}", rms(&peaks));
+    // Every frame: RMS 0.083 px (was 0.126 px).
+    assert!(rms(&all) < 0.12, "z_rim RMS {}", rms(&all));
+}
