@@ -578,16 +578,13 @@ fn frame_energies(
     series: &StateSeries,
     strip: Option<&signal::StripAnalysis>,
 ) -> Vec<EnergySample> {
-    // A state whose local fit window was cut short (at the window's edges) rests
-    // on too few rim heights to trust: keep fits with at least 80 % of the
-    // median number of points.
-    let mut counts: Vec<usize> = series.states.iter().map(|s| s.points).collect();
-    counts.sort_unstable();
-    let full = counts.get(counts.len() / 2).copied().unwrap_or(0);
+    // A state whose local fit is poorly determined (its window cut short at the
+    // start of the series, or too few rim heights) is left out: keep states whose
+    // φ and ψ̇ carry standard errors below 10 %.
     series
         .states
         .iter()
-        .filter(|s| 5 * s.points >= 4 * full)
+        .filter(|s| s.sigma_phi < 0.1 * s.phi.abs() && s.sigma_psi_dot < 0.1 * s.psi_dot.abs())
         .filter_map(|s| {
             // The side view gives |ψ̇| only. Near stationary rolling β̇ = ψ̇ + θ̇ =
             // ψ̇ (1 − cos φ + h sin φ) (eqs. 3.7, 3.22) has the sign of ψ̇, so the
