@@ -9,7 +9,7 @@
 //!    friction, thesis §4.7.1);
 //! 4. an index page with the recovered n beside the true n for every clip.
 //!
-//! Clips are small (480 × 320 px, 0.65 s at 480 fps) so the demo runs in well
+//! Clips are small (480 × 320 px, 0.75 s at 480 fps) so the demo runs in well
 //! under two minutes on two cores.
 
 use std::path::{Path, PathBuf};
@@ -91,7 +91,7 @@ pub fn render_demo_footage(root: &Path, clips: &[DemoClip]) -> Result<Vec<PathBu
             spec.effects.seed = k as u64 + 1;
             let timing = Timing {
                 fps: 480.0,
-                halt_time: 0.5,
+                halt_time: 0.6,
                 after_halt: 0.15,
             };
             let post_flat = PostFlatSpin {
