@@ -691,7 +691,12 @@ fn run_demo(out: &Path) -> Result<()> {
     let model = ModelKind::AugmentedContour;
     eprintln!("demo: comparing the two-view clip with {model:?} friction…");
     let compared = eulerdisk::compare::load_experiment(&experiment_dir).and_then(|e| {
-        eulerdisk::compare::compare(&e, &experiment_dir, &CompareOptions::new(model))
+        // Peaks exist only inside the 0.5 s fit window, so start just inside it.
+        let options = CompareOptions {
+            lead_s: 0.45,
+            ..CompareOptions::new(model)
+        };
+        eulerdisk::compare::compare(&e, &experiment_dir, &options)
     });
     let compare_link = match compared {
         Ok(c) => {
