@@ -17,6 +17,9 @@ fn main() -> opencv::Result<()> {
         frames += 1;
     }
     let secs = started.elapsed().as_secs_f64();
-    println!("{frames} frames in {secs:.3} s: {:.0} frames/s", frames as f64 / secs);
+    println!(
+        "{frames} frames in {secs:.3} s: {:.0} frames/s",
+        frames as f64 / secs
+    );
     Ok(())
 }

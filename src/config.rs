@@ -227,22 +227,22 @@ impl ExperimentConfig {
             positive("disk.inertia_a_kg_m2", disk.inertia_a_kg_m2)?;
             positive("disk.inertia_c_kg_m2", disk.inertia_c_kg_m2)?;
         }
-        if let Some(gamma) = self.vision.as_ref().and_then(|v| v.gamma) {
-            if !(gamma > 0.0 && gamma < 1.0) {
-                return Err(format!(
-                    "`vision.gamma` = {gamma} must lie strictly between 0 and 1 \
-                     (a fraction of full white, as MATLAB's im2bw level)"
-                ));
-            }
+        if let Some(gamma) = self.vision.as_ref().and_then(|v| v.gamma)
+            && !(gamma > 0.0 && gamma < 1.0)
+        {
+            return Err(format!(
+                "`vision.gamma` = {gamma} must lie strictly between 0 and 1 \
+                 (a fraction of full white, as MATLAB's im2bw level)"
+            ));
         }
         if let Some(c) = &self.calibration {
-            if !(c.x_r > c.x_l) {
+            if c.x_r.partial_cmp(&c.x_l) != Some(std::cmp::Ordering::Greater) {
                 return Err(format!(
                     "calibration: x_r = {} must lie right of x_l = {}",
                     c.x_r, c.x_l
                 ));
             }
-            if !(c.z_base > c.z_t) {
+            if c.z_base.partial_cmp(&c.z_t) != Some(std::cmp::Ordering::Greater) {
                 return Err(format!(
                     "calibration: z_base = {} must lie below z_t = {} (image rows grow downward)",
                     c.z_base, c.z_t

@@ -426,7 +426,7 @@ pub fn run(
         None => clips,
     };
     events(StudyEvent::Started { clips: clips.len() });
-    let outcomes: Vec<Result<ExperimentSummary, ClipFailure>> = clips
+    let outcomes: Vec<Result<ExperimentSummary, Box<ClipFailure>>> = clips
         .par_iter()
         .map(|clip| {
             let outcome = analyse_one(clip, out, options.resume, analyser);
@@ -454,7 +454,7 @@ pub fn run(
     for outcome in outcomes {
         match outcome {
             Ok(summary) => results.experiments.push(summary),
-            Err(failure) => results.failures.push(failure),
+            Err(failure) => results.failures.push(*failure),
         }
     }
     results.sort();
@@ -467,11 +467,13 @@ fn analyse_one(
     out: &Path,
     resume: bool,
     analyser: &dyn ClipAnalyser,
-) -> Result<(ExperimentSummary, bool), ClipFailure> {
-    let fail = |reason: String| ClipFailure {
-        clip: clip.relative.clone(),
-        meta: clip.meta.clone(),
-        reason,
+) -> Result<(ExperimentSummary, bool), Box<ClipFailure>> {
+    let fail = |reason: String| {
+        Box::new(ClipFailure {
+            clip: clip.relative.clone(),
+            meta: clip.meta.clone(),
+            reason,
+        })
     };
     let key = analyser.resume_key(clip).map_err(fail)?;
     let dir = clip.experiment_dir(out);

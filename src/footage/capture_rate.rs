@@ -244,14 +244,14 @@ pub fn resolve_capture_fps(
         if !(fps.is_finite() && fps > 0.0) {
             return Err(format!("configured fps {fps} is not a positive number"));
         }
-        if let Some(stored) = &container_rate {
-            if (stored.fps - fps).abs() > 0.01 * fps {
-                warnings.push(format!(
-                    "configured fps {fps} differs from the container's capture rate {} ({}); \
-                     using the configured value",
-                    stored.fps, stored.source
-                ));
-            }
+        if let Some(stored) = &container_rate
+            && (stored.fps - fps).abs() > 0.01 * fps
+        {
+            warnings.push(format!(
+                "configured fps {fps} differs from the container's capture rate {} ({}); \
+                 using the configured value",
+                stored.fps, stored.source
+            ));
         }
         return Ok(CaptureFps {
             fps,

@@ -2,8 +2,8 @@
 //! the destination folder and renamed into place, so an interrupted run never
 //! leaves a half-written result (DESIGN.md, conventions).
 
-pub mod diagnostics;
 pub mod compare;
+pub mod diagnostics;
 pub mod experiment;
 pub mod html;
 pub mod plot;

@@ -285,15 +285,15 @@ pub fn write_study_report(
         .into_iter()
         .filter(|g| !g.name.is_empty() && g.values.len() >= 2)
         .collect();
-        if within.len() >= 2 {
-            if let Ok(m) = stats::pairwise_t_tests(
+        if within.len() >= 2
+            && let Ok(m) = stats::pairwise_t_tests(
                 &within,
                 options.variance,
                 Correction::Bonferroni,
                 options.alpha,
-            ) {
-                disk_matrices.push((material.name.clone(), m));
-            }
+            )
+        {
+            disk_matrices.push((material.name.clone(), m));
         }
     }
 
