@@ -831,35 +831,8 @@ fn levenberg_marquardt(
 mod tests {
     use super::*;
     use crate::model::params::Preset;
+    use crate::rng::SplitMix64;
     use nalgebra::Vector3;
-
-    /// SplitMix64: a tiny deterministic generator, so every run sees the same data.
-    struct SplitMix64(u64);
-
-    impl SplitMix64 {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-
-        /// Uniform on the open interval (0, 1).
-        fn uniform(&mut self) -> f64 {
-            ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        }
-
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.uniform()
-        }
-
-        /// Standard normal by Box–Muller.
-        fn gaussian(&mut self) -> f64 {
-            let (u1, u2) = (self.uniform(), self.uniform());
-            (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-        }
-    }
 
     const PRESETS: [Preset; 3] = [Preset::EulerDisk, Preset::BrassDisk, Preset::FoodCan];
     const EXPONENTS: [f64; 4] = [0.45, 0.5, 2.0 / 3.0, 2.2];
@@ -934,7 +907,7 @@ mod tests {
     /// Eq. (3.6) is eq. (3.4) with eq. (3.5) substituted, for any rolling state.
     #[test]
     fn eq_3_6_equals_eq_3_4_at_random_states() {
-        let mut rng = SplitMix64(36);
+        let mut rng = SplitMix64::new(36);
         for preset in PRESETS {
             let p = preset.params();
             for _ in 0..1000 {
@@ -956,7 +929,7 @@ mod tests {
     /// "stationary rolling" means.
     #[test]
     fn stationary_rolling_keeps_the_centre_of_mass_still() {
-        let mut rng = SplitMix64(37);
+        let mut rng = SplitMix64::new(37);
         let p = Preset::EulerDisk.params();
         for _ in 0..1000 {
             let (phi, psi, psi_dot) = (
@@ -976,7 +949,7 @@ mod tests {
     /// and R(θ̇ + ψ̇ cos φ) − H ψ̇ sin φ = 0 removes the translational term.
     #[test]
     fn eq_3_8_equals_eq_3_6_under_stationary_rolling() {
-        let mut rng = SplitMix64(38);
+        let mut rng = SplitMix64::new(38);
         for preset in PRESETS {
             let p = preset.params();
             for _ in 0..1000 {
@@ -1101,7 +1074,7 @@ mod tests {
     fn confidence_interval_for_n_covers_the_truth() {
         for (halt, seed) in [(HaltTime::Fixed(0.5), 11), (HaltTime::Free, 12)] {
             for n in EXPONENTS {
-                let mut rng = SplitMix64(seed);
+                let mut rng = SplitMix64::new(seed);
                 let mut covered = 0;
                 let mut failed = 0;
                 for _ in 0..200 {
@@ -1124,7 +1097,7 @@ mod tests {
     #[test]
     fn confidence_interval_for_t0_covers_the_truth() {
         for n in EXPONENTS {
-            let mut rng = SplitMix64(13);
+            let mut rng = SplitMix64::new(13);
             let covered = (0..200)
                 .filter(|_| {
                     let (t, e) = noisy_series(n, &mut rng);

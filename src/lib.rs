@@ -9,6 +9,7 @@ pub mod model;
 pub mod render;
 pub mod report;
 pub mod reproduce;
+pub mod rng;
 pub mod signal;
 pub mod stats;
 pub mod study;

@@ -495,42 +495,31 @@ impl Dissipation {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rng::SplitMix64;
+
+    fn log_uniform(rng: &mut SplitMix64, lo: f64, hi: f64) -> f64 {
+        (lo.ln() + (hi.ln() - lo.ln()) * rng.uniform()).exp()
+    }
+
+    /// A rate with random sign and magnitude spread over 1e-3..1e3.
+    fn rate(rng: &mut SplitMix64) -> f64 {
+        let m = log_uniform(rng, 1e-3, 1e3);
+        if rng.uniform() < 0.5 { -m } else { m }
+    }
+
+    fn rates(rng: &mut SplitMix64) -> Rates {
+        Rates {
+            phi: log_uniform(rng, 1e-4, 1.4),
+            phi_dot: rate(rng),
+            psi_dot: rate(rng),
+            theta_dot: rate(rng),
+        }
+    }
 
     /// Scaled constants of the commercial Euler's disk (§4.3.1, eq. 4.42).
     const H: f64 = 0.167;
     const A: f64 = 0.252;
     const C: f64 = 0.501;
-
-    /// SplitMix64, deterministic and dependency-free.
-    struct Rng(u64);
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-        fn uniform(&mut self) -> f64 {
-            (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn log_uniform(&mut self, lo: f64, hi: f64) -> f64 {
-            (lo.ln() + (hi.ln() - lo.ln()) * self.uniform()).exp()
-        }
-        /// A rate with random sign and magnitude spread over 1e-3..1e3.
-        fn rate(&mut self) -> f64 {
-            let m = self.log_uniform(1e-3, 1e3);
-            if self.uniform() < 0.5 { -m } else { m }
-        }
-        fn rates(&mut self) -> Rates {
-            Rates {
-                phi: self.log_uniform(1e-4, 1.4),
-                phi_dot: self.rate(),
-                psi_dot: self.rate(),
-                theta_dot: self.rate(),
-            }
-        }
-    }
 
     fn all_models() -> Vec<Dissipation> {
         let mut v: Vec<Dissipation> = ModelKind::ALL
@@ -583,10 +572,10 @@ mod tests {
     /// φ ∈ (1e-4, 1.4); strictly < 0 off the discontinuity set for all but None.
     #[test]
     fn every_model_dissipates() {
-        let mut rng = Rng(42);
+        let mut rng = SplitMix64::new(42);
         for d in all_models() {
             for _ in 0..20_000 {
-                let mut r = rng.rates();
+                let mut r = rates(&mut rng);
                 for spin in [1.0, -1.0] {
                     r.theta_dot = spin * r.theta_dot.abs();
                     let q = d.q_body(&r, H);
@@ -606,10 +595,10 @@ mod tests {
     /// q·Ω in closed form for every model (the dissipated power / (η n)).
     #[test]
     fn power_matches_closed_form() {
-        let mut rng = Rng(7);
+        let mut rng = SplitMix64::new(7);
         for d in all_models() {
             for _ in 0..2_000 {
-                let r = rng.rates();
+                let r = rates(&mut rng);
                 let (s, c) = r.phi.sin_cos();
                 let (pd, sd, td) = (r.phi_dot, r.psi_dot, r.theta_dot);
                 let ru = d.ku_over_kv;
@@ -646,9 +635,9 @@ mod tests {
     #[test]
     fn classical_rolling_is_unit_and_horizontal() {
         let d = Dissipation::new(ModelKind::ClassicalRolling);
-        let mut rng = Rng(1);
+        let mut rng = SplitMix64::new(1);
         for _ in 0..5_000 {
-            let r = rng.rates();
+            let r = rates(&mut rng);
             let q = d.q_body(&r, H);
             assert!(close(q.norm(), 1.0, 1e-14), "{r:?}: |q| = {}", q.norm());
             let (s, c) = r.phi.sin_cos();
@@ -674,9 +663,9 @@ mod tests {
     #[test]
     fn general_rolling_is_unit_omega() {
         let d = Dissipation::new(ModelKind::GeneralRolling);
-        let mut rng = Rng(2);
+        let mut rng = SplitMix64::new(2);
         for _ in 0..5_000 {
-            let r = rng.rates();
+            let r = rates(&mut rng);
             let w = r.omega_body();
             let q = d.q_body(&r, H);
             assert!(close(q.norm(), 1.0, 1e-14));
@@ -696,9 +685,9 @@ mod tests {
     #[test]
     fn pivoting_is_unit_vertical() {
         let d = Dissipation::new(ModelKind::Pivoting);
-        let mut rng = Rng(3);
+        let mut rng = SplitMix64::new(3);
         for _ in 0..5_000 {
-            let r = rng.rates();
+            let r = rates(&mut rng);
             let q = d.q_body(&r, H);
             let (s, c) = r.phi.sin_cos();
             assert!(close(q.norm(), 1.0, 1e-14));
@@ -717,9 +706,9 @@ mod tests {
         let contour = Dissipation::new(ModelKind::Contour);
         let classical = Dissipation::new(ModelKind::ClassicalRolling);
         let curvature = Dissipation::new(ModelKind::CurvatureOffset);
-        let mut rng = Rng(4);
+        let mut rng = SplitMix64::new(4);
         for _ in 0..5_000 {
-            let r = rng.rates();
+            let r = rates(&mut rng);
             let q = contour.q_body(&r, H);
             let w = r.omega_body();
             let scale = q.norm() * w.norm();
@@ -740,14 +729,14 @@ mod tests {
     #[test]
     fn augmented_contour_scales_contour() {
         let contour = Dissipation::new(ModelKind::Contour);
-        let mut rng = Rng(5);
+        let mut rng = SplitMix64::new(5);
         for p in [0.0, DEFAULT_AUGMENTED_EXPONENT, 1.3] {
             let aug = Dissipation {
                 augmented_exponent: p,
                 ..Dissipation::new(ModelKind::AugmentedContour)
             };
             for _ in 0..2_000 {
-                let r = rng.rates();
+                let r = rates(&mut rng);
                 let qc = contour.q_body(&r, H);
                 let qa = aug.q_body(&r, H);
                 if p == 0.0 {
@@ -767,9 +756,9 @@ mod tests {
     fn viscous_is_classical_times_norm() {
         let classical = Dissipation::new(ModelKind::ClassicalRolling);
         let viscous = Dissipation::new(ModelKind::ViscousRolling);
-        let mut rng = Rng(6);
+        let mut rng = SplitMix64::new(6);
         for _ in 0..5_000 {
-            let r = rng.rates();
+            let r = rates(&mut rng);
             let s = r.phi.sin();
             let norm = (r.phi_dot.powi(2) + r.theta_dot.powi(2) * s * s).sqrt();
             let qv = viscous.q_body(&r, H);
@@ -789,7 +778,7 @@ mod tests {
             (ModelKind::Winkler, -3.0 / 8.0, 1.0 / 8.0),
             (ModelKind::Cylinder, -0.5, f64::NAN),
         ];
-        let mut rng = Rng(8);
+        let mut rng = SplitMix64::new(8);
         for (kind, pv, pu) in cases {
             let ku = if kind == ModelKind::Cylinder {
                 0.0
@@ -801,8 +790,8 @@ mod tests {
                 ..Dissipation::new(kind)
             };
             for _ in 0..1_000 {
-                let mut r = rng.rates();
-                r.phi = rng.log_uniform(1e-6, 1e-4);
+                let mut r = rates(&mut rng);
+                r.phi = log_uniform(&mut rng, 1e-6, 1e-4);
                 let (st, sp) = (r.theta_dot.signum(), r.phi_dot.signum());
                 let u = if ku == 0.0 { 0.0 } else { ku * r.phi.powf(pu) };
                 // Printed: −n(−k_v φ^p, −k_u φ^{p_u}, k_v φ^{p+1}) (4.83, 4.87), or the

@@ -90,6 +90,7 @@ pub mod motion;
 pub mod scene;
 pub mod write;
 
+use crate::rng::SplitMix64;
 use std::path::PathBuf;
 
 use image::RgbImage;
@@ -836,34 +837,6 @@ fn gaussian_blur(buf: &mut [[f32; 3]], w: usize, h: usize, sigma: f64) {
             *out = convolve(&|d| tmp[(y as isize + d).clamp(0, h as isize - 1) as usize * w + x]);
         }
     });
-}
-
-/// SplitMix64 (Steele, Lea & Flood 2014): a tiny deterministic generator.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn new(seed: u64) -> Self {
-        SplitMix64(seed)
-    }
-
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in (0, 1].
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 1.0) / (1u64 << 53) as f64
-    }
-
-    /// Standard normal by the Box–Muller transform.
-    fn gaussian(&mut self) -> f64 {
-        let (u1, u2) = (self.uniform(), self.uniform());
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    }
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@
 //! §3.2.4 describes. z_rim = R sin φ (1 + cos ψ), sampled at 480 fps, plus Gaussian noise.
 
 use super::*;
+use crate::rng::SplitMix64;
 use std::f64::consts::PI;
 
 const R: f64 = 0.0381;
@@ -16,28 +17,6 @@ const FRAME: f64 = 1.0 / FPS;
 const PHI_A: f64 = 0.03;
 const OMEGA_A: f64 = 188.0;
 const TAU_A: f64 = 0.5;
-
-/// SplitMix64 with Box–Muller: deterministic noise for every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-
-    fn gaussian(&mut self) -> f64 {
-        let (u1, u2) = (self.uniform(), self.uniform());
-        (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
-    }
-}
 
 /// The synthetic disk: analytic φ(t), ψ(t), with t0 the halt.
 struct Truth {
@@ -104,7 +83,7 @@ fn clip(noise: f64, seed: u64) -> (Vec<f64>, Vec<f64>, Truth) {
     let n = n_motion + 144;
     let t: Vec<f64> = (0..n).map(|i| 2.0 + i as f64 * FRAME).collect();
     let truth = Truth::new(t[n_motion - 1]);
-    let mut rng = Rng(seed);
+    let mut rng = SplitMix64::new(seed);
     let z = t
         .iter()
         .map(|&x| truth.z_rim(x) + noise * rng.gaussian())
@@ -345,7 +324,7 @@ fn exact_geometry_is_a_drop_in_model() {
         camera_elevation: 0.1,
     };
     let (t, _, truth) = clip(0.0, 4);
-    let mut rng = Rng(5);
+    let mut rng = SplitMix64::new(5);
     let z: Vec<f64> = t
         .iter()
         .map(|&x| exact.z_rim(truth.phi(x), truth.psi(x)) + NOISE * rng.gaussian())
@@ -403,7 +382,7 @@ fn too_few_peaks_and_missing_rest_are_errors() {
         "{result:?}"
     );
     // Nothing but noise: no motion.
-    let mut rng = Rng(7);
+    let mut rng = SplitMix64::new(7);
     let flat: Vec<f64> = t.iter().map(|_| NOISE * rng.gaussian()).collect();
     let result = halt_time(&t, &flat, &SignalConfig::default());
     assert!(
@@ -475,7 +454,7 @@ fn strip_clip(seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>, StripTruth) {
     let truth = StripTruth {
         t_stop: 1.2 + 0.3 * FRAME,
     };
-    let mut rng = Rng(seed);
+    let mut rng = SplitMix64::new(seed);
     let clean: Vec<f64> = t.iter().map(|&x| truth.beta(x)).collect();
     let measured = clean
         .iter()
@@ -549,7 +528,7 @@ fn moving_average_and_derivative_on_uneven_times() {
 /// The two-view clip: rim and strip on the same frames.
 fn two_view(seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let (t, z, truth) = clip(NOISE, seed);
-    let mut rng = Rng(seed + 100);
+    let mut rng = SplitMix64::new(seed + 100);
     // The strip turns at β̇ ≈ ψ̇ + θ̇ ≈ 2 rad/s before the halt and stops 0.03 s after,
     // slowing at constant rate over the last 7 ms (a Coulomb stop, eq. 4.113).
     let beta_true = |x: f64| {
@@ -706,7 +685,7 @@ fn sweep_seeds() {
 fn pixel_quantised_rim_heights() {
     let delta = 6.58e-5;
     let (t, clean, truth) = clip(0.0, 13);
-    let mut rng = Rng(14);
+    let mut rng = SplitMix64::new(14);
     let z: Vec<f64> = clean
         .iter()
         .map(|&x| ((x / delta + 0.3 * rng.gaussian()).round()) * delta)
