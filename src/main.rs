@@ -74,6 +74,9 @@ enum Command {
         /// Output folder of the combined report.
         #[arg(short, long, default_value = "out/study")]
         out: PathBuf,
+        /// Welch's t-test instead of the pooled-variance test of the thesis.
+        #[arg(long)]
+        welch: bool,
     },
     /// Overlay a simulated model on a measured experiment (thesis §4.7.1, §4.8):
     /// initial state from the footage, η tuned to the halt or fitted, error table,
@@ -300,7 +303,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => run_render(&args),
         Command::Analyse { clip, config, out } => run_analyse(&clip, config.as_deref(), out),
         Command::Study(args) => run_study(&args),
-        Command::Merge { shards, out } => run_merge(&shards, &out),
+        Command::Merge { shards, out, welch } => run_merge(&shards, &out, welch),
         Command::Compare(args) => run_compare(&args),
         Command::Reproduce {
             out,
@@ -428,10 +431,10 @@ fn run_study(args: &StudyArgs) -> Result<()> {
     Ok(())
 }
 
-fn run_merge(shards: &[PathBuf], out: &Path) -> Result<()> {
+fn run_merge(shards: &[PathBuf], out: &Path, welch: bool) -> Result<()> {
     let results = study::merge(shards)?;
     eulerdisk::report::write_json(&out.join(study::STUDY_FILE), &results)?;
-    write_study_report(out, &results, StudyReportOptions::default())?;
+    write_study_report(out, &results, report_options(welch))?;
     println!(
         "merged {} shards: {} clips, {} failed; report: {}",
         shards.len(),
