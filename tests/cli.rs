@@ -1,15 +1,7 @@
 //! The `eulerdisk` binary end to end, each test in a fresh temporary folder.
 
-use std::path::Path;
-use std::process::Command;
-
-fn eulerdisk(dir: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_eulerdisk"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run eulerdisk")
-}
+mod util;
+use util::eulerdisk;
 
 /// `simulate` with the thesis's contour-friction run writes the CSV, the JSON summary
 /// and the plot panel, and the summary carries the physics: the end on θ̇ = 0 with

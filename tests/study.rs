@@ -6,13 +6,8 @@ use std::process::Command;
 
 use serde_json::Value;
 
-fn eulerdisk(dir: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_eulerdisk"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run eulerdisk")
-}
+mod util;
+use util::eulerdisk;
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -40,6 +40,17 @@ impl FootageError {
         }
     }
 
+    /// The file-system metadata of `path`: `NotFound` when nothing is there,
+    /// `Unreadable` for any other failure.
+    pub(crate) fn metadata(path: &Path) -> Result<std::fs::Metadata, Self> {
+        std::fs::metadata(path).map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => Self::NotFound {
+                path: path.to_path_buf(),
+            },
+            _ => Self::unreadable(path, e),
+        })
+    }
+
     pub(crate) fn unreadable(path: &Path, reason: impl std::fmt::Display) -> Self {
         Self::Unreadable {
             path: path.to_path_buf(),

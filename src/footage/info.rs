@@ -127,12 +127,7 @@ fn number(x: f64) -> String {
 /// file that is not a video container; `EmptyFolder` for a folder without frames;
 /// `Unreadable` when OpenCV cannot open the video or decode its first frame.
 pub fn probe(path: &Path) -> Result<ClipInfo, FootageError> {
-    let meta = std::fs::metadata(path).map_err(|e| match e.kind() {
-        std::io::ErrorKind::NotFound => FootageError::NotFound {
-            path: path.to_path_buf(),
-        },
-        _ => FootageError::unreadable(path, e),
-    })?;
+    let meta = FootageError::metadata(path)?;
     if meta.is_dir() {
         probe_folder(path)
     } else {

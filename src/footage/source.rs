@@ -52,19 +52,10 @@ impl FrameSource {
     /// `NotFound`, `UnknownExtension`, `EmptyFolder`, or `Unreadable` when OpenCV
     /// cannot open the video.
     pub fn open(path: &Path) -> Result<Self, FootageError> {
-        let meta = std::fs::metadata(path).map_err(|e| match e.kind() {
-            std::io::ErrorKind::NotFound => FootageError::NotFound {
-                path: path.to_path_buf(),
-            },
-            _ => FootageError::unreadable(path, e),
-        })?;
+        let meta = FootageError::metadata(path)?;
         if meta.is_dir() {
+            // `frame_files` refuses a folder without frames.
             let files = frame_files(path)?;
-            if files.is_empty() {
-                return Err(FootageError::EmptyFolder {
-                    path: path.to_path_buf(),
-                });
-            }
             return Ok(Self {
                 path: path.to_path_buf(),
                 next: 0,

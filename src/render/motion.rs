@@ -328,18 +328,7 @@ pub fn power_law_motion(
             centre: [0.0, 0.0],
         });
     }
-    let halt = DiskState {
-        t: 0.0,
-        phi: 0.0,
-        psi: 0.0,
-        theta: 0.0,
-        beta: law.beta0,
-        psi_dot: 0.0,
-        theta_dot: 0.0,
-        beta_dot: 0.0,
-        energy: 0.0,
-        centre: [0.0, 0.0],
-    };
+    let halt = DiskState::fallen_flat(0.0, 0.0, law.beta0);
     let states = times
         .iter()
         .zip(states)
@@ -383,6 +372,25 @@ fn wrap_pi(a: f64) -> f64 {
 
 /// The flat disk at `t` ≥ 0 after the halt state `halt`: φ = 0, the strip (and θ)
 /// turning with the post-flat spin.
+impl DiskState {
+    /// The disk just fallen flat at the halt (t = 0), with the angles it ended on,
+    /// at rest over its rest position.
+    fn fallen_flat(psi: f64, theta: f64, beta: f64) -> Self {
+        DiskState {
+            t: 0.0,
+            phi: 0.0,
+            psi,
+            theta,
+            beta,
+            psi_dot: 0.0,
+            theta_dot: 0.0,
+            beta_dot: 0.0,
+            energy: 0.0,
+            centre: [0.0, 0.0],
+        }
+    }
+}
+
 fn flat_state(params: &DiskParams, halt: &DiskState, spin: PostFlatSpin, t: f64) -> DiskState {
     let (dbeta, beta_dot) = spin.at(params, t);
     DiskState {
@@ -483,18 +491,7 @@ pub fn trajectory_motion(
         beta_dot0: last.beta_dot,
         mu,
     };
-    let halt = DiskState {
-        t: 0.0,
-        phi: 0.0,
-        psi: last.psi,
-        theta: last.theta,
-        beta: last.beta,
-        psi_dot: 0.0,
-        theta_dot: 0.0,
-        beta_dot: 0.0,
-        energy: 0.0,
-        centre: [0.0, 0.0],
-    };
+    let halt = DiskState::fallen_flat(last.psi, last.theta, last.beta);
     let states = timing
         .times()
         .into_iter()
