@@ -86,31 +86,41 @@ fn dark_plate_clip_matches_its_ground_truth() {
     assert_eq!(e.series.peaks.peaks.len(), true_peaks);
 
     // Halt: the last frame with motion lies at most 2 frames (4.2 ms) before the
-    // true halt — motion under 0.25 px (5 σ of the noise floor) is invisible.
+    // true halt — motion under 0.1 px (5 σ of the noise floor) is invisible, and
+    // z_rim passes through zero once a turn.
     let true_halt = f(&truth["halt_time"]);
     let t_phi = e.series.halt.t_phi;
     assert!(
         t_phi <= true_halt + 1e-9 && true_halt - t_phi < 2.5 / 480.0,
         "t_φ {t_phi}"
     );
-    // The fitted halt: its 95 % interval must cover the true halt. (The issue
-    // asks 2 ms; the fit's own standard error on this clip is 1.5 ms, and the
-    // estimate lands 2.5 ms late, inside its interval.)
-    let (lo, hi) = e.peaks_fit.fit.ci95_t0.expect("t0 is free");
+    // The fitted halts. Per frame: within 2 ms (−0.8 ms). At the peaks: within
+    // 5 ms (−4.4 ms): H.264 at OpenCV's fixed crf 23 reads the narrow gaps of the
+    // last turns 0.1 px low (0.01 px on the same frames stored losslessly, where the
+    // peaks' halt is within 2.5 ms: tests/power_law.rs).
+    let per_frame = e.frames_fit.as_ref().expect("per-frame fit");
+    let frames_halt = t_phi + per_frame.fit.t0;
     assert!(
-        (t_phi + lo..=t_phi + hi).contains(&true_halt),
-        "fitted halt interval {}…{} s",
-        t_phi + lo,
-        t_phi + hi
+        (frames_halt - true_halt).abs() < 2e-3,
+        "per-frame halt {frames_halt}"
+    );
+    let peaks_halt = t_phi + e.peaks_fit.fit.t0;
+    assert!(
+        (peaks_halt - true_halt).abs() < 5e-3,
+        "peaks' halt {peaks_halt}"
     );
 
-    // n: 0.488 for the true 0.5 (issue: ±0.02). The rim edge read +0.09 px high
-    // at the peaks (z_base's half-level bias), which grew relative to the
-    // shrinking peaks and gave 0.47; placed by area it reads +0.004 px
-    // (tests/vision_render.rs).
+    // n: 0.493 for the true 0.5 (issue: ±0.02), 0.494 per frame. Below 2 px the
+    // rim height comes from the darkness of the gap (vision::gap): the edge read
+    // the narrow gaps 0.15–0.2 px high and gave 0.488.
     let n = e.peaks_fit.fit.n;
     let true_n = f(&truth["true_n"]);
     assert!((n - true_n).abs() < 0.02, "n = {n}");
+    assert!(
+        (per_frame.fit.n - true_n).abs() < 0.02,
+        "per-frame n = {}",
+        per_frame.fit.n
+    );
     let (lo, hi) = e.peaks_fit.fit.ci95_n;
     assert!((lo..=hi).contains(&true_n), "95 % CI {lo}…{hi}");
 }

@@ -16,7 +16,10 @@
 //!    [`VisionError::NotAtRest`] when the frames differ.
 //! 2. [`RimGauge::measure`] then reads one frame: it touches only a band of
 //!    columns around the centre line x_centre = (x_l + x_r)/2 and returns
-//!    z_rim = z_base − (bottom edge row), sub-pixel.
+//!    z_rim = z_base − (bottom edge row), sub-pixel. On a dark plate,
+//!    [`GapGauge`] reads the rim heights below 2 px from the darkness of the gap
+//!    between the disk and its mirror image instead, where no row shows the gap's
+//!    own level and the edge cannot be placed.
 //!
 //! # Two views (thesis §3.3.2)
 //!
@@ -35,6 +38,7 @@
 mod calibration;
 mod components;
 mod error;
+mod gap;
 mod profile;
 mod rim;
 mod threshold;
@@ -48,6 +52,7 @@ pub use calibration::{
     calibrate_at_rest, calibrate_frame,
 };
 pub use error::VisionError;
+pub use gap::{GapGauge, GapSample};
 pub use rim::{RimGauge, RimHeight};
 pub use threshold::{GammaSource, INTENSITY_SCALE, Threshold};
 pub use two_view::{
