@@ -430,7 +430,7 @@ pub fn analyse_clip(
         let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
         if gauge.resolve(&mut heights, &gaps).is_none() {
             warnings.push(
-                "the rim never lifts 3–4.5 px, so the plate's level in the gap is unknown: \
+                "the rim never lifts 2.5–4.5 px, so the darkness of the gap per pixel is unknown: \
                  rim heights below 2 px come from the edge alone and read up to 0.2 px high"
                     .into(),
             );

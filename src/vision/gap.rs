@@ -34,12 +34,15 @@
 //! window's ends. A global change of brightness (50 Hz flicker) is divided out
 //! by the ratio of the frame to the reference on rows just outside the window.
 //!
-//! G is the plate's level seen through the gap (2G the sum of its levels above
-//! and below the plate line, where they differ). It is learned from the clip
-//! itself: in frames whose gap is [`WIDE_GAP_PX`] high by the edge method, the
-//! rows either side of the plate line lie inside the gap and show it (the
-//! median over those frames). The rest frame cannot give it (the gap is closed), nor can the plate
-//! beside the disk (it is lit, where the gap lies in the disk's shadow).
+//! The light a unit lift removes, p_ref(y₀) + p_ref(y₁) − 2G, depends on G, the
+//! plate's level seen through the gap (which neither the rest frame, where the
+//! gap is closed, nor the plate beside the disk, lit where the gap lies in the
+//! disk's shadow, shows). It is learned from the clip itself, against the edge
+//! where the edge is exact: in frames whose rim lifts [`CALIBRATION_GAP_PX`] by
+//! the edge method, the gap's middle rows show its own level and the edge is
+//! placed to about 0.01 px, so D / z_rim there gives the darkness per pixel of
+//! lift (the median over those frames). The two methods then agree where they
+//! meet, whatever the plate's levels and the disk's shading.
 
 use std::ops::Range;
 
@@ -55,9 +58,9 @@ const HALF_WINDOW: usize = 5;
 const SCALE_ROWS: usize = 2;
 /// Below this rim height from the edge method (px), the gap's darkness gives z_rim.
 pub const NARROW_GAP_PX: f64 = 2.0;
-/// Rim heights from the edge method (px) at which the gap's middle row shows the
-/// plate's level, and the scale rows are still outside the gap.
-pub const WIDE_GAP_PX: std::ops::RangeInclusive<f64> = 3.0..=4.5;
+/// Rim heights from the edge method (px) at which the edge is exact and the scale
+/// rows are still outside the gap: the darkness per pixel of lift is learned there.
+pub const CALIBRATION_GAP_PX: std::ops::RangeInclusive<f64> = 2.5..=4.5;
 
 /// Measures the gap's darkness on the centre band, one frame after another.
 #[derive(Clone, Debug)]
@@ -69,8 +72,6 @@ pub struct GapGauge {
     reference: Vec<f32>,
     /// Rest-frame band means of the scale rows (above, then below the window).
     scale_reference: f64,
-    /// p_ref(y₀) + p_ref(y₁ − 1): the light a unit lift moves out of the window.
-    ends: f64,
 }
 
 /// One frame's gap, in the rest frames' brightness.
@@ -78,9 +79,6 @@ pub struct GapGauge {
 pub struct GapSample {
     /// Σ_window (p_ref − p), grey levels × rows.
     pub deficit: f64,
-    /// The mean of the rows just above and just below the plate line's row, grey
-    /// levels: the gap's level when the gap is wide.
-    pub middle: f64,
 }
 
 impl GapGauge {
@@ -118,13 +116,11 @@ impl GapGauge {
             .chain(&mean[mean.len() - SCALE_ROWS..])
             .map(|&v| f64::from(v))
             .sum();
-        let ends = f64::from(reference[0] + reference[reference.len() - 1]);
         Ok(Some(Self {
             columns: x0..x1,
             window,
             reference,
             scale_reference,
-            ends,
         }))
     }
 
@@ -142,45 +138,41 @@ impl GapGauge {
             .zip(&self.reference)
             .map(|(y, &r)| f64::from(r) - mean(y) / scale)
             .sum();
-        let base = y0 + HALF_WINDOW;
-        let middle = 0.5 * (mean(base - 1) + mean(base + 1)) / scale;
-        GapSample { deficit, middle }
-    }
-
-    /// z_rim [px] of a sample, given the plate's level G seen through the gap.
-    pub fn z_rim_px(&self, sample: &GapSample, gap_level: f64) -> f64 {
-        sample.deficit / (self.ends - 2.0 * gap_level)
+        GapSample { deficit }
     }
 
     /// Replaces the rim heights of narrow gaps (below [`NARROW_GAP_PX`], contact
-    /// included) by the gap's darkness, with G learned from the frames whose gap
-    /// is wide ([`WIDE_GAP_PX`], module docs). `heights` are the edge method's z_rim per frame
-    /// (`None`: no edge, left alone), `samples` the gap of the same frames.
-    /// Returns G, or `None` (and changes nothing) when fewer than three frames
-    /// show a wide gap.
+    /// included) by the gap's darkness over the darkness per pixel of lift, learned
+    /// from the frames whose edge lies in [`CALIBRATION_GAP_PX`] (module docs).
+    /// `heights` are the edge method's z_rim per frame (`None`: no edge, left
+    /// alone), `samples` the gap of the same frames. Returns the darkness per pixel
+    /// of lift [grey levels], or `None` (and changes nothing) when fewer than three
+    /// frames lift the rim that far.
     pub fn resolve(&self, heights: &mut [Option<f64>], samples: &[GapSample]) -> Option<f64> {
-        let mut middles: Vec<f64> = heights
+        let mut per_px: Vec<f64> = heights
             .iter()
             .zip(samples)
-            .filter(|(z, _)| z.is_some_and(|z| WIDE_GAP_PX.contains(&z)))
-            .map(|(_, s)| s.middle)
+            .filter_map(|(z, s)| {
+                let z = (*z)?;
+                CALIBRATION_GAP_PX.contains(&z).then(|| s.deficit / z)
+            })
             .collect();
-        if middles.len() < 3 {
+        if per_px.len() < 3 {
             return None;
         }
-        middles.sort_by(f64::total_cmp);
-        let gap_level = middles[middles.len() / 2];
-        if (self.ends - 2.0 * gap_level).is_nan() || self.ends - 2.0 * gap_level <= 0.0 {
+        per_px.sort_by(f64::total_cmp);
+        let darkness = per_px[per_px.len() / 2];
+        if darkness.is_nan() || darkness <= 0.0 {
             return None;
         }
         for (z, sample) in heights.iter_mut().zip(samples) {
             if let Some(height) = z
                 && *height < NARROW_GAP_PX
             {
-                *height = self.z_rim_px(sample, gap_level);
+                *height = sample.deficit / darkness;
             }
         }
-        Some(gap_level)
+        Some(darkness)
     }
 }
 
@@ -218,10 +210,16 @@ mod tests {
             samples.push(gauge.measure(&view));
         }
         let edge = heights.clone();
-        let level = gauge
+        let darkness = gauge
             .resolve(&mut heights, &samples)
             .expect("three wide gaps");
-        assert!((level - 30.0).abs() < 0.5, "gap level {level}");
+        // Disk 230 above, mirror 35 + 0.55 (230 − 35) below; background 25 and
+        // plate 35 in the gap.
+        let expected = 230.0 + (35.0 + 0.55 * 195.0) - 25.0 - 35.0;
+        assert!(
+            (darkness / expected - 1.0).abs() < 0.01,
+            "darkness {darkness}"
+        );
         for ((&lift, z), z_edge) in lifts.iter().zip(&heights).zip(&edge) {
             let z = z.unwrap();
             if lift < NARROW_GAP_PX {
