@@ -1,21 +1,22 @@
 //! Closed loop of `compare` (issue 5 §1–§2): simulate a known model with a known η,
-//! render the footage, analyse it like any clip, and run `compare --fit` on the
-//! result. The fitted η must come back within 10 % of the true one, and the true
-//! model must rank first among contour, classical rolling and curvature-offset
-//! friction.
+//! render the footage, analyse it like any clip (automatic rest-frame calibration),
+//! and run `compare --fit` on the result. The fitted η must come back within 10 % of
+//! the true one, and the true model must rank first among contour, classical rolling
+//! and curvature-offset friction.
 
 use std::path::Path;
 
 use eulerdisk::analyse::{self, Experiment};
 use eulerdisk::compare::{self, CompareOptions, EtaMethod};
-use eulerdisk::config::{CalibrationConfig, ExperimentConfig};
+use eulerdisk::config::ExperimentConfig;
 use eulerdisk::model::closed_form::stationary_rolling;
 use eulerdisk::model::dissipation::{Dissipation, ModelKind};
 use eulerdisk::model::params::Preset;
 use eulerdisk::model::simulate::{EndReason, SimulationSpec, simulate};
-use eulerdisk::render::{Plate, RenderSpec, Renderer, trajectory_motion, write_clip};
+use eulerdisk::render::{GroundTruth, Plate, RenderSpec, Renderer, trajectory_motion, write_clip};
 use eulerdisk::report::compare::{comparison_dir, write_comparison, write_ranking};
 use eulerdisk::report::experiment::write_experiment;
+use eulerdisk::vision::PointSource;
 
 /// The true model and η: the thesis's contour run (§4.7).
 const TRUE_MODEL: ModelKind = ModelKind::Contour;
@@ -40,11 +41,10 @@ struct Setup {
 }
 
 /// Renders the true motion at 480 fps (320 × 240 px side view, or 320 × 480 px two
-/// views) and analyses it. The calibration points are the renderer's (as a user would
-/// click them, §3.2.4): the automatic rest-frame calibration of this branch misplaces
-/// z_t and x_l, x_r on these small frames (δ about 24 % low), which scales every φ by
-/// 0.76 and, run through compare, gives η = 1.10e-4 (−55 %) for the side view.
-fn closed_loop_experiment(dir: &Path, setup: &Setup) -> Experiment {
+/// views) and analyses it as a user's clip: the calibration points come from the
+/// automatic rest-frame calibration (§3.2.4), nothing from the renderer's truth.
+/// Returns the experiment and the truth.
+fn closed_loop_experiment(dir: &Path, setup: &Setup) -> (Experiment, GroundTruth) {
     let params = Preset::EulerDisk.params();
     let mut spec = SimulationSpec::thesis_default(params, Dissipation::new(TRUE_MODEL), TRUE_ETA);
     if setup.stationary_start {
@@ -77,19 +77,52 @@ fn closed_loop_experiment(dir: &Path, setup: &Setup) -> Experiment {
     let renderer = Renderer::new(&render, &motion).expect("renderer");
     let clip = dir.join("contour.mp4");
     write_clip(&renderer, &clip).expect("write clip");
-    let c = renderer.truth().calibration;
     let config = ExperimentConfig {
         material: Some("stainless steel".into()),
         two_view: Some(setup.two_view),
-        calibration: Some(CalibrationConfig {
-            x_l: c.x_l,
-            x_r: c.x_r,
-            z_t: c.z_t,
-            z_base: c.z_base,
-        }),
+        fps: Some(480.0),
         ..ExperimentConfig::default()
     };
-    analyse::analyse_clip(&clip, &config, &|_, _| {}).expect("analyse")
+    let experiment = analyse::analyse_clip(&clip, &config, &|_, _| {}).expect("analyse");
+    (experiment, renderer.truth().clone())
+}
+
+/// The automatic calibration against the renderer's truth (vision coordinates are the
+/// renderer's + ½ px). The scale comes from the diameter, 2R/(x_r − x_l), and must
+/// match the image scale. Seen from the 3° elevation z_t is the top of the disk's
+/// silhouette, the *far* rim of the top face, 2R sin ε (15 px here) above the near rim
+/// that the truth records; on the two-view render the strip's line across the top face
+/// cuts that far part off the disk's blob and must be bridged. So eq. 3.10's
+/// 2H/(z_base − z_t) reads about 24 % low and analyse warns, as it should.
+fn check_calibration(experiment: &Experiment, truth: &GroundTruth) {
+    let report = &experiment.plan.calibration;
+    assert!(
+        report.sources.iter().all(|s| *s == PointSource::Detected),
+        "{:?}",
+        report.sources
+    );
+    let (cal, t) = (&report.calibration, &truth.calibration);
+    let s = truth.metres_per_px_image;
+    assert!(
+        (experiment.plan.metres_per_px / s - 1.0).abs() < 0.005,
+        "scale {} m/px, truth {s} m/px",
+        experiment.plan.metres_per_px
+    );
+    assert!(
+        (cal.z_base - (t.z_base + 0.5)).abs() < 0.1,
+        "z_base {cal:?} vs {t:?}"
+    );
+    let far_rim = t.z_t + 0.5 - 2.0 * truth.disk.radius * truth.elevation.sin() / s;
+    assert!(
+        (cal.z_t - far_rim).abs() < 0.2,
+        "z_t {} vs far rim {far_rim}",
+        cal.z_t
+    );
+    assert!(
+        experiment.warnings.iter().any(|w| w.contains("eq. 3.10")),
+        "no eq. 3.10 warning: {:?}",
+        experiment.warnings
+    );
 }
 
 /// Side view only, 320 × 240 px, started on the stationary-rolling manifold: θ̇ of
@@ -122,7 +155,8 @@ fn compare_fit_two_view_recovers_eta_and_ranks_contour_first() {
 fn closed_loop(setup: &Setup) {
     let dir = tempfile::tempdir().expect("tempdir");
     let experiment_dir = dir.path().join("contour");
-    let analysed = closed_loop_experiment(dir.path(), setup);
+    let (analysed, truth) = closed_loop_experiment(dir.path(), setup);
+    check_calibration(&analysed, &truth);
     write_experiment(&experiment_dir, &analysed).expect("write experiment");
     // The CLI's path: result.json read back.
     let experiment = compare::load_experiment(&experiment_dir).expect("result.json round trip");
@@ -206,6 +240,18 @@ fn closed_loop(setup: &Setup) {
         misfit(ModelKind::ClassicalRolling) > misfit(ModelKind::Contour),
         "classical rolling fits better than the true model"
     );
+
+    // Every model is fitted among those still moving at the measured halt (compare's
+    // fit domain): none ends more than a frame before it.
+    let frame = 1.0 / 480.0;
+    for r in &ranked {
+        let late = r.end_time_error_s.expect("compared");
+        assert!(
+            late >= -frame,
+            "{:?} ends {late} s from the measured halt",
+            r.model
+        );
+    }
 
     // The fitted model's rim falls below the footage's halt threshold close to the
     // measured halt (the footage loses the last turns, 15 ms each near the end;

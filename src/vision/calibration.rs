@@ -17,8 +17,11 @@
 //! bottom of the frame, §3.2.4).
 //!
 //! On a band of columns around the disk's centre, z_t is the first
-//! dark-to-bright step going down and the bright run below it ends at the
-//! disk's bottom, except on a dark, mirror-like plate whose reflection is
+//! dark-to-bright step going down (the top of the disk's silhouette: the far rim
+//! of the top face when the camera looks down on it) and the bright run below it
+//! ends at the disk's bottom, short dark gaps such as a strip's line bridged both
+//! ways (a strip across the top face can cut the face's far part off the disk's
+//! blob), except on a dark, mirror-like plate whose reflection is
 //! brighter than γ: the run then holds the disk *and* its mirror image, about
 //! equally tall, and the plate line is the step down from the disk to its
 //! dimmer reflection near the middle of the run. A reflection as bright as the
@@ -485,13 +488,30 @@ fn vertical_points(
         frame: index,
         point,
     };
-    let y0 = disk.row_min.saturating_sub(REACH + 1);
+    // From the top of the frame: the disk's top may lie above its blob (below).
+    let y0 = 0;
     let y1 = (disk.row_max + REACH + 2).min(frame.height);
     let p: Vec<f32> = (y0..y1).map(|y| row_band_mean(frame, y, x0, x1)).collect();
     let origin = y0 as f64;
 
-    let top = p.iter().position(|&v| v > level).filter(|&k| k > 0);
-    let top = top.ok_or_else(|| missing("z_t"))?;
+    // The top of the disk on the band: the blob's first bright row there, extended
+    // up over bright rows and dark gaps of at most MAX_BRIDGED_GAP_PX. A strip across
+    // the top face (two-view set-ups, fig. 3.19), seen from the camera's small
+    // elevation, is a thin dark line across the face's ellipse that cuts off its far
+    // part as a blob of its own, so the largest blob starts below the disk's top.
+    let first = (disk.row_min - y0..p.len()).find(|&k| p[k] > level);
+    let mut top = first.ok_or_else(|| missing("z_t"))?;
+    loop {
+        top -= p[..top].iter().rev().take_while(|&&v| v > level).count();
+        let gap = p[..top].iter().rev().take_while(|&&v| v <= level).count();
+        if gap == 0 || gap == top || gap > MAX_BRIDGED_GAP_PX {
+            break;
+        }
+        top -= gap;
+    }
+    if top == 0 {
+        return Err(missing("z_t"));
+    }
     let z_t = area_edge(&p, top - 1, REACH, origin).ok_or_else(|| missing("z_t"))?;
     // The bright run from the top down, bridging short dark gaps: a coloured
     // strip on the top face (two-view set-ups, fig. 3.19) crosses the centre
@@ -657,6 +677,30 @@ mod tests {
     fn dark_plate_with_dim_reflection() {
         let s = SideScene::standard();
         let report = calibrate_one(&s.dark_plate(0.0, 0.12));
+        assert_points(&report.calibration, &s);
+    }
+
+    #[test]
+    fn strip_line_cutting_off_the_top_face_is_bridged() {
+        // Two-view set-ups (fig. 3.19): the strip across the top face, seen from a
+        // small elevation, is a thin dark line right across the face's ellipse. It
+        // cuts the face's far part off the disk's blob, so the largest blob starts
+        // 7.8 px below the disk's top; z_t is still the top of the silhouette. A
+        // bright object further above than the bridged gap is not the disk.
+        let s = SideScene::standard();
+        let (w, h) = (s.w as f64, s.h as f64);
+        let mirror = 35.0 + 0.55 * (s.disk - 35.0);
+        let line = (s.z_t() + 6.3, s.z_t() + 7.8);
+        let lamp_bottom = s.z_t() - MAX_BRIDGED_GAP_PX as f64 - 1.5;
+        let rects = [
+            (0.0, s.z_base, w, h, grey(35.0)),
+            (s.x_l, s.z_t(), s.x_r, s.z_base, grey(s.disk)),
+            (s.x_l, s.z_base, s.x_r, s.z_base + s.thickness, grey(mirror)),
+            (s.x_l, line.0, s.x_r, line.1, grey(70.0)),
+            (300.0, lamp_bottom - 5.0, 340.0, lamp_bottom, grey(240.0)),
+        ];
+        let c = Canvas::from_rects(s.w, s.h, grey(s.background), &rects);
+        let report = calibrate_one(&c);
         assert_points(&report.calibration, &s);
     }
 
