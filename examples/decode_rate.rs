@@ -1,5 +1,9 @@
 //! OpenCV's decode-only rate for a video: the ceiling for `eulerdisk analyse`,
-//! used by `scripts/bench --footage`. Prints frames, seconds and frames/s.
+//! used by `scripts/bench --footage`. Decodes every frame to BGR exactly as
+//! `analyse` does (`VideoCapture::read`, FFmpeg) and prints frames, seconds and
+//! frames/s. The printed seconds are in-process (no library loading, no start-up);
+//! `scripts/bench` compares `analyse` with this program as whole processes, so
+//! both sides pay the same start-up.
 //!
 //! cargo run --release --example decode_rate -- clip.mp4
 

@@ -1,7 +1,9 @@
 //! A small Levenberg–Marquardt least-squares solver for the local rim fits (a handful
-//! of parameters, tens of residuals), with a central-difference Jacobian so that any
-//! [`RimModel`](super::RimModel) can be fitted, and the linearised covariance
-//! s² (JᵀJ)⁻¹, s² = SSR/dof, at the optimum.
+//! of parameters, tens of residuals), and the linearised covariance s² (JᵀJ)⁻¹,
+//! s² = SSR/dof, at the optimum. The Jacobian is the caller's
+//! ([`levenberg_marquardt_with`]: the local fits build it from the rim model's
+//! partial derivatives, which is most of their speed) or central differences
+//! ([`levenberg_marquardt`]).
 
 use nalgebra::{DMatrix, DVector};
 
@@ -27,11 +29,28 @@ const STEP_TOL: f64 = 1e-12;
 /// Minimises Σ r_i(p)² from `p0`. `residuals(p, out)` fills `out` (length `count`);
 /// `steps[j]` is the finite-difference step for parameter j (the parameters should be
 /// scaled to order one). Returns `None` if a residual is not finite at `p0`.
+#[cfg_attr(not(test), allow(dead_code))]
 pub(crate) fn levenberg_marquardt(
     residuals: impl Fn(&[f64], &mut [f64]),
     p0: &[f64],
     count: usize,
     steps: &[f64],
+) -> Option<LsqFit> {
+    levenberg_marquardt_with(
+        &residuals,
+        |p, jac| central_differences(&residuals, p, steps, jac),
+        p0,
+        count,
+    )
+}
+
+/// [`levenberg_marquardt`] with the Jacobian supplied: `jacobian(p, jac)` fills the
+/// `count` × `p0.len()` matrix ∂r_i/∂p_j at `p`.
+pub(crate) fn levenberg_marquardt_with(
+    residuals: impl Fn(&[f64], &mut [f64]),
+    jacobian: impl Fn(&[f64], &mut DMatrix<f64>),
+    p0: &[f64],
+    count: usize,
 ) -> Option<LsqFit> {
     let n = p0.len();
     let mut p = DVector::from_column_slice(p0);
@@ -42,7 +61,12 @@ pub(crate) fn levenberg_marquardt(
         return None;
     }
     let mut lambda = 1e-3;
-    let mut jac = jacobian(&residuals, &p, count, steps);
+    let mut jac = DMatrix::zeros(count, n);
+    jacobian(p.as_slice(), &mut jac);
+    // One trial vector for the whole search, swapped with `r` on success.
+    let mut r_trial = DVector::zeros(count);
+    // Whether `p` moved since `jac` was taken.
+    let mut stale = false;
     for _ in 0..MAX_ITERATIONS {
         let jtj = jac.transpose() * &jac;
         let jtr = jac.transpose() * &r;
@@ -58,14 +82,13 @@ pub(crate) fn levenberg_marquardt(
                 continue;
             };
             let trial = &p + &step;
-            let mut r_trial = DVector::zeros(count);
             residuals(trial.as_slice(), r_trial.as_mut_slice());
             let ssr_trial = r_trial.norm_squared();
             if ssr_trial.is_finite() && ssr_trial <= ssr {
                 settled = ssr - ssr_trial <= SSR_TOL * ssr
                     || step.norm() <= STEP_TOL * (p.norm() + STEP_TOL);
                 p = trial;
-                r = r_trial;
+                std::mem::swap(&mut r, &mut r_trial);
                 ssr = ssr_trial;
                 lambda = (lambda / 10.0).max(1e-12);
                 improved = true;
@@ -73,12 +96,20 @@ pub(crate) fn levenberg_marquardt(
             }
             lambda *= 10.0;
         }
-        if !improved || settled {
+        if !improved {
             break;
         }
-        jac = jacobian(&residuals, &p, count, steps);
+        if settled {
+            stale = true;
+            break;
+        }
+        jacobian(p.as_slice(), &mut jac);
     }
-    let jac = jacobian(&residuals, &p, count, steps);
+    // The covariance takes the Jacobian at the optimum: recompute it only if the
+    // last accepted step moved `p` since it was taken (the same numbers otherwise).
+    if stale {
+        jacobian(p.as_slice(), &mut jac);
+    }
     let dof = count.saturating_sub(n);
     let covariance = if dof > 0 {
         (jac.transpose() * &jac)
@@ -96,17 +127,17 @@ pub(crate) fn levenberg_marquardt(
     })
 }
 
-fn jacobian(
+/// Central-difference Jacobian of `residuals` at `p` into `jac` (`count` × n).
+fn central_differences(
     residuals: &impl Fn(&[f64], &mut [f64]),
-    p: &DVector<f64>,
-    count: usize,
+    p: &[f64],
     steps: &[f64],
-) -> DMatrix<f64> {
-    let n = p.len();
-    let mut jac = DMatrix::zeros(count, n);
+    jac: &mut DMatrix<f64>,
+) {
+    let (count, n) = jac.shape();
     let mut plus = vec![0.0; count];
     let mut minus = vec![0.0; count];
-    let mut q = p.clone();
+    let mut q = p.to_vec();
     for j in 0..n {
         let h = steps[j];
         q[j] = p[j] + h;
@@ -118,7 +149,6 @@ fn jacobian(
             jac[(i, j)] = (plus[i] - minus[i]) / (2.0 * h);
         }
     }
-    jac
 }
 
 #[cfg(test)]

@@ -19,6 +19,18 @@ pub trait RimModel {
     /// Must be even and 2π-periodic in χ, and largest at χ = 0.
     fn z_rim(&self, phi: f64, chi: f64) -> f64;
 
+    /// (∂z_rim/∂φ, ∂z_rim/∂χ) at (`phi`, `chi`), for the Jacobians of the local fits.
+    /// The default takes central differences (steps 1e-6 of φ, floored at 1e-12 rad,
+    /// and 1e-6 rad in χ); a model with a closed form overrides it.
+    fn z_rim_partials(&self, phi: f64, chi: f64) -> (f64, f64) {
+        let h_phi = 1e-6 * phi.abs().max(1e-6);
+        let h_chi = 1e-6;
+        (
+            (self.z_rim(phi + h_phi, chi) - self.z_rim(phi - h_phi, chi)) / (2.0 * h_phi),
+            (self.z_rim(phi, chi + h_chi) - self.z_rim(phi, chi - h_chi)) / (2.0 * h_chi),
+        )
+    }
+
     /// The nutation angle φ whose peak height z_rim(φ, 0) is `z_peak` [m]; eq. (3.9)
     /// for [`ThesisRim`]. The default solves z_rim(φ, 0) = z_peak by bisection on
     /// [0, π/2] (z_rim(·, 0) must increase there); NaN when z_peak lies outside.
@@ -53,6 +65,15 @@ pub struct ThesisRim {
 impl RimModel for ThesisRim {
     fn z_rim(&self, phi: f64, chi: f64) -> f64 {
         self.radius * phi.sin() * (1.0 + chi.cos())
+    }
+
+    fn z_rim_partials(&self, phi: f64, chi: f64) -> (f64, f64) {
+        let (sin_phi, cos_phi) = phi.sin_cos();
+        let (sin_chi, cos_chi) = chi.sin_cos();
+        (
+            self.radius * cos_phi * (1.0 + cos_chi),
+            -self.radius * sin_phi * sin_chi,
+        )
     }
 
     /// Eq. (3.9): φ = arcsin(z_peak / 2R).
@@ -215,6 +236,28 @@ mod tests {
                     let bound = 2.0 * R * phi.powi(3) + (R + H) * phi * phi * eps.tan() + 1e-17;
                     assert!((z - first_order).abs() < bound, "φ {phi} χ {chi}");
                 }
+            }
+        }
+    }
+
+    /// The closed-form partials of the thesis profile agree with the default central
+    /// differences, which the exact model uses.
+    #[test]
+    fn partials_match_central_differences() {
+        struct Numeric(ThesisRim);
+        impl RimModel for Numeric {
+            fn z_rim(&self, phi: f64, chi: f64) -> f64 {
+                self.0.z_rim(phi, chi)
+            }
+        }
+        let thesis = ThesisRim { radius: R };
+        for &phi in &[1e-4, 0.01, 0.3] {
+            for k in 0..16 {
+                let chi = 2.0 * PI * k as f64 / 16.0 - 0.1;
+                let (a_phi, a_chi) = thesis.z_rim_partials(phi, chi);
+                let (n_phi, n_chi) = Numeric(thesis).z_rim_partials(phi, chi);
+                assert!((a_phi - n_phi).abs() < 1e-8 * R, "φ {phi} χ {chi}");
+                assert!((a_chi - n_chi).abs() < 1e-8 * R * phi, "φ {phi} χ {chi}");
             }
         }
     }
