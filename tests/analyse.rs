@@ -183,6 +183,33 @@ fn two_view_clip_gives_the_strip_angle_and_its_stop() {
     );
 }
 
+/// Frame skips (issue §5, §7): the light fixture lost captures 40 and 171, so file
+/// frames 40 and 170 follow a skip; the timestamps are renumbered, so only the rim's
+/// phase shows them. The dark fixture has no drops and no flags.
+#[test]
+fn light_plate_drops_are_flagged_and_clean_clips_are_not() {
+    let truth = truth("side-light-n067-artefacts.truth.json");
+    assert_eq!(truth["dropped"], serde_json::json!([40, 171]));
+    let e = analyse(
+        "side-light-n067-artefacts.mp4",
+        "fps = 480\nplate = \"light\"\n",
+    );
+    let flagged: Vec<usize> = e.series.flags.iter().map(|f| f.index).collect();
+    // Capture 171 lies 69 frames before the halt (capture 240): peaks of 3 px over
+    // 0.05 px of noise (SNR 55) at 8 frames per period. Its phase-step statistic is
+    // F = 83 (threshold 40; F = 30 with one period either side, as before), frame 40
+    // F = 285; frames more than a period from a skip stay below F = 0.
+    assert_eq!(flagged, vec![40, 170], "{:?}", e.series.flags);
+    assert!(
+        e.series
+            .flags
+            .iter()
+            .all(|f| matches!(f.reason, eulerdisk::signal::SkipReason::RimPhaseStep { .. }))
+    );
+    let dark = analyse("side-dark-n050.mp4", "fps = 480\n");
+    assert!(dark.series.flags.is_empty(), "{:?}", dark.series.flags);
+}
+
 #[test]
 fn bad_input_fails_with_the_file_and_the_reason() {
     let dir = tempfile::tempdir().unwrap();

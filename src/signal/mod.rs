@@ -193,7 +193,7 @@ impl Default for SignalConfig {
             strip_spike_sigmas: 6.0,
             strip_rate_floor: 1e-3,
             skip_min_snr: 20.0,
-            phase_step_statistic: 100.0,
+            phase_step_statistic: 40.0,
         }
     }
 }
