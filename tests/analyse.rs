@@ -144,11 +144,27 @@ fn two_view_clip_gives_the_strip_angle_and_its_stop() {
     let strip = e.series.strip.as_ref().unwrap();
     let t_beta_clip = e.series.halt.t_phi + strip.rotation_after_flat;
     let true_t_beta = f(&truth["halt_time"]) + f(&truth["t_beta"]);
-    // The band method of fig. 3.22 on a smoothed β: issue asks two frames; the
-    // 5-point average delays the last motion by up to 2.5 frames. 3 frames.
+    // t_β from the Coulomb stop fitted to β (eq. 4.112): −0.07 frame here, and within
+    // 0.22 frame on eight fresh renders with the default post-flat spin (n 0.35–0.65,
+    // sub-frame halts, β̇₀ −2 to −4 rad/s, noise 0–2). The band of fig. 3.22 read +2.5
+    // frames here (H.264 codes the still frames exactly, a band of zero width, while
+    // the last moving frames carry 3e-4 rad of coding error) and −4.3 to +3.7 frames on
+    // those renders. Issue §7: two frames.
     assert!(
-        (t_beta_clip - true_t_beta).abs() < 3.0 / 480.0,
+        (t_beta_clip - true_t_beta).abs() < 2.0 / 480.0,
         "t_β {t_beta_clip} vs {true_t_beta}"
+    );
+    // The fitted deceleration is the rim friction's, μ m g R / C (eq. 4.112 as in
+    // ERRATA, with the renderer's μ = 0.134 of Table 3.1): 69.3 against 68.9 rad/s².
+    // 3 %.
+    let disk = &truth["disk"];
+    let friction =
+        0.134 * f(&disk["mass"]) * f(&disk["gravity"]) * f(&disk["radius"]) / f(&disk["inertia_c"]);
+    let fit = strip.stop.fit.as_ref().expect("Coulomb stop fit");
+    assert!(
+        (fit.deceleration / friction - 1.0).abs() < 0.03,
+        "deceleration {} vs {friction} rad/s²",
+        fit.deceleration
     );
     // θ̇ from the strip: the full-state energy (eq. 3.6) is fitted too, and its n
     // agrees with the stationary-rolling one within their uncertainty.
@@ -175,6 +191,33 @@ fn two_view_clip_gives_the_strip_angle_and_its_stop() {
         "per-frame n = {}",
         per_frame.n
     );
+}
+
+/// Frame skips (issue §5, §7): the light fixture lost captures 40 and 171, so file
+/// frames 40 and 170 follow a skip; the timestamps are renumbered, so only the rim's
+/// phase shows them. The dark fixture has no drops and no flags.
+#[test]
+fn light_plate_drops_are_flagged_and_clean_clips_are_not() {
+    let truth = truth("side-light-n067-artefacts.truth.json");
+    assert_eq!(truth["dropped"], serde_json::json!([40, 171]));
+    let e = analyse(
+        "side-light-n067-artefacts.mp4",
+        "fps = 480\nplate = \"light\"\n",
+    );
+    let flagged: Vec<usize> = e.series.flags.iter().map(|f| f.index).collect();
+    // Capture 171 lies 69 frames before the halt (capture 240): peaks of 3 px over
+    // 0.05 px of noise (SNR 55) at 8 frames per period. Its phase-step statistic is
+    // F = 83 (threshold 40; F = 30 with one period either side, as before), frame 40
+    // F = 285; frames more than a period from a skip stay below F = 0.
+    assert_eq!(flagged, vec![40, 170], "{:?}", e.series.flags);
+    assert!(
+        e.series
+            .flags
+            .iter()
+            .all(|f| matches!(f.reason, eulerdisk::signal::SkipReason::RimPhaseStep { .. }))
+    );
+    let dark = analyse("side-dark-n050.mp4", "fps = 480\n");
+    assert!(dark.series.flags.is_empty(), "{:?}", dark.series.flags);
 }
 
 #[test]

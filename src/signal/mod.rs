@@ -11,7 +11,7 @@
 //!   │   find_peaks        peaks (sub-frame), φ at peaks (eq. 3.9), ψ by turns, ψ̇ (3.11)
 //!   │   frame_states      φ, ψ, ψ̇ at every frame, with standard errors (local fits)
 //!   │   strip_series      β unwrapped by ±π, 5-point moving average, β̇ (eq. 3.22)
-//!   │   strip_stop_time   t_β by the band method of fig. 3.22; t_β − t_φ
+//!   │   strip_stop_time   t_β: Coulomb stop fit (eq. 4.112), band of fig. 3.22; t_β − t_φ
 //!   │   frame_skips       timestamp gaps, β̇ spikes, rim phase steps, with reasons
 //!   │   analyse           all of the above → StateSeries
 //!   ▼
@@ -98,7 +98,8 @@
 //!   synthetic data they are somewhat small (83–91 % of truths within 3σ), as the
 //!   residuals also carry the model error.
 //! * **Strip** ([`strip_series`], [`strip_stop_time`]): unwrapping, the 5-point moving
-//!   average and β̇ as §3.3.2; t_β by the band of fig. 3.22.
+//!   average and β̇ as §3.3.2; t_β by fitting the stop of a flat disk braked by rim
+//!   friction (eq. 4.112), with the band of fig. 3.22 beside it.
 //! * **Frame skips** ([`frame_skips`]): see [`SkipReason`].
 //!
 //! # Known limits
@@ -192,7 +193,7 @@ impl Default for SignalConfig {
             strip_spike_sigmas: 6.0,
             strip_rate_floor: 1e-3,
             skip_min_snr: 20.0,
-            phase_step_statistic: 100.0,
+            phase_step_statistic: 40.0,
         }
     }
 }
@@ -520,7 +521,7 @@ pub fn analyse(
             let settled_after = config
                 .strip_settled_after
                 .unwrap_or(t[t.len() - 1] - config.strip_settled_tail_s);
-            let stop = strip_stop_time(t, &series.beta, settled_after)?;
+            let stop = strip_stop_time(t, &series, halt.t_phi, settled_after)?;
             let rotation_after_flat = stop.t_beta - halt.t_phi;
             Some(StripAnalysis {
                 series,

@@ -162,8 +162,8 @@ pub fn strip_rate_spikes(
 ///
 /// For each pair of consecutive rim heights before the halt, where the oscillation
 /// stands clear of the noise (peak height above `skip_min_snr` × noise), the local
-/// model with a chirp (φ₀ + φ₁τ, χ₀ + ωτ + ½ω̇τ²) is fitted over about one period on
-/// each side twice: with the stamped times (A), and with every later frame taken one
+/// model with a chirp (φ₀ + φ₁τ, χ₀ + ωτ + ½ω̇τ²) is fitted over 1.5 periods on each
+/// side (the period from the phase track's advance over one period either side) twice: with the stamped times (A), and with every later frame taken one
 /// nominal period later (B, the dropped-frame hypothesis). The frame is flagged when
 /// F = (SSR_A − SSR_B) / (SSR_B / dof_B) exceeds `phase_step_statistic`; of flags
 /// closer than a period, the strongest is kept. Times in `track` are halt-shifted.
@@ -195,11 +195,21 @@ pub(crate) fn rim_phase_steps(
         {
             continue;
         }
+        // The rate over a period on each side: the track's own rate between two
+        // extrema is one frame short across a dropped frame (25 % at 8 frames per
+        // period) and would shrink the window.
+        let span = 2.0 * PI / psi_dot;
+        let psi_dot = match (track.psi_at(t_c - span), track.psi_at(t_c + span)) {
+            (Some((before, _)), Some((after, _))) if after > before => {
+                (after - before) / (2.0 * span)
+            }
+            _ => psi_dot,
+        };
         let per_period = (2.0 * PI / psi_dot / frame).round() as usize;
         if per_period < MIN_FRAMES_PER_PERIOD {
             continue;
         }
-        let m = per_period.max(6);
+        let m = ((per_period as f64 * WINDOW_PERIODS).round() as usize).max(6);
         if k < m || k + m > idx.len() {
             continue;
         }
@@ -244,6 +254,13 @@ pub(crate) fn rim_phase_steps(
     }
     flags
 }
+
+/// Half-width of the phase-step fits in oscillation periods. The statistic grows with
+/// the samples after the step: on the light fixture the drop at frame 171 (8 frames per
+/// period, peaks 3 px over 0.05 px of noise) gives F = 30 with one period on each side
+/// and 83 with 1.5, while frames without a skip stay below F = 0 (the stepped model
+/// fits them worse).
+const WINDOW_PERIODS: f64 = 1.5;
 
 /// Below this many frames per oscillation the local fits of the phase-step test are
 /// too short to be trusted (the last few oscillations before the halt).

@@ -426,8 +426,9 @@ impl StripTruth {
         let decel_start = self.t_stop - STOP_DURATION;
         let a = BETA_DOT_END / STOP_DURATION;
         let before = |s: f64| {
-            // β̇ = 1 + 19 e^{−s/0.2} for s = decel_start − t ≥ 0 (fast early, 1 rad/s late).
-            -(s + 19.0 * 0.2 * (1.0 - (-s / 0.2).exp()))
+            // β̇ = 20 − 19 e^{−s/0.2} for s = decel_start − t ≥ 0 (fast early, 1 rad/s
+            // late, continuous into the deceleration: a spin does not jump).
+            -(20.0 * s - 19.0 * 0.2 * (1.0 - (-s / 0.2).exp()))
         };
         let at_decel = BETA_DOT_END * STOP_DURATION - 0.5 * a * STOP_DURATION.powi(2);
         if t <= decel_start {
@@ -485,27 +486,48 @@ fn strip_unwraps_smooths_and_stops_by_the_band() {
             series.beta_dot[i]
         );
     }
-    let stop = strip_stop_time(&t, &series.beta, 1.3).expect("band");
+    check_strip_stop(8);
+    let flat_from = truth.t_stop - STOP_DURATION - 2.0 * FRAME;
+    // No motion before the settled time: an error, not a stop time.
+    let still = strip_series(&t, &vec![0.1; t.len()], 5).expect("strip");
+    assert!(matches!(
+        strip_stop_time(&t, &still, flat_from, 1.3),
+        Err(SignalError::StripNeverMoves { .. })
+    ));
+    assert!(matches!(
+        strip_stop_time(&t, &still, flat_from, 2.0),
+        Err(SignalError::SettledTooShort { frames: 0, .. })
+    ));
+}
+
+/// t_β of [`strip_clip`]: the band of fig. 3.22 and the Coulomb-stop fit.
+fn check_strip_stop(seed: u64) {
+    let (t, _, measured, truth) = strip_clip(seed);
+    let series = strip_series(&t, &measured, 5).expect("strip");
+    // The halt as the rim would give it: a frame or two before the deceleration.
+    let flat_from = truth.t_stop - STOP_DURATION - 2.0 * FRAME;
+    let stop = strip_stop_time(&t, &series, flat_from, 1.3).expect("band");
+    assert!(stop.band.1 - stop.band.0 < 12.0 * BETA_NOISE && stop.settled_frames > 40);
     // The band method enters the band when the remaining turn ½ a (t_stop − t)² falls to
     // the band's half-width (~2.5σ): √(2 · 2.5e-4 / 143) = 1.9 ms < 1 frame early;
     // plus one frame of sampling: two frames.
     assert!(
-        (stop.t_beta - truth.t_stop).abs() <= 2.0 * FRAME,
+        (stop.band_t_beta - truth.t_stop).abs() <= 2.0 * FRAME,
+        "band t_β = {} vs {}",
+        stop.band_t_beta,
+        truth.t_stop
+    );
+    // The Coulomb-stop fit: the 3.4 frames of deceleration carry a turn of
+    // ½ · 143 · 0.007² = 3.5e-3 rad, 35 noise σ, and put t_β within 0.4 frame over
+    // the seeds of the sweep. One frame.
+    let fit = stop.fit.as_ref().expect("Coulomb fit");
+    assert!(
+        (stop.t_beta - truth.t_stop).abs() <= FRAME && stop.t_beta == fit.t_stop,
         "t_β = {} vs {}",
         stop.t_beta,
         truth.t_stop
     );
-    assert!(stop.band.1 - stop.band.0 < 12.0 * BETA_NOISE && stop.settled_frames > 40);
-    // No motion before the settled time: an error, not a stop time.
-    let still = vec![0.1; t.len()];
-    assert!(matches!(
-        strip_stop_time(&t, &still, 1.3),
-        Err(SignalError::StripNeverMoves { .. })
-    ));
-    assert!(matches!(
-        strip_stop_time(&t, &still, 2.0),
-        Err(SignalError::SettledTooShort { frames: 0, .. })
-    ));
+    assert_eq!(stop.index, t.partition_point(|&x| x < stop.t_beta));
 }
 
 #[test]
@@ -637,10 +659,11 @@ fn analyse_runs_the_stage_end_to_end() {
     )
     .expect("analyse");
     let strip = result.strip.expect("strip");
-    // The strip stops 0.03 s after t0, t_φ is within a frame of t0 (above), the band
-    // method within two frames (above): 3 frames in all.
+    // The strip stops 0.03 s after t0, t_φ is within a frame of t0 (above), the
+    // Coulomb-stop fit within half a frame of the stop (on this clip 0.04 frame): 1.5
+    // frames in all.
     assert!(
-        (strip.rotation_after_flat - 0.03).abs() < 3.0 * FRAME,
+        (strip.rotation_after_flat - 0.03).abs() < 1.5 * FRAME,
         "{}",
         strip.rotation_after_flat
     );
@@ -658,6 +681,7 @@ fn sweep_seeds() {
             ("peaks", check_peaks as fn(u64)),
             ("states", check_states),
             ("dropped", check_dropped),
+            ("strip stop", check_strip_stop),
             ("clean", |s| {
                 let (t, z, beta) = two_view(s);
                 let flags = all_flags(&t, &z, &beta);
