@@ -361,7 +361,8 @@ fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<Strin
                 e.peaks_fit.fit.ci95_n.0, e.peaks_fit.fit.ci95_n.1, e.peaks_fit.fit.points, plan.window_s))
         }
         @if let Some(s) = strip {
-            p { (format!("Strip stop t_β − t_φ = {:.4} s (band method, fig. 3.22).", s.rotation_after_flat)) }
+            p { (format!("Strip stop t_β − t_φ = {:.4} s ({}).", s.rotation_after_flat,
+                if s.stop.fit.is_some() { "fit of the friction stop, eq. 4.112" } else { "band method, fig. 3.22" })) }
         }
         @if !e.warnings.is_empty() {
             h2 { "Warnings" }
