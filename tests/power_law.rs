@@ -107,7 +107,7 @@ fn power_law_exponent_and_halt_come_back_from_lossless_clips() {
         // The thesis's estimate, eq. 3.8 at the peaks with ψ̇ by central differences:
         // n and its interval as well; its halt within 2.5 ms, as the peak fits of the
         // last turns carry the local model's error (module docs of `signal`): the
-        // halt comes 2.1 ms early at n = 0.67.
+        // halt comes 1.9 ms early at n = 0.67.
         check(
             &format!("n = {n}, peaks"),
             &e.peaks_fit,
