@@ -7,6 +7,7 @@
 //! vision::   calibrate_at_rest → x_l, x_r, z_t, z_base, γ     (thesis §3.2.4)
 //!   │        two-view: split row, colour thresholds             (§3.3.2)
 //!   │        pass 2, streamed: RimGauge per frame → z_rim [px]; StripFinder → β
+//!   │        dark plate: GapGauge per frame, then z_rim < 2 px from the gap's darkness
 //!   ▼
 //! signal::   halt t_φ, peaks, φ (eq. 3.9), ψ, ψ̇ (eq. 3.11), per-frame states,
 //!   │        β unwrapped and smoothed, t_β, frame-skip flags    (§3.2.5, §3.3.3)
