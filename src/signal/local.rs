@@ -9,7 +9,7 @@
 //! cannot tell the sense of precession).
 
 use super::RimModel;
-use super::lsq::levenberg_marquardt_with;
+use super::lsq::levenberg_marquardt;
 use std::f64::consts::PI;
 
 /// Starting values of a local fit.
@@ -90,7 +90,7 @@ pub(crate) fn fit_local(
         }
         (p[0] + p[1] * ui, chi)
     };
-    let fit = levenberg_marquardt_with(
+    let fit = levenberg_marquardt(
         |p, out| {
             for ((o, &ui), &zi) in out.iter_mut().zip(&u).zip(z) {
                 let (phi, chi) = state(p, ui);

@@ -1,9 +1,7 @@
 //! A small Levenberg–Marquardt least-squares solver for the local rim fits (a handful
 //! of parameters, tens of residuals), and the linearised covariance s² (JᵀJ)⁻¹,
-//! s² = SSR/dof, at the optimum. The Jacobian is the caller's
-//! ([`levenberg_marquardt_with`]: the local fits build it from the rim model's
-//! partial derivatives, which is most of their speed) or central differences
-//! ([`levenberg_marquardt`]).
+//! s² = SSR/dof, at the optimum. The Jacobian is the caller's: the local fits build
+//! it from the rim model's partial derivatives, which is most of their speed.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -26,27 +24,11 @@ const SSR_TOL: f64 = 1e-12;
 /// Relative step below which the search has settled.
 const STEP_TOL: f64 = 1e-12;
 
-/// Minimises Σ r_i(p)² from `p0`. `residuals(p, out)` fills `out` (length `count`);
-/// `steps[j]` is the finite-difference step for parameter j (the parameters should be
-/// scaled to order one). Returns `None` if a residual is not finite at `p0`.
-#[cfg_attr(not(test), allow(dead_code))]
+/// Minimises Σ r_i(p)² from `p0` (parameters scaled to order one). `residuals(p,
+/// out)` fills `out` (length `count`); `jacobian(p, jac)` fills the `count` ×
+/// `p0.len()` matrix ∂r_i/∂p_j at `p`. Returns `None` if a residual is not finite at
+/// `p0`.
 pub(crate) fn levenberg_marquardt(
-    residuals: impl Fn(&[f64], &mut [f64]),
-    p0: &[f64],
-    count: usize,
-    steps: &[f64],
-) -> Option<LsqFit> {
-    levenberg_marquardt_with(
-        &residuals,
-        |p, jac| central_differences(&residuals, p, steps, jac),
-        p0,
-        count,
-    )
-}
-
-/// [`levenberg_marquardt`] with the Jacobian supplied: `jacobian(p, jac)` fills the
-/// `count` × `p0.len()` matrix ∂r_i/∂p_j at `p`.
-pub(crate) fn levenberg_marquardt_with(
     residuals: impl Fn(&[f64], &mut [f64]),
     jacobian: impl Fn(&[f64], &mut DMatrix<f64>),
     p0: &[f64],
@@ -127,30 +109,6 @@ pub(crate) fn levenberg_marquardt_with(
     })
 }
 
-/// Central-difference Jacobian of `residuals` at `p` into `jac` (`count` × n).
-fn central_differences(
-    residuals: &impl Fn(&[f64], &mut [f64]),
-    p: &[f64],
-    steps: &[f64],
-    jac: &mut DMatrix<f64>,
-) {
-    let (count, n) = jac.shape();
-    let mut plus = vec![0.0; count];
-    let mut minus = vec![0.0; count];
-    let mut q = p.to_vec();
-    for j in 0..n {
-        let h = steps[j];
-        q[j] = p[j] + h;
-        residuals(q.as_slice(), &mut plus);
-        q[j] = p[j] - h;
-        residuals(q.as_slice(), &mut minus);
-        q[j] = p[j];
-        for i in 0..count {
-            jac[(i, j)] = (plus[i] - minus[i]) / (2.0 * h);
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -167,9 +125,16 @@ mod tests {
                     *o = p[0] * (p[1] * x + p[2]).sin() - yi;
                 }
             },
+            |p, jac| {
+                for (i, &x) in t.iter().enumerate() {
+                    let (sin, cos) = (p[1] * x + p[2]).sin_cos();
+                    jac[(i, 0)] = sin;
+                    jac[(i, 1)] = p[0] * x * cos;
+                    jac[(i, 2)] = p[0] * cos;
+                }
+            },
             &[1.0, 1.9, 0.0],
             t.len(),
-            &[1e-6; 3],
         )
         .expect("fit");
         assert!((fit.params[0] - 1.5).abs() < 1e-9, "{:?}", fit.params);
