@@ -256,11 +256,13 @@ pub fn analyse_clip(
         path: clip.to_path_buf(),
         error,
     };
-    let info = footage::probe(clip)?;
+    // One source serves both passes: the rest frames at the end, then every
+    // frame from the start.
+    let mut source = FrameSource::open(clip)?;
     let fps = footage::resolve_capture_fps(
         config.fps,
         footage::container_capture_rate(clip),
-        info.container_fps,
+        source.container_fps(),
     )
     .map_err(|reason| AnalyseError::Fps {
         path: clip.to_path_buf(),
@@ -273,10 +275,17 @@ pub fn analyse_clip(
     let roi = vision_config.roi;
 
     // Pass 1: the rest frames at the end.
-    let mut source = FrameSource::open(clip)?;
-    let expected = source
-        .expected_frames()
-        .unwrap_or(info.frame_count as usize);
+    let expected = match source.expected_frames() {
+        Some(n) => n,
+        None => {
+            // No frame count stored: count by reading once.
+            let mut n = 0;
+            while source.next_frame()?.is_some() {
+                n += 1;
+            }
+            n
+        }
+    };
     if expected < REST_FRAMES + 3 {
         return Err(AnalyseError::Clip {
             path: clip.to_path_buf(),
@@ -381,8 +390,18 @@ pub fn analyse_clip(
     drop(rest_sides);
     drop(rest);
 
-    // Pass 2: every frame, streamed.
-    let mut source = FrameSource::open(clip)?;
+    // Pass 2: every frame, streamed. A side view reads only the band of columns
+    // about the centre line, so only that band is converted to colour.
+    source.seek(0)?;
+    if split.is_none() {
+        let x = roi.map_or(0, |r| r[0] as usize);
+        let mut band = gauge.band_columns();
+        if let Some(gap) = &gap_gauge {
+            let columns = gap.band_columns();
+            band = band.start.min(columns.start)..band.end.max(columns.end);
+        }
+        source.convert_only_columns(Some(x + band.start..x + band.end))?;
+    }
     let mut strip_finder = colour_thresholds
         .as_ref()
         .map(|(t, s)| StripFinder::new(*t, *s));
@@ -392,11 +411,13 @@ pub fn analyse_clip(
     // The frame with the highest rim so far, kept for the threshold diagnostic.
     let mut highest: Option<(f64, f64, OwnedFrame)> = None;
     while let Some(frame) = source.next_frame()? {
-        let (side, plan) = side_view(&frame.view, roi, split, frame.index).map_err(vision_err)?;
-        let z_rim_px = match gauge.measure(&side, frame.index).map_err(vision_err)? {
+        let index = frame.index;
+        let (side, plan) = side_view(&frame.view, roi, split, index).map_err(vision_err)?;
+        let mut new_highest = None;
+        let z_rim_px = match gauge.measure(&side, index).map_err(vision_err)? {
             RimHeight::Edge { z_rim_px, edge_row } => {
                 if highest.as_ref().is_none_or(|(z, _, _)| z_rim_px > *z) {
-                    highest = Some((z_rim_px, edge_row, OwnedFrame::copy(frame.index, &side)));
+                    new_highest = Some((z_rim_px, edge_row));
                 }
                 Some(z_rim_px)
             }
@@ -410,20 +431,26 @@ pub fn analyse_clip(
             gaps.push(gauge.measure(&side));
         }
         let beta_raw = match (&mut strip_finder, plan) {
-            (Some(finder), Some(plan)) => finder.measure(&plan, frame.index).ok().map(|s| s.beta),
+            (Some(finder), Some(plan)) => finder.measure(&plan, index).ok().map(|s| s.beta),
             _ => None,
         };
         frames.push(FrameRecord {
-            index: frame.index,
-            t_capture: frame.index as f64 / fps.fps,
+            index,
+            t_capture: index as f64 / fps.fps,
             t: f64::NAN,
             container_time_s: frame.container_time_s,
             z_rim_px,
             z_rim_m: z_rim_px.map(|z| z * metres_per_px),
             beta_raw,
         });
-        if frame.index % 256 == 0 {
-            progress(frame.index, Some(expected));
+        if index % 256 == 0 {
+            progress(index, Some(expected));
+        }
+        if let Some((z_rim_px, edge_row)) = new_highest {
+            // The diagnostic shows the whole side view: convert the other columns.
+            let whole = source.whole_frame()?;
+            let side = side_view(&whole, roi, split, index).map_err(vision_err)?.0;
+            highest = Some((z_rim_px, edge_row, OwnedFrame::copy(index, &side)));
         }
     }
     progress(frames.len(), Some(expected));

@@ -1,17 +1,21 @@
 //! Footage: the first stage of the data flow, and one of only two that read files.
 //!
 //! Input is a clip as the user filmed it: a video file (MP4/MOV/AVI, decoded by
-//! OpenCV's `videoio`) or a folder of PNG/TIFF/JPEG frames (read by `imgcodecs`,
-//! in natural name order). This stage owns everything about frames as they come
-//! off the disk: metadata, the capture fps and where it came from, timestamps,
-//! frame-skip flags, the region of interest and the mirror split. The frames it
-//! delivers go on to `vision`, which turns them into `z_rim(t)` and `β(t)`.
+//! FFmpeg's libavcodec, the library behind OpenCV's `videoio`, called directly so
+//! that only the pixels the side view reads are converted to colour) or a folder
+//! of PNG/TIFF/JPEG frames (read by the `image` crate, in natural name order).
+//! This stage owns everything about frames as they come off the disk: metadata,
+//! the capture fps and where it came from, timestamps, frame-skip flags, the
+//! region of interest and the mirror split. The frames it delivers go on to
+//! `vision`, which turns them into `z_rim(t)` and `β(t)`.
 //!
-//! So far: [`probe`] reports what OpenCV says about a clip ([`ClipInfo`], shown by
-//! `eulerdisk info CLIP`), and [`frame_files`] lists a frame folder in the order
-//! its frames are analysed. Failures are [`FootageError`]s that name the file.
+//! [`FrameSource`] streams a clip's frames; [`probe`] reports what OpenCV says
+//! about a clip ([`ClipInfo`], shown by `eulerdisk info CLIP`), and
+//! [`frame_files`] lists a frame folder in the order its frames are analysed.
+//! Failures are [`FootageError`]s that name the file.
 
 mod capture_rate;
+mod decoder;
 mod error;
 mod frame;
 mod info;

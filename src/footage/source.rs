@@ -1,16 +1,18 @@
 //! Streaming frames off the disk, one at a time, in clip order.
 //!
-//! A [`FrameSource`] decodes a video through OpenCV's `VideoCapture` (FFmpeg when
-//! available) or reads a frame folder through the `image` crate, in natural name
-//! order. It holds one decoded frame at a time and lends it out as a
+//! A [`FrameSource`] decodes a video with FFmpeg's libraries ([`VideoDecoder`],
+//! the same libavcodec as OpenCV's `VideoCapture`, without converting pixels
+//! nobody reads) or reads a frame folder through the `image` crate, in natural
+//! name order. It holds one decoded frame at a time and lends it out as a
 //! [`FrameView`], so memory stays bounded whatever the clip length.
 
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use opencv::core::Mat;
 use opencv::prelude::*;
 use opencv::videoio;
 
+use super::decoder::VideoDecoder;
 use super::info::{VIDEO_EXTENSIONS, frame_files, lower_extension};
 use super::{ChannelOrder, FootageError, FrameView};
 
@@ -35,10 +37,7 @@ pub struct FrameSource {
 }
 
 enum Reader {
-    Video {
-        capture: videoio::VideoCapture,
-        frame: Mat,
-    },
+    Video(Box<VideoDecoder>),
     Folder {
         files: Vec<PathBuf>,
         frame: image::RgbImage,
@@ -73,18 +72,12 @@ impl FrameSource {
                 ext,
             });
         }
-        let capture = open_capture(path)?;
-        let count = capture
-            .get(videoio::CAP_PROP_FRAME_COUNT)
-            .map_err(|e| opencv_error(path, e))?;
+        let decoder = VideoDecoder::open(path)?;
         Ok(Self {
             path: path.to_path_buf(),
             next: 0,
-            expected: (count.is_finite() && count >= 1.0).then_some(count.round() as usize),
-            reader: Reader::Video {
-                capture,
-                frame: Mat::default(),
-            },
+            expected: decoder.frame_count(),
+            reader: Reader::Video(Box::new(decoder)),
         })
     }
 
@@ -98,6 +91,52 @@ impl FrameSource {
         self.expected
     }
 
+    /// The frame rate the container stores (average, else nominal) [frames/s];
+    /// `None` for a frame folder or a container without one.
+    pub fn container_fps(&self) -> Option<f64> {
+        match &self.reader {
+            Reader::Video(decoder) => decoder.fps(),
+            Reader::Folder { .. } => None,
+        }
+    }
+
+    /// From the next frame on, lend frames in which only `columns` need to be
+    /// right (`None`: every column). A video then converts just those columns
+    /// from the codec's YUV to colour, and the other columns of a lent frame
+    /// hold stale pixels: for callers that read a band of columns, such as the
+    /// side-view stage. [`Self::whole_frame`] converts the rest on demand.
+    ///
+    /// # Errors
+    /// `Unreadable` when libswscale refuses the conversion.
+    pub fn convert_only_columns(
+        &mut self,
+        columns: Option<Range<usize>>,
+    ) -> Result<(), FootageError> {
+        match &mut self.reader {
+            Reader::Video(decoder) => decoder.set_columns(columns),
+            Reader::Folder { .. } => Ok(()),
+        }
+    }
+
+    /// The frame last returned by [`Self::next_frame`], every column converted.
+    ///
+    /// # Errors
+    /// `Unreadable` when no frame has been read or the conversion fails.
+    pub fn whole_frame(&mut self) -> Result<FrameView<'_>, FootageError> {
+        match &mut self.reader {
+            Reader::Video(decoder) => {
+                let (width, height) = decoder.size();
+                Ok(bgr_view(decoder.bgr_whole()?, width, height))
+            }
+            Reader::Folder { frame, .. } => {
+                if frame.width() == 0 {
+                    return Err(FootageError::unreadable(&self.path, "no frame read yet"));
+                }
+                Ok(FrameView::from_rgb(frame))
+            }
+        }
+    }
+
     /// Skip ahead so that the next frame returned is `index` (for a video, by
     /// seeking; a codec may land on a nearby key frame, so the caller should
     /// read [`Frame::index`] rather than assume it).
@@ -105,16 +144,8 @@ impl FrameSource {
     /// # Errors
     /// `Unreadable` when the container refuses the seek.
     pub fn seek(&mut self, index: usize) -> Result<(), FootageError> {
-        if let Reader::Video { capture, .. } = &mut self.reader {
-            let ok = capture
-                .set(videoio::CAP_PROP_POS_FRAMES, index as f64)
-                .map_err(|e| opencv_error(&self.path, e))?;
-            if !ok {
-                return Err(FootageError::unreadable(
-                    &self.path,
-                    format!("cannot seek to frame {index}"),
-                ));
-            }
+        if let Reader::Video(decoder) = &mut self.reader {
+            decoder.seek(index)?;
         }
         self.next = index;
         Ok(())
@@ -153,13 +184,11 @@ impl FrameSource {
                     view: FrameView::from_rgb(frame),
                 }))
             }
-            Reader::Video { capture, frame } => {
-                let path = &self.path;
-                let read = capture.read(frame).map_err(|e| opencv_error(path, e))?;
-                if !read || frame.empty() {
+            Reader::Video(decoder) => {
+                let Some(time_s) = decoder.next()? else {
                     return match self.expected {
                         Some(expected) if index + 1 < expected => Err(FootageError::unreadable(
-                            path,
+                            &self.path,
                             format!(
                                 "decoding stopped at frame {index} of the {expected} \
                                      the container states (truncated or corrupt file)"
@@ -167,19 +196,27 @@ impl FrameSource {
                         )),
                         _ => Ok(None),
                     };
-                }
-                let time_ms = capture
-                    .get(videoio::CAP_PROP_POS_MSEC)
-                    .map_err(|e| opencv_error(path, e))?;
+                };
                 self.next += 1;
+                let (width, height) = decoder.size();
                 Ok(Some(Frame {
                     index,
-                    container_time_s: (time_ms.is_finite() && time_ms >= 0.0)
-                        .then_some(time_ms / 1e3),
-                    view: mat_view(path, frame, index)?,
+                    container_time_s: time_s.filter(|t| t.is_finite() && *t >= 0.0),
+                    view: bgr_view(decoder.bgr()?, width, height),
                 }))
             }
         }
+    }
+}
+
+/// A decoded BGR buffer (rows `3 · width` bytes apart) as a [`FrameView`].
+fn bgr_view(data: &[u8], width: usize, height: usize) -> FrameView<'_> {
+    FrameView {
+        width,
+        height,
+        stride: 3 * width,
+        order: ChannelOrder::Bgr,
+        data,
     }
 }
 
@@ -212,28 +249,6 @@ pub(super) fn open_capture(path: &Path) -> Result<videoio::VideoCapture, Footage
 
 pub(super) fn opencv_error(path: &Path, e: opencv::Error) -> FootageError {
     FootageError::unreadable(path, format!("OpenCV: {}", e.message))
-}
-
-/// Borrow a decoded OpenCV frame (8-bit BGR, continuous) as a [`FrameView`].
-fn mat_view<'a>(path: &Path, mat: &'a Mat, index: usize) -> Result<FrameView<'a>, FootageError> {
-    let bad = |what: &str| FootageError::unreadable(path, format!("frame {index}: {what}"));
-    if mat.channels() != 3 || mat.depth() != opencv::core::CV_8U {
-        return Err(bad("not an 8-bit, 3-channel frame"));
-    }
-    if !mat.is_continuous() {
-        return Err(bad("OpenCV returned a non-contiguous frame buffer"));
-    }
-    let data = mat
-        .data_bytes()
-        .map_err(|e| FootageError::unreadable(path, format!("OpenCV: {}", e.message)))?;
-    let width = mat.cols().unsigned_abs() as usize;
-    Ok(FrameView {
-        width,
-        height: mat.rows().unsigned_abs() as usize,
-        stride: 3 * width,
-        order: ChannelOrder::Bgr,
-        data,
-    })
 }
 
 #[cfg(test)]

@@ -133,6 +133,7 @@ pub use strip::{
 };
 
 use local::{LocalInit, fit_local};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use thiserror::Error;
@@ -393,55 +394,56 @@ pub fn frame_states(
         .collect();
     let st: Vec<f64> = idx.iter().map(|&i| ts[i]).collect();
     let v: Vec<f64> = idx.iter().map(|&i| z_rim[i] - halt.rest_level).collect();
-    let mut states = Vec::new();
-    for (k, &i) in idx.iter().enumerate() {
-        let t_c = st[k];
-        if t_c < peaks.window.0 {
-            continue;
-        }
-        let (Some((psi0, omega)), Some((phi0, phi_slope))) = (track.psi_at(t_c), track.phi_at(t_c))
-        else {
-            continue;
-        };
-        if !(omega > 0.0 && phi0 > 0.0) {
-            continue;
-        }
-        let half = (0.5 * config.state_window_periods * 2.0 * PI / omega).max(3.5 * frame);
-        let (mut lo, mut hi) = (
-            st.partition_point(|&x| x < t_c - half),
-            st.partition_point(|&x| x <= t_c + half),
-        );
-        // At least eight samples (four parameters, four degrees of freedom).
-        while hi - lo < 8 && (lo > 0 || hi < st.len()) {
-            lo = lo.saturating_sub(1);
-            if hi - lo < 8 && hi < st.len() {
-                hi += 1;
+    // One independent local fit per frame: spread over the cores.
+    idx.par_iter()
+        .enumerate()
+        .filter_map(|(k, &i)| {
+            let t_c = st[k];
+            if t_c < peaks.window.0 {
+                return None;
             }
-        }
-        let init = LocalInit {
-            phi: phi0,
-            phi_slope,
-            chi: psi0,
-            omega,
-        };
-        let Some(fit) = fit_local(model, &st[lo..hi], &v[lo..hi], t_c, init, true, None) else {
-            continue;
-        };
-        let psi = fit.chi + 2.0 * PI * ((psi0 - fit.chi) / (2.0 * PI)).round();
-        states.push(FrameState {
-            index: i,
-            t: t_c,
-            phi: fit.phi,
-            sigma_phi: fit.sigma_phi,
-            psi,
-            sigma_psi: fit.sigma_chi,
-            psi_dot: fit.omega,
-            sigma_psi_dot: fit.sigma_omega,
-            residual_rms: (fit.ssr / fit.points as f64).sqrt(),
-            points: fit.points,
-        });
-    }
-    states
+            let (Some((psi0, omega)), Some((phi0, phi_slope))) =
+                (track.psi_at(t_c), track.phi_at(t_c))
+            else {
+                return None;
+            };
+            if !(omega > 0.0 && phi0 > 0.0) {
+                return None;
+            }
+            let half = (0.5 * config.state_window_periods * 2.0 * PI / omega).max(3.5 * frame);
+            let (mut lo, mut hi) = (
+                st.partition_point(|&x| x < t_c - half),
+                st.partition_point(|&x| x <= t_c + half),
+            );
+            // At least eight samples (four parameters, four degrees of freedom).
+            while hi - lo < 8 && (lo > 0 || hi < st.len()) {
+                lo = lo.saturating_sub(1);
+                if hi - lo < 8 && hi < st.len() {
+                    hi += 1;
+                }
+            }
+            let init = LocalInit {
+                phi: phi0,
+                phi_slope,
+                chi: psi0,
+                omega,
+            };
+            let fit = fit_local(model, &st[lo..hi], &v[lo..hi], t_c, init, true, None)?;
+            let psi = fit.chi + 2.0 * PI * ((psi0 - fit.chi) / (2.0 * PI)).round();
+            Some(FrameState {
+                index: i,
+                t: t_c,
+                phi: fit.phi,
+                sigma_phi: fit.sigma_phi,
+                psi,
+                sigma_psi: fit.sigma_chi,
+                psi_dot: fit.omega,
+                sigma_psi_dot: fit.sigma_omega,
+                residual_rms: (fit.ssr / fit.points as f64).sqrt(),
+                points: fit.points,
+            })
+        })
+        .collect()
 }
 
 /// Frame skips of every kind, sorted by frame: timestamp gaps over the whole clip;

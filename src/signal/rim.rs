@@ -12,7 +12,7 @@
 use std::f64::consts::FRAC_PI_2;
 
 /// Rim height on the centre column above the plate as the camera sees it [m].
-pub trait RimModel {
+pub trait RimModel: Sync {
     /// z_rim for nutation `phi` = φ [rad] and precession phase `chi` = χ = ψ − ψ_c
     /// [rad], where χ = 0 is the orientation of fig. 3.6 (the raised side of the
     /// disk, and its underside, face the camera; the contact point is farthest away).

@@ -5,6 +5,7 @@
 use super::local::{LocalInit, PhaseTrack, fit_local};
 use super::peaks::nominal_period;
 use super::{Halt, RimModel, SignalConfig, finite_samples, mad_sigma, median};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -184,55 +185,58 @@ pub(crate) fn rim_phase_steps(
     let v: Vec<f64> = idx.iter().map(|&i| z_rim[i] - halt.rest_level).collect();
     let st: Vec<f64> = idx.iter().map(|&i| ts[i]).collect();
     // (sample k, statistic, phase step, half-width in samples) of each candidate.
-    let mut candidates: Vec<(usize, f64, f64, usize)> = Vec::new();
-    for k in 1..idx.len() {
-        let t_c = st[k];
-        let (Some((psi, psi_dot)), Some((phi, phi_dot))) = (track.psi_at(t_c), track.phi_at(t_c))
-        else {
-            continue;
-        };
-        if !(psi_dot > 0.0 && phi > 0.0) || model.z_rim(phi, 0.0) < config.skip_min_snr * halt.noise
-        {
-            continue;
-        }
-        // The rate over a period on each side: the track's own rate between two
-        // extrema is one frame short across a dropped frame (25 % at 8 frames per
-        // period) and would shrink the window.
-        let span = 2.0 * PI / psi_dot;
-        let psi_dot = match (track.psi_at(t_c - span), track.psi_at(t_c + span)) {
-            (Some((before, _)), Some((after, _))) if after > before => {
-                (after - before) / (2.0 * span)
+    // Two independent local fits per sample: spread over the cores.
+    let candidates: Vec<(usize, f64, f64, usize)> = (1..idx.len())
+        .into_par_iter()
+        .filter_map(|k| {
+            let t_c = st[k];
+            let (Some((psi, psi_dot)), Some((phi, phi_dot))) =
+                (track.psi_at(t_c), track.phi_at(t_c))
+            else {
+                return None;
+            };
+            if !(psi_dot > 0.0 && phi > 0.0)
+                || model.z_rim(phi, 0.0) < config.skip_min_snr * halt.noise
+            {
+                return None;
             }
-            _ => psi_dot,
-        };
-        let per_period = (2.0 * PI / psi_dot / frame).round() as usize;
-        if per_period < MIN_FRAMES_PER_PERIOD {
-            continue;
-        }
-        let m = ((per_period as f64 * WINDOW_PERIODS).round() as usize).max(6);
-        if k < m || k + m > idx.len() {
-            continue;
-        }
-        let (lo, hi) = (k - m, k + m);
-        let init = LocalInit {
-            phi,
-            phi_slope: phi_dot,
-            chi: psi,
-            omega: psi_dot,
-        };
-        let (tw, zw) = (&st[lo..hi], &v[lo..hi]);
-        let plain = fit_local(model, tw, zw, t_c, init, true, None);
-        let stepped = fit_local(model, tw, zw, t_c, init, true, Some((t_c, frame)));
-        let (Some(a), Some(b)) = (plain, stepped) else {
-            continue;
-        };
-        let dof = b.dof.saturating_sub(1).max(1) as f64;
-        let variance = (b.ssr / dof).max(f64::MIN_POSITIVE);
-        let statistic = (a.ssr - b.ssr) / variance;
-        if statistic > config.phase_step_statistic {
-            candidates.push((k, statistic, b.omega * frame, m));
-        }
-    }
+            // The rate over a period on each side: the track's own rate between two
+            // extrema is one frame short across a dropped frame (25 % at 8 frames per
+            // period) and would shrink the window.
+            let span = 2.0 * PI / psi_dot;
+            let psi_dot = match (track.psi_at(t_c - span), track.psi_at(t_c + span)) {
+                (Some((before, _)), Some((after, _))) if after > before => {
+                    (after - before) / (2.0 * span)
+                }
+                _ => psi_dot,
+            };
+            let per_period = (2.0 * PI / psi_dot / frame).round() as usize;
+            if per_period < MIN_FRAMES_PER_PERIOD {
+                return None;
+            }
+            let m = ((per_period as f64 * WINDOW_PERIODS).round() as usize).max(6);
+            if k < m || k + m > idx.len() {
+                return None;
+            }
+            let (lo, hi) = (k - m, k + m);
+            let init = LocalInit {
+                phi,
+                phi_slope: phi_dot,
+                chi: psi,
+                omega: psi_dot,
+            };
+            let (tw, zw) = (&st[lo..hi], &v[lo..hi]);
+            let plain = fit_local(model, tw, zw, t_c, init, true, None);
+            let stepped = fit_local(model, tw, zw, t_c, init, true, Some((t_c, frame)));
+            let (Some(a), Some(b)) = (plain, stepped) else {
+                return None;
+            };
+            let dof = b.dof.saturating_sub(1).max(1) as f64;
+            let variance = (b.ssr / dof).max(f64::MIN_POSITIVE);
+            let statistic = (a.ssr - b.ssr) / variance;
+            (statistic > config.phase_step_statistic).then_some((k, statistic, b.omega * frame, m))
+        })
+        .collect();
     // Keep the strongest of candidates closer than a period.
     let mut flags = Vec::new();
     for &(k, statistic, step, m) in &candidates {

@@ -127,6 +127,11 @@ impl GapGauge {
         }))
     }
 
+    /// The columns read on every frame (the rim gauge's band).
+    pub fn band_columns(&self) -> Range<usize> {
+        self.columns.clone()
+    }
+
     /// The gap of one frame (of the calibration frames' size; the rim gauge has
     /// checked that).
     pub fn measure(&self, frame: &FrameView) -> GapSample {
