@@ -27,6 +27,10 @@ use super::FootageError;
 /// without scaling it selects the same YUV→RGB routine whatever the width.
 const SWS_FLAGS: scaling::Flags = scaling::Flags::BICUBIC;
 
+/// Frames by which a frame's decoding may precede its display (B-frame
+/// reordering; x264's default pyramid needs 3, HEVC encoders up to 16).
+const REORDER_MARGIN: usize = 16;
+
 /// One video stream being decoded frame by frame.
 pub(super) struct VideoDecoder {
     path: PathBuf,
@@ -47,6 +51,9 @@ pub(super) struct VideoDecoder {
     yuv: ff::frame::Video,
     /// A frame decoded while seeking that is the next one to lend out.
     pending: bool,
+    /// While seeking: packets stamped before this are decoded only if other
+    /// frames refer to them (the frames themselves are dropped anyway).
+    skip_before: Option<i64>,
     eof_sent: bool,
     /// The current frame in BGR, 3 bytes a pixel, rows `3 · width` apart.
     bgr: Vec<u8>,
@@ -129,6 +136,7 @@ impl VideoDecoder {
             height,
             yuv: ff::frame::Video::empty(),
             pending: false,
+            skip_before: None,
             eof_sent: false,
             bgr: vec![0; 3 * width * height],
             whole: None,
@@ -221,13 +229,21 @@ impl VideoDecoder {
         self.decoder.flush();
         self.eof_sent = false;
         self.pending = false;
+        // Frames more than REORDER_MARGIN before the target cannot be lent out
+        // (in decoding order they may stand that far from their display place).
+        self.skip_before =
+            Some(target - (REORDER_MARGIN as f64 / fps / self.time_base).ceil() as i64);
+        let mut landed = false;
         while self.receive()? {
             let ts = self.yuv.timestamp().unwrap_or(target);
             if ts >= target - tolerance {
-                self.pending = true;
-                return Ok(());
+                landed = true;
+                break;
             }
         }
+        self.skip_before = None;
+        self.decoder.skip_frame(ff::Discard::Default);
+        self.pending = landed;
         Ok(())
     }
 
@@ -297,6 +313,14 @@ impl VideoDecoder {
             let mut packet = ff::Packet::empty();
             match packet.read(&mut self.input) {
                 Ok(()) if packet.stream() == self.stream => {
+                    if let Some(limit) = self.skip_before {
+                        let early = packet.pts().is_some_and(|pts| pts < limit);
+                        self.decoder.skip_frame(if early {
+                            ff::Discard::NonReference
+                        } else {
+                            ff::Discard::Default
+                        });
+                    }
                     // A corrupt packet is skipped, as FFmpeg's own tools do; a
                     // stream that ends early is caught by the frame count.
                     let _ = self.decoder.send_packet(&packet);
