@@ -15,7 +15,6 @@ use serde::{Deserialize, Serialize};
 
 use super::FootageError;
 use super::capture_rate::{ContainerCaptureRate, container_capture_rate};
-use super::source::{open_capture, opencv_error};
 
 /// Video containers that [`probe`] hands to OpenCV (lower case, no dot).
 pub const VIDEO_EXTENSIONS: &[&str] = &["mp4", "m4v", "mov", "avi", "mkv"];
@@ -369,6 +368,37 @@ fn split_run(s: &str) -> (&str, &str) {
         .find(|c: char| is_digit(c) != leading_digit)
         .unwrap_or(s.len());
     s.split_at(end)
+}
+
+/// Open a video with FFmpeg when this OpenCV has it (the same decoder and frame
+/// count on every machine), else with whatever backend OpenCV picks.
+fn open_capture(path: &Path) -> Result<videoio::VideoCapture, FootageError> {
+    let cv = |e| opencv_error(path, e);
+    let has_ffmpeg = videoio::has_backend(videoio::VideoCaptureAPIs::CAP_FFMPEG).map_err(cv)?;
+    let api = if has_ffmpeg {
+        videoio::CAP_FFMPEG
+    } else {
+        videoio::CAP_ANY
+    };
+    let capture = videoio::VideoCapture::from_file(path, api).map_err(cv)?;
+    if !capture.is_opened().map_err(cv)? {
+        let backend = if has_ffmpeg {
+            "FFmpeg"
+        } else {
+            "no OpenCV video backend"
+        };
+        return Err(FootageError::unreadable(
+            path,
+            format!(
+                "{backend} could not open it (truncated, not a video, or an unsupported codec)"
+            ),
+        ));
+    }
+    Ok(capture)
+}
+
+fn opencv_error(path: &Path, e: opencv::Error) -> FootageError {
+    FootageError::unreadable(path, format!("OpenCV: {}", e.message))
 }
 
 #[cfg(test)]

@@ -9,9 +9,6 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use opencv::prelude::*;
-use opencv::videoio;
-
 use super::decoder::VideoDecoder;
 use super::info::{VIDEO_EXTENSIONS, frame_files, lower_extension};
 use super::{ChannelOrder, FootageError, FrameView};
@@ -48,7 +45,7 @@ impl FrameSource {
     /// Open a video file or a frame folder for streaming.
     ///
     /// # Errors
-    /// `NotFound`, `UnknownExtension`, `EmptyFolder`, or `Unreadable` when OpenCV
+    /// `NotFound`, `UnknownExtension`, `EmptyFolder`, or `Unreadable` when FFmpeg
     /// cannot open the video.
     pub fn open(path: &Path) -> Result<Self, FootageError> {
         let meta = FootageError::metadata(path)?;
@@ -220,40 +217,12 @@ fn bgr_view(data: &[u8], width: usize, height: usize) -> FrameView<'_> {
     }
 }
 
-/// Open a video with FFmpeg when this OpenCV has it (the same decoder and frame
-/// count on every machine), else with whatever backend OpenCV picks.
-pub(super) fn open_capture(path: &Path) -> Result<videoio::VideoCapture, FootageError> {
-    let cv = |e| opencv_error(path, e);
-    let has_ffmpeg = videoio::has_backend(videoio::VideoCaptureAPIs::CAP_FFMPEG).map_err(cv)?;
-    let api = if has_ffmpeg {
-        videoio::CAP_FFMPEG
-    } else {
-        videoio::CAP_ANY
-    };
-    let capture = videoio::VideoCapture::from_file(path, api).map_err(cv)?;
-    if !capture.is_opened().map_err(cv)? {
-        let backend = if has_ffmpeg {
-            "FFmpeg"
-        } else {
-            "no OpenCV video backend"
-        };
-        return Err(FootageError::unreadable(
-            path,
-            format!(
-                "{backend} could not open it (truncated, not a video, or an unsupported codec)"
-            ),
-        ));
-    }
-    Ok(capture)
-}
-
-pub(super) fn opencv_error(path: &Path, e: opencv::Error) -> FootageError {
-    FootageError::unreadable(path, format!("OpenCV: {}", e.message))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use opencv::core::Mat;
+    use opencv::prelude::*;
+    use opencv::videoio;
 
     fn write_frames(dir: &Path, sizes: &[(u32, u32)]) {
         for (i, &(w, h)) in sizes.iter().enumerate() {
