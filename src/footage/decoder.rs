@@ -249,6 +249,7 @@ impl VideoDecoder {
 
     /// The current frame in BGR: the columns set by [`Self::set_columns`], or all.
     pub(super) fn bgr(&mut self) -> Result<&[u8], FootageError> {
+        self.check_decoded()?;
         match &mut self.band {
             Some((columns, context)) => {
                 let (x0, path) = (columns.start, &self.path);
@@ -267,6 +268,7 @@ impl VideoDecoder {
     }
 
     fn convert_whole(&mut self) -> Result<(), FootageError> {
+        self.check_decoded()?;
         if self.whole.is_none() {
             let context = scaling::Context::get(
                 self.yuv.format(),
@@ -334,6 +336,17 @@ impl VideoDecoder {
                 }
                 Err(e) => return Err(self.error(format!("reading failed: {e}"))),
             }
+        }
+    }
+
+    /// A frame must be at hand (not before the first, not after the last).
+    fn check_decoded(&self) -> Result<(), FootageError> {
+        // SAFETY: `yuv` is an allocated AVFrame; its plane pointers are only read.
+        let empty = unsafe { (*self.yuv.as_ptr()).data[0].is_null() };
+        if empty {
+            Err(self.error("no decoded frame at hand".into()))
+        } else {
+            Ok(())
         }
     }
 
@@ -448,6 +461,14 @@ mod tests {
             }
         }
         assert!(whole.next().unwrap().is_none(), "no frame after the last");
+    }
+
+    #[test]
+    fn no_frame_is_lent_before_the_first_or_after_the_last() {
+        let mut decoder = VideoDecoder::open(&fixture()).unwrap();
+        assert!(decoder.bgr_whole().is_err(), "before the first frame");
+        while decoder.next().unwrap().is_some() {}
+        assert!(decoder.bgr().is_err(), "after the last frame");
     }
 
     #[test]
