@@ -126,7 +126,7 @@ pub use peaks::{
     ExtremumMethod, Peak, PeakSeries, PrecessionSample, Trough, find_peaks, precession,
 };
 pub use rim::{RimModel, SideViewRim, ThesisRim};
-pub use skips::{FrameFlag, SkipReason, flags_within, strip_rate_spikes, timestamp_gaps};
+pub use skips::{FrameFlag, SkipReason, flags_within, strip_angle_steps, timestamp_gaps};
 pub use strip::{
     StripSeries, StripStop, derivative, moving_average, strip_series, strip_stop_time,
     unwrap_half_turns,
@@ -167,10 +167,10 @@ pub struct SignalConfig {
     pub strip_settled_tail_s: f64,
     /// A frame interval above this many nominal periods is a timestamp gap.
     pub gap_factor: f64,
-    /// A raw β̇ this many robust σ from its local median is a spike.
-    pub strip_spike_sigmas: f64,
-    /// Lower bound of the local β̇ spread in the spike test [rad/s].
-    pub strip_rate_floor: f64,
+    /// A step of the strip's angle this many robust σ from zero is a skip.
+    pub strip_step_sigmas: f64,
+    /// Lower bound of the steps' spread in that test [rad].
+    pub strip_step_floor: f64,
     /// The phase-step test runs where the peak height exceeds this many noise σ.
     pub skip_min_snr: f64,
     /// F statistic above which a rim phase step is flagged.
@@ -191,8 +191,8 @@ impl Default for SignalConfig {
             strip_settled_after: None,
             strip_settled_tail_s: 0.1,
             gap_factor: 1.5,
-            strip_spike_sigmas: 6.0,
-            strip_rate_floor: 1e-3,
+            strip_step_sigmas: 6.0,
+            strip_step_floor: 1e-6,
             skip_min_snr: 20.0,
             phase_step_statistic: 40.0,
         }
@@ -208,14 +208,14 @@ impl SignalConfig {
             ("state_window_periods", self.state_window_periods),
             ("strip_settled_tail_s", self.strip_settled_tail_s),
             ("gap_factor", self.gap_factor),
-            ("strip_spike_sigmas", self.strip_spike_sigmas),
+            ("strip_step_sigmas", self.strip_step_sigmas),
             ("phase_step_statistic", self.phase_step_statistic),
         ];
         let non_negative = [
             ("noise_floor", self.noise_floor),
             ("prominence_sigmas", self.prominence_sigmas),
             ("min_prominence", self.min_prominence),
-            ("strip_rate_floor", self.strip_rate_floor),
+            ("strip_step_floor", self.strip_step_floor),
             ("skip_min_snr", self.skip_min_snr),
         ];
         for (field, value) in positive {
@@ -447,7 +447,7 @@ pub fn frame_states(
 }
 
 /// Frame skips of every kind, sorted by frame: timestamp gaps over the whole clip;
-/// strip-rate spikes over the whole clip (if `beta_unwrapped` is given); rim phase
+/// strip-angle steps over the whole clip (if `beta_unwrapped` is given); rim phase
 /// steps before the halt, where the peaks (found over the whole motion, not only the
 /// window) give a phase track. A frame can carry several flags, one per reason.
 pub fn frame_skips(
@@ -463,11 +463,11 @@ pub fn frame_skips(
     let mut flags = timestamp_gaps(t, config.gap_factor);
     if let Some(beta) = beta_unwrapped {
         check_series(t, beta, "beta")?;
-        flags.extend(strip_rate_spikes(
+        flags.extend(strip_angle_steps(
             t,
             beta,
-            config.strip_spike_sigmas,
-            config.strip_rate_floor,
+            config.strip_step_sigmas,
+            config.strip_step_floor,
         ));
     }
     let (all_peaks, all_troughs) = peaks::extrema(t, z_rim, halt, model, config, f64::NEG_INFINITY);

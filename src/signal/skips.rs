@@ -1,10 +1,10 @@
 //! Frame skips (thesis §3.3.2: "spikes appear due to frame skips occurring in the
 //! footage"): timestamp gaps, and dropped frames that the timestamps hide but the motion
-//! shows, as a spike in the strip's rate or a step in the rim's phase.
+//! shows, as a step in the strip's angle or in the rim's phase.
 
 use super::local::{LocalInit, PhaseTrack, fit_local};
 use super::peaks::nominal_period;
-use super::{Halt, RimModel, SignalConfig, finite_samples, mad_sigma, median};
+use super::{Halt, RimModel, SignalConfig, finite_samples, mad_sigma};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -22,17 +22,18 @@ pub enum SkipReason {
         /// Frames missing by the gap: round(gap / nominal) − 1.
         missing_frames: usize,
     },
-    /// The strip turned much further since the previous frame than its neighbours do: a
-    /// spike in the raw β̇ (fig. 3.24).
-    StripRateSpike {
-        /// Raw β̇ from the previous frame [rad/s].
-        rate: f64,
-        /// Local level of β̇: the nearer of the medians of the 12 frames before and
-        /// the 12 after [rad/s].
-        local_rate: f64,
-        /// Robust spread of β̇ about its local level over the clip (1.4826 × MAD, at
-        /// least the configured floor) [rad/s].
-        local_sigma: f64,
+    /// The strip's angle from this frame on stands a step away from where the frames
+    /// before it lead (the thesis saw such skips as spikes in β̇, fig. 3.24).
+    StripAngleStep {
+        /// The after-fit minus the before-fit between this frame and the previous
+        /// [rad].
+        step: f64,
+        /// One frame's turn at the local rate, β̇ × nominal period: the step that a
+        /// dropped frame makes [rad].
+        frame_turn: f64,
+        /// Robust spread of the steps over the clip (1.4826 × MAD, at least the
+        /// configured floor) [rad].
+        sigma: f64,
     },
     /// The rim's phase jumps between the previous frame and this one: the local rim fit
     /// improves greatly when the frames from this one on are taken one period later.
@@ -92,71 +93,130 @@ pub fn timestamp_gaps(t: &[f64], gap_factor: f64) -> Vec<FrameFlag> {
         .collect()
 }
 
-/// Neighbouring rates on each side that define the local level of β̇.
-const RATE_NEIGHBOURS: usize = 12;
+/// Frames on each side of a boundary whose angles give where the strip stands there.
+const STEP_NEIGHBOURS: usize = 12;
 
-/// Frames whose raw β̇ from the previous frame, (β_i − β_{i−1}) / (t_i − t_{i−1}) on
-/// the unwrapped β, lies beyond both the median of the 12 rates before it and that of
-/// the 12 after it by more than `sigmas` × the robust spread of such departures over
-/// the clip (1.4826 × MAD, at least `rate_floor` [rad/s]). A rate between the two
-/// medians is a change of rate, not a skip.
-/// A dropped frame whose timestamp was renumbered doubles one step of β.
-pub fn strip_rate_spikes(
+/// Frames after which the strip's angle stands a step away from where the frames
+/// before it lead: a dropped frame whose timestamp was renumbered.
+///
+/// At each boundary between frames k − 1 and k, β (unwrapped) over the 12 frames
+/// before and over the 12 from k on are each fitted with a quadratic in the stamped
+/// time, and the step is the after-fit minus the before-fit halfway between the two
+/// frames. A renumbered dropped frame advances every later angle by one frame's turn,
+/// β̇·Δt, and the step shows it in full. A change of rate leaves the angle continuous:
+/// a Coulomb stop is a quadratic, and a frame the codec left behind and then caught
+/// up (H.264 on the slow strip) gives a step near zero. The thesis looked for spikes in the raw β̇ instead (fig. 3.24),
+/// which such kinks and lags raise too. Flagged: a step beyond `sigmas` × the robust
+/// spread of the steps over the clip (at least `floor` [rad]) and beyond `sigmas` ×
+/// its own standard error from the two fits' residuals (a kink inside a window, which
+/// the quadratics cannot follow, raises the residual and the error with it: a skip
+/// within 12 frames of a sharp kink goes unflagged). Of flags within 6 frames, the
+/// largest step is kept.
+pub fn strip_angle_steps(
     t: &[f64],
     beta_unwrapped: &[f64],
     sigmas: f64,
-    rate_floor: f64,
+    floor: f64,
 ) -> Vec<FrameFlag> {
     let idx = finite_samples(t, beta_unwrapped);
-    // rates[k] is the rate from sample k to sample k + 1 (frame idx[k + 1]).
-    let rates: Vec<f64> = idx
-        .windows(2)
-        .map(|w| (beta_unwrapped[w[1]] - beta_unwrapped[w[0]]) / (t[w[1]] - t[w[0]]))
-        .collect();
-    // Local levels: the medians of the 12 rates before and of the 12 after. A skip is
-    // a one-frame spike beyond both; a change of rate (the strip slowing to a stop
-    // within a few frames) passes between them. The departure is the distance from the
-    // interval between the two levels. The spread is the robust σ of these departures
-    // over the whole clip (the angle noise is the camera's, the same throughout; 24
-    // neighbours alone would estimate it to only ±25 %).
-    let levels: Vec<Option<f64>> = (0..rates.len())
-        .map(|k| {
-            let before = &rates[k.saturating_sub(RATE_NEIGHBOURS)..k];
-            let after =
-                &rates[(k + 1).min(rates.len())..(k + 1 + RATE_NEIGHBOURS).min(rates.len())];
-            if before.len() < RATE_NEIGHBOURS / 2 || after.len() < RATE_NEIGHBOURS / 2 {
-                return None;
-            }
-            let (left, right) = (median(before), median(after));
-            Some(rates[k].clamp(left.min(right), left.max(right)))
-        })
-        .collect();
-    let departures: Vec<f64> = rates
-        .iter()
-        .zip(&levels)
-        .filter_map(|(r, l)| l.map(|l| r - l))
-        .collect();
-    if departures.is_empty() {
+    let frame = nominal_period(t);
+    if frame.is_nan() || frame <= 0.0 {
         return Vec::new();
     }
-    let sigma = mad_sigma(&departures, 0.0).max(rate_floor);
-    let mut flags = Vec::new();
-    for (k, level) in levels.iter().enumerate() {
-        let Some(level) = *level else { continue };
-        if (rates[k] - level).abs() > sigmas * sigma {
-            let i = idx[k + 1];
-            flags.push(FrameFlag {
-                index: i,
-                t: t[i],
-                reason: SkipReason::StripRateSpike {
-                    rate: rates[k],
-                    local_rate: level,
-                    local_sigma: sigma,
-                },
-            });
+    let fit = |range: &[usize], t_mid: f64| {
+        QuadraticFit::new(range.iter().map(|&i| (t[i] - t_mid, beta_unwrapped[i])))
+    };
+    let n = STEP_NEIGHBOURS;
+    if idx.len() < 2 * n {
+        return Vec::new();
+    }
+    // (sample k, step, frame turn, standard error of the step)
+    let boundaries: Vec<(usize, f64, f64, f64)> = (n..=idx.len() - n)
+        .filter_map(|k| {
+            let t_mid = 0.5 * (t[idx[k - 1]] + t[idx[k]]);
+            let before = fit(&idx[k - n..k], t_mid)?;
+            let after = fit(&idx[k..k + n], t_mid)?;
+            let step = after.value - before.value;
+            let frame_turn = 0.5 * (before.slope + after.slope) * frame;
+            Some((k, step, frame_turn, before.value_se.hypot(after.value_se)))
+        })
+        .collect();
+    let steps: Vec<f64> = boundaries.iter().map(|b| b.1).collect();
+    let sigma = mad_sigma(&steps, 0.0).max(floor);
+    let mut candidates: Vec<(usize, f64, f64)> = boundaries
+        .iter()
+        .filter(|b| b.1.abs() > sigmas * sigma.max(b.3))
+        .map(|&(k, step, turn, _)| (k, step, turn))
+        .collect();
+    // The largest steps first; a smaller one within 6 frames of a kept one is the
+    // same skip seen from a window that straddles it.
+    candidates.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+    let mut kept: Vec<(usize, f64, f64)> = Vec::new();
+    for c in candidates {
+        if kept.iter().all(|k| k.0.abs_diff(c.0) > n / 2) {
+            kept.push(c);
         }
     }
-    flags
+    kept.sort_by_key(|c| c.0);
+    kept.into_iter()
+        .map(|(k, step, frame_turn)| {
+            let i = idx[k];
+            FrameFlag {
+                index: i,
+                t: t[i],
+                reason: SkipReason::StripAngleStep {
+                    step,
+                    frame_turn,
+                    sigma,
+                },
+            }
+        })
+        .collect()
+}
+
+/// A least-squares quadratic a + b·τ + c·τ² through points (τ, y): its value a and
+/// slope b at τ = 0, and the standard error of a from the residual.
+struct QuadraticFit {
+    value: f64,
+    slope: f64,
+    value_se: f64,
+}
+
+impl QuadraticFit {
+    fn new(points: impl Iterator<Item = (f64, f64)> + Clone) -> Option<Self> {
+        let mut normal = nalgebra::Matrix3::<f64>::zeros();
+        let mut rhs = nalgebra::Vector3::<f64>::zeros();
+        let mut count = 0usize;
+        // Times in units of the span keep the normal equations well scaled.
+        let scale = points.clone().map(|(x, _)| x.abs()).fold(0.0, f64::max);
+        if scale.is_nan() || scale <= 0.0 {
+            return None;
+        }
+        for (x, y) in points.clone() {
+            let u = x / scale;
+            let basis = nalgebra::Vector3::new(1.0, u, u * u);
+            normal += basis * basis.transpose();
+            rhs += basis * y;
+            count += 1;
+        }
+        if count < 4 {
+            return None;
+        }
+        let cholesky = normal.cholesky()?;
+        let coef = cholesky.solve(&rhs);
+        let ssr: f64 = points
+            .map(|(x, y)| {
+                let u = x / scale;
+                (y - (coef[0] + coef[1] * u + coef[2] * u * u)).powi(2)
+            })
+            .sum();
+        let variance = ssr / (count - 3) as f64;
+        Some(Self {
+            value: coef[0],
+            slope: coef[1] / scale,
+            value_se: (variance * cholesky.inverse()[(0, 0)]).sqrt(),
+        })
+    }
 }
 
 /// Frames after which the rim's phase steps by one frame's worth of precession.

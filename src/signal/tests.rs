@@ -632,7 +632,7 @@ fn check_dropped(seed: u64) {
             .any(|f| f.index == e && matches!(f.reason, SkipReason::RimPhaseStep { .. }));
         let strip = flags
             .iter()
-            .any(|f| f.index == e && matches!(f.reason, SkipReason::StripRateSpike { .. }));
+            .any(|f| f.index == e && matches!(f.reason, SkipReason::StripAngleStep { .. }));
         assert!(
             rim && strip,
             "drop before {e}: rim {rim}, strip {strip}: {flags:?}"
