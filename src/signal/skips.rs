@@ -105,8 +105,9 @@ const STEP_NEIGHBOURS: usize = 12;
 /// frames. A renumbered dropped frame advances every later angle by one frame's turn,
 /// β̇·Δt, and the step shows it in full. A change of rate leaves the angle continuous:
 /// a Coulomb stop is a quadratic, and a frame the codec left behind and then caught
-/// up (H.264 on the slow strip) gives a step near zero. The thesis looked for spikes in the raw β̇ instead (fig. 3.24),
-/// which such kinks and lags raise too. Flagged: a step beyond `sigmas` × the robust
+/// up (H.264 on the slow strip) gives a step near zero. The thesis looked for spikes
+/// in the raw β̇ instead (fig. 3.24), which such lags raise too, as does a sudden
+/// change of β̇ (the renderer's at the halt). Flagged: a step beyond `sigmas` × the robust
 /// spread of the steps over the clip (at least `floor` [rad]) and beyond `sigmas` ×
 /// its own standard error from the two fits' residuals (a kink inside a window, which
 /// the quadratics cannot follow, raises the residual and the error with it: a skip
