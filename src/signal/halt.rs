@@ -1,5 +1,11 @@
-//! The halt time t_φ (thesis §3.2.4, §3.3.2): the last frame whose rim height differs
-//! from its rest level by more than the noise measured after the halt.
+//! The halt time t_φ (thesis §3.2.4, §3.3.2): the last frame whose rim height rises
+//! above its rest level by more than the noise measured after the halt.
+//!
+//! Motion is one-sided: the rim of a rolling disk is never below its rest on the plate
+//! (z_rim = R sin φ (1 + cos χ) ≥ 0, see the module docs of `signal`), so a reading
+//! below the rest level is measurement noise, however large. On H.264 footage of a
+//! still disk, the frames where the encoder refreshes the picture read the edge up to
+//! 0.2 px low (14 σ of the copied frames around them) on the light-plate fixture.
 
 use super::{SignalConfig, SignalError, finite_samples, mad_sigma, median};
 use serde::{Deserialize, Serialize};
@@ -16,7 +22,7 @@ pub struct Halt {
     /// Noise σ of z_rim at rest (robust: a 3σ-clipped RMS started from the MAD), at
     /// least [`SignalConfig::noise_floor`] [m].
     pub noise: f64,
-    /// Motion threshold: a frame moves if |z_rim − rest level| exceeds it [m].
+    /// Motion threshold: a frame moves if z_rim − rest level exceeds it [m].
     pub threshold: f64,
     /// Frames after t_φ with a rim height (the rest tail the noise came from).
     pub rest_frames: usize,
@@ -29,6 +35,19 @@ const MAX_LAG: usize = 24;
 /// Autocorrelation above which a tail oscillates instead of resting: white noise of
 /// 48 samples gives |r| < 0.6 at 4 standard errors (1/√48 ≈ 0.14).
 const OSCILLATION_CORRELATION: f64 = 0.6;
+/// A rise above the threshold is motion only with another within this many frames
+/// before it. A rolling disk's rim rises on a run of frames every turn, and its turns
+/// grow backwards from the halt (3–8 frames each at 480 fps in the last ones); an H.264
+/// refresh of a still picture lifts one frame alone (0.07–0.09 px, 5–6.5 σ of the
+/// copied frames, on light-plate renders with sensor noise).
+const MOTION_PARTNER_FRAMES: usize = 8;
+/// The motion threshold is at least the band of the still disk (thesis fig. 3.22: the
+/// largest |z_rim − rest| over the later half of the rest tail) times this. Gaussian
+/// noise keeps the band near 2.5 σ, below the `motion_sigmas` threshold; H.264 codes
+/// most frames of a still disk as copies (σ of 0.02 px on light-plate renders with
+/// sensor noise) and refreshes a few, which read up to 0.2 px off: the band covers
+/// those.
+const BAND_WIDENING: f64 = 1.5;
 /// Fewest rim heights a rest tail needs to measure its noise.
 pub(crate) const MIN_REST_FRAMES: usize = 8;
 
@@ -39,10 +58,11 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    the rest level; its noise σ is the RMS of the deviations within 3σ, σ started
 ///    from 1.4826 × MAD (floored at `noise_floor`); the motion threshold is
 ///    `motion_sigmas` × σ.
-/// 2. The tail must be at rest: no frame in it beyond the threshold, and no
+/// 2. The tail must be at rest: no motion in it (a rise above the threshold with
+///    another in the [`MOTION_PARTNER_FRAMES`] frames before it), and no
 ///    oscillation (autocorrelation above 0.6 at any lag up to 24 frames, checked
 ///    when the tail's spread exceeds twice `noise_floor`).
-/// 3. t_φ is the last frame beyond the threshold; the noise is then re-measured over
+/// 3. t_φ is the last frame of motion; the noise is then re-measured over
 ///    every frame after t_φ, and t_φ found again with it.
 ///
 /// Errors: [`SignalError::RestTailTooShort`], [`SignalError::TailNotAtRest`],
@@ -66,13 +86,24 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         });
     }
     let (level, noise) = rest_statistics(z_rim, &tail, config.noise_floor);
-    let threshold = config.motion_sigmas * noise;
-    let moving = |i: usize, level: f64, threshold: f64| (z_rim[i] - level).abs() > threshold;
+    // The band of fig. 3.22 over the later half of the tail, widened by half.
+    let later = &tail[tail.len() / 2..];
+    let band = BAND_WIDENING
+        * later
+            .iter()
+            .map(|&i| (z_rim[i] - level).abs())
+            .fold(0.0, f64::max);
+    let threshold = (config.motion_sigmas * noise).max(band);
+    let rises = |i: usize, level: f64, threshold: f64| z_rim[i] - level > threshold;
+    let moving = |i: usize, level: f64, threshold: f64| {
+        rises(i, level, threshold)
+            && (i.saturating_sub(MOTION_PARTNER_FRAMES)..i).any(|j| rises(j, level, threshold))
+    };
     if let Some(&i) = tail.iter().rev().find(|&&i| moving(i, level, threshold)) {
         return Err(SignalError::TailNotAtRest {
             tail_start,
             t_moving: t[i],
-            deviation: (z_rim[i] - level).abs(),
+            deviation: z_rim[i] - level,
             threshold,
         });
     }
@@ -95,7 +126,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     };
     let max_deviation = samples
         .iter()
-        .map(|&i| (z_rim[i] - level).abs())
+        .map(|&i| z_rim[i] - level)
         .fold(0.0, f64::max);
     let Some(first_guess) = last_moving(level, threshold) else {
         return Err(SignalError::NoMotion {
@@ -110,7 +141,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         .filter(|&i| i > first_guess)
         .collect();
     let (level, noise) = rest_statistics(z_rim, &rest, config.noise_floor);
-    let threshold = config.motion_sigmas * noise;
+    let threshold = (config.motion_sigmas * noise).max(band);
     let index = last_moving(level, threshold).unwrap_or(first_guess);
     let t_phi = t[index];
     Ok(Halt {

@@ -107,12 +107,12 @@ const STEP_NEIGHBOURS: usize = 12;
 /// a Coulomb stop is a quadratic, and a frame the codec left behind and then caught
 /// up (H.264 on the slow strip) gives a step near zero. The thesis looked for spikes
 /// in the raw β̇ instead (fig. 3.24), which such lags raise too, as does a sudden
-/// change of β̇ (the renderer's at the halt). Flagged: a step beyond `sigmas` × the robust
-/// spread of the steps over the clip (at least `floor` [rad]) and beyond `sigmas` ×
-/// its own standard error from the two fits' residuals (a kink inside a window, which
-/// the quadratics cannot follow, raises the residual and the error with it: a skip
-/// within 12 frames of a sharp kink goes unflagged). Of flags within 6 frames, the
-/// largest step is kept.
+/// change of β̇. Flagged: a step beyond `sigmas` × the robust spread of the steps over
+/// the clip (at least `floor` [rad]) and beyond `sigmas` × its own standard error from
+/// the two fits' residuals (a jump of β̇ inside a window, which the quadratics cannot
+/// follow, raises the residual and the error with it, and hides a skip within 12
+/// frames of it). A skip is thus seen only where the strip turns by more than
+/// `sigmas` spreads in a frame. Of flags within 6 frames, the largest step is kept.
 pub fn strip_angle_steps(
     t: &[f64],
     beta_unwrapped: &[f64],
@@ -321,10 +321,10 @@ pub(crate) fn rim_phase_steps(
 }
 
 /// Half-width of the phase-step fits in oscillation periods. The statistic grows with
-/// the samples after the step: on the light fixture the drop at frame 171 (8 frames per
-/// period, peaks 3 px over 0.05 px of noise) gives F = 30 with one period on each side
-/// and 83 with 1.5, while frames without a skip stay below F = 0 (the stepped model
-/// fits them worse).
+/// the samples after the step: on a light-plate render the drop at capture 171 (8
+/// frames per period, peaks 3 px over 0.05 px of noise) gave F = 30 with one period on
+/// each side and 83 with 1.5, while frames without a skip stay below F = 0 (the
+/// stepped model fits them worse).
 const WINDOW_PERIODS: f64 = 1.5;
 
 /// Below this many frames per oscillation the local fits of the phase-step test are
