@@ -382,8 +382,6 @@ fn wrap_pi(a: f64) -> f64 {
     if w > PI { w - 2.0 * PI } else { w }
 }
 
-/// The flat disk at `t` ≥ 0 after the halt state `halt`: φ = 0, the strip (and θ)
-/// turning with the post-flat spin.
 impl DiskState {
     /// The disk just fallen flat at the halt (t = 0), with the angles it ended on,
     /// at rest over its rest position.
@@ -403,6 +401,8 @@ impl DiskState {
     }
 }
 
+/// The flat disk at `t` ≥ 0 after the halt state `halt`: φ = 0, the strip (and θ)
+/// turning with the post-flat spin.
 fn flat_state(params: &DiskParams, halt: &DiskState, spin: PostFlatSpin, t: f64) -> DiskState {
     let (dbeta, beta_dot) = spin.at(params, t);
     DiskState {

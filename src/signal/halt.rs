@@ -35,12 +35,6 @@ const MAX_LAG: usize = 24;
 /// Autocorrelation above which a tail oscillates instead of resting: white noise of
 /// 48 samples gives |r| < 0.6 at 4 standard errors (1/√48 ≈ 0.14).
 const OSCILLATION_CORRELATION: f64 = 0.6;
-/// A rise above the threshold is motion only with another within this many frames
-/// before it. A rolling disk's rim rises on a run of frames every turn, and its turns
-/// grow backwards from the halt (3–8 frames each at 480 fps in the last ones); an H.264
-/// refresh of a still picture lifts one frame alone (0.07–0.09 px, 5–6.5 σ of the
-/// copied frames, on light-plate renders with sensor noise).
-const MOTION_PARTNER_FRAMES: usize = 8;
 /// The motion threshold is at least the band of the still disk (thesis fig. 3.22: the
 /// largest |z_rim − rest| over the later half of the rest tail) times this. Gaussian
 /// noise keeps the band near 2.5 σ, below the `motion_sigmas` threshold; H.264 codes
@@ -57,9 +51,9 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 /// 1. The rest tail is the last [`SignalConfig::rest_tail_s`] seconds. Its median is
 ///    the rest level; its noise σ is the RMS of the deviations within 3σ, σ started
 ///    from 1.4826 × MAD (floored at `noise_floor`); the motion threshold is
-///    `motion_sigmas` × σ.
-/// 2. The tail must be at rest: no motion in it (a rise above the threshold with
-///    another in the [`MOTION_PARTNER_FRAMES`] frames before it), and no
+///    `motion_sigmas` × σ, and at least [`BAND_WIDENING`] × the band of the still
+///    disk.
+/// 2. The tail must be at rest: no rise in it above the threshold, and no
 ///    oscillation (autocorrelation above 0.6 at any lag up to 24 frames, checked
 ///    when the tail's spread exceeds twice `noise_floor`).
 /// 3. t_φ is the last frame of motion; the noise is then re-measured over
@@ -94,11 +88,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             .map(|&i| (z_rim[i] - level).abs())
             .fold(0.0, f64::max);
     let threshold = (config.motion_sigmas * noise).max(band);
-    let rises = |i: usize, level: f64, threshold: f64| z_rim[i] - level > threshold;
-    let moving = |i: usize, level: f64, threshold: f64| {
-        rises(i, level, threshold)
-            && (i.saturating_sub(MOTION_PARTNER_FRAMES)..i).any(|j| rises(j, level, threshold))
-    };
+    let moving = |i: usize, level: f64, threshold: f64| z_rim[i] - level > threshold;
     if let Some(&i) = tail.iter().rev().find(|&&i| moving(i, level, threshold)) {
         return Err(SignalError::TailNotAtRest {
             tail_start,

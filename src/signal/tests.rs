@@ -119,6 +119,34 @@ fn halt_is_found_within_a_frame() {
     assert!((halt.shifted_t[0] - (t[0] - halt.t_phi)).abs() < 1e-12);
 }
 
+/// H.264 on a still disk: most frames are copies and a few refreshes read the edge
+/// far off (light-plate renders: 14 σ low, 6.5 σ high, 0.2 px). Readings below the
+/// rest are not motion, and the still disk's band keeps the high ones below the
+/// threshold: the halt is still found within a frame of the truth.
+#[test]
+fn codec_refreshes_in_the_rest_tail_are_not_motion() {
+    let (t, mut z, truth) = clip(NOISE, 1);
+    let n = z.len();
+    for (back, sigmas) in [(60, -14.0), (40, -10.0), (30, 6.5), (10, 6.5)] {
+        z[n - back] += sigmas * NOISE;
+    }
+    let halt = halt_time(&t, &z, &SignalConfig::default()).expect("halt");
+    assert!(
+        (halt.t_phi - (truth.t0 - 0.5 * FRAME)).abs() <= FRAME + 1e-12,
+        "t_φ = {}, t0 = {}",
+        halt.t_phi,
+        truth.t0
+    );
+    // The same rise in the first half of the tail, where the band is not measured,
+    // with nothing as high in the later half: motion, so the tail is refused.
+    let (_, mut z, _) = clip(NOISE, 1);
+    z[n - 40] += 6.5 * NOISE;
+    assert!(matches!(
+        halt_time(&t, &z, &SignalConfig::default()),
+        Err(SignalError::TailNotAtRest { .. })
+    ));
+}
+
 /// How far a peak time may be from the truth: a tenth of a frame by the local fit
 /// (observed < 0.05) while ψ̇ changes slowly; half a frame by the parabola (the last,
 /// tiny peak, 5 frames a turn), or in the last 0.03 s, where ψ̇ ∝ τ^{−1/4} changes by
