@@ -35,6 +35,11 @@ const MAX_LAG: usize = 24;
 /// Autocorrelation above which a tail oscillates instead of resting: white noise of
 /// 48 samples gives |r| < 0.6 at 4 standard errors (1/√48 ≈ 0.14).
 const OSCILLATION_CORRELATION: f64 = 0.6;
+/// The autocorrelation at half a period of an oscillation whose full-period
+/// correlation exceeds [`OSCILLATION_CORRELATION`] is below −0.6 (a sinusoid in white
+/// noise has r(T/2) = −r(T)); a correlated still tail of 48 samples stays above
+/// −0.45 (3 standard errors).
+const OSCILLATION_TROUGH: f64 = -0.45;
 /// The motion threshold is at least the band of the still disk (thesis fig. 3.22: the
 /// largest |z_rim − rest| over the later half of the rest tail) times this. Gaussian
 /// noise keeps the band near 2.5 σ, below the `motion_sigmas` threshold; H.264 codes
@@ -54,7 +59,8 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    `motion_sigmas` × σ, and at least [`BAND_WIDENING`] × the band of the still
 ///    disk.
 /// 2. The tail must be at rest: no rise in it above the threshold, and no
-///    oscillation (autocorrelation above 0.6 at any lag up to 24 frames, checked
+///    oscillation (autocorrelation below −0.45 at some lag and above 0.6 at a
+///    later one, up to 24 frames, checked
 ///    when the tail's spread exceeds twice `noise_floor`).
 /// 3. t_φ is the last frame of motion; the noise is then re-measured over
 ///    every frame after t_φ, and t_φ found again with it.
@@ -168,8 +174,16 @@ fn rest_statistics(z: &[f64], indices: &[usize], floor: f64) -> (f64, f64) {
     (level, sigma.max(floor))
 }
 
-/// The lag and value of the largest autocorrelation of the tail deviations, if it
-/// shows an oscillation.
+/// The lag and value of the autocorrelation peak of the tail deviations, if they
+/// oscillate.
+///
+/// A rocking disk is periodic: its rim's autocorrelation falls below zero at half a
+/// period and comes back above [`OSCILLATION_CORRELATION`] at a full period. A still
+/// disk on H.264 footage is not: the encoder copies a frame's picture to the next
+/// ones, so the readings are correlated over a few frames (lag-one correlation about
+/// 0.7 on the independent footage set), but that correlation decays without a
+/// trough. An oscillation therefore needs a correlation above the threshold at some
+/// lag *after* one below [`OSCILLATION_TROUGH`].
 fn oscillation(z: &[f64], tail: &[usize], level: f64) -> Option<(usize, f64)> {
     let dev: Vec<f64> = tail.iter().map(|&i| z[i] - level).collect();
     let mean = dev.iter().sum::<f64>() / dev.len() as f64;
@@ -177,13 +191,20 @@ fn oscillation(z: &[f64], tail: &[usize], level: f64) -> Option<(usize, f64)> {
     if var <= 0.0 {
         return None;
     }
-    (1..=MAX_LAG.min(dev.len() / 3))
-        .map(|lag| {
-            let c: f64 = (lag..dev.len())
-                .map(|i| (dev[i] - mean) * (dev[i - lag] - mean))
-                .sum();
-            (lag, c / var)
-        })
-        .filter(|&(_, r)| r > OSCILLATION_CORRELATION)
-        .max_by(|a, b| a.1.total_cmp(&b.1))
+    let correlation = |lag: usize| {
+        (lag..dev.len())
+            .map(|i| (dev[i] - mean) * (dev[i - lag] - mean))
+            .sum::<f64>()
+            / var
+    };
+    let mut trough = false;
+    let mut best: Option<(usize, f64)> = None;
+    for lag in 1..=MAX_LAG.min(dev.len() / 3) {
+        let r = correlation(lag);
+        trough |= r < OSCILLATION_TROUGH;
+        if trough && r > OSCILLATION_CORRELATION && best.is_none_or(|(_, b)| r > b) {
+            best = Some((lag, r));
+        }
+    }
+    best
 }
