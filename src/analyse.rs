@@ -725,7 +725,11 @@ pub fn config_for(
         if !extra.is_file() {
             return Err(crate::config::ConfigError::Unreadable {
                 path: extra.to_path_buf(),
-                reason: "no such file".into(),
+                reason: if extra.is_dir() {
+                    "a folder, not a config file (-c takes a TOML file)".into()
+                } else {
+                    "no such file".into()
+                },
             });
         }
         layers.push(extra.to_path_buf());

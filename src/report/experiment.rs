@@ -12,7 +12,7 @@
 //! | `series.svg/.png`, `states.svg/.png`, `energy.svg` | plots |
 //! | `calibration.png`, `threshold.png` | diagnostic images (figs. 3.3, 3.7) |
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use maud::html;
 use plotters::prelude::*;
@@ -77,6 +77,17 @@ fn plot_error(e: impl std::fmt::Display) -> ReportError {
 /// Write every output of an experiment into `dir` (created if missing).
 ///
 /// # Errors
+/// The clip whose analysis `dir` holds (from its `plan.json`), when that is a
+/// different clip from `clip` (compared by real path): one output folder must not
+/// silently change from one clip's results to another's.
+pub fn other_clip_in(dir: &Path, clip: &Path) -> Option<PathBuf> {
+    let bytes = std::fs::read(dir.join("plan.json")).ok()?;
+    let plan: serde_json::Value = serde_json::from_slice(&bytes).ok()?;
+    let previous = PathBuf::from(plan.get("clip")?.as_str()?);
+    let real = |p: &Path| p.canonicalize().unwrap_or_else(|_| p.to_path_buf());
+    (real(&previous) != real(clip)).then_some(previous)
+}
+
 /// A file cannot be written or a plot cannot be drawn.
 pub fn write_experiment(dir: &Path, experiment: &Experiment) -> Result<(), ReportError> {
     let e = experiment;
