@@ -348,6 +348,25 @@ pub fn analyse_clip(
     // a baseline six times longer than the thesis's 2H / (z_base − z_t) (eq. 3.10),
     // which is also computed and compared.
     let cal = calibration.calibration;
+    // The rim height is read on the centre line; a band wider than a tenth of the
+    // radius either side reads it where the rim is lower by more than 0.5 %
+    // (√(1 − 0.1²) = 0.995).
+    let widest_band = 0.05 * (cal.x_r - cal.x_l);
+    if vision_config.band_half_width_px.is_some()
+        && side_config.half_width_px as f64 > widest_band.max(1.0)
+    {
+        return Err(AnalyseError::Clip {
+            path: clip.to_path_buf(),
+            reason: format!(
+                "vision.band_half_width_px = {} px is more than a tenth of the disk's radius \
+                 either side of the centre line (the disk is {:.0} px wide, so at most {:.0} px): \
+                 the rim would be read where it is lower than on the centre line",
+                side_config.half_width_px,
+                cal.x_r - cal.x_l,
+                widest_band.max(1.0).floor()
+            ),
+        });
+    }
     let metres_per_px = 2.0 * params.radius / (cal.x_r - cal.x_l);
     let thickness_scale = cal.metres_per_px(params.half_thickness);
     if (thickness_scale / metres_per_px - 1.0).abs() > 0.05 {

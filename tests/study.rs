@@ -50,6 +50,18 @@ fn footage_tree(root: &Path) {
     }
 }
 
+/// Exit status 2: the study (or merge) finished, but clips failed or the
+/// previous report was kept.
+fn clips_failed(out: &std::process::Output) {
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "stdout: {}\nstderr: {}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn study_json(dir: &Path) -> Value {
     serde_json::from_slice(&std::fs::read(dir.join("study.json")).unwrap()).unwrap()
 }
@@ -64,7 +76,7 @@ fn study_survives_bad_clips_resumes_and_merges_shards() {
     footage_tree(&root);
 
     let out = eulerdisk(dir.path(), &["study", "footage", "-o", "full"]);
-    ok(&out);
+    clips_failed(&out);
     let full = study_json(&dir.path().join("full"));
     let experiments = full["experiments"].as_array().unwrap();
     let failures = full["failures"].as_array().unwrap();
@@ -91,13 +103,13 @@ fn study_survives_bad_clips_resumes_and_merges_shards() {
     assert!(page.contains("no disk in view"));
     assert!(
         dir.path()
-            .join("full/experiments/euler/oak/run1/index.html")
+            .join("full/experiments/euler/oak/run1.mp4/index.html")
             .is_file()
     );
 
     // Resume: every good clip is reused, the failed ones are tried again.
     let out = eulerdisk(dir.path(), &["study", "footage", "-o", "full", "--resume"]);
-    ok(&out);
+    clips_failed(&out);
     let log = String::from_utf8_lossy(&out.stderr);
     assert_eq!(log.matches("reused").count(), 4, "{log}");
     assert_eq!(log.matches("FAILED").count(), 3, "{log}");
@@ -105,12 +117,12 @@ fn study_survives_bad_clips_resumes_and_merges_shards() {
     // Shards 1/2 and 2/2, merged, equal the single run.
     for k in ["1/2", "2/2"] {
         let name = format!("shard-{}", &k[..1]);
-        ok(&eulerdisk(
+        clips_failed(&eulerdisk(
             dir.path(),
             &["study", "footage", "-o", &name, "--shard", k],
         ));
     }
-    ok(&eulerdisk(
+    clips_failed(&eulerdisk(
         dir.path(),
         &["merge", "shard-1", "shard-2", "-o", "merged"],
     ));
@@ -120,6 +132,35 @@ fn study_survives_bad_clips_resumes_and_merges_shards() {
     assert_eq!(
         merged_page, page,
         "the merged report is the single run's report"
+    );
+
+    // Issue 13.2: merging 1 of 2 shards said "merged 1 shards" and exited 0.
+    let out = eulerdisk(dir.path(), &["merge", "shard-1", "-o", "half"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("shard 2/2 missing"), "{stderr}");
+    assert!(!dir.path().join("half/study.json").exists());
+
+    // Issue 13.2: a typo in the root eulerdisk.toml made every clip fail, replaced
+    // the complete report and exited 0. The report is kept, the run says so and
+    // why (the file, the key and its line), and exits 2.
+    let before = std::fs::read(dir.path().join("full/study.json")).unwrap();
+    std::fs::write(root.join("eulerdisk.toml"), "fps = 480\nfsp = 480\n").unwrap();
+    let out = eulerdisk(dir.path(), &["study", "footage", "-o", "full", "--resume"]);
+    clips_failed(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("kept the previous report"), "{stderr}");
+    assert!(
+        stderr.contains("eulerdisk.toml") && stderr.contains("fsp") && stderr.contains("line 2"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read(dir.path().join("full/study.json")).unwrap(),
+        before
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("full/index.html")).unwrap(),
+        page
     );
 }
 
@@ -166,11 +207,11 @@ fn study_page_loads_in_headless_chromium_without_errors() {
     ));
     let root = dir.path().join("footage");
     footage_tree(&root);
-    ok(&eulerdisk(dir.path(), &["study", "footage", "-o", "full"]));
+    clips_failed(&eulerdisk(dir.path(), &["study", "footage", "-o", "full"]));
     for page in [
         "pub/index.html",
         "full/index.html",
-        "full/experiments/euler/oak/run1/index.html",
+        "full/experiments/euler/oak/run1.mp4/index.html",
     ] {
         let url = format!("file://{}", dir.path().join(page).display());
         let out = Command::new(chromium)
