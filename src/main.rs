@@ -371,6 +371,7 @@ fn run_analyse(
         .file_name()
         .map_or_else(|| "clip".into(), |s| s.to_string_lossy().into_owned());
     let out = out.unwrap_or_else(|| Path::new("out").join(&name));
+    eulerdisk::report::check_folder(&out)?;
     if !force && let Some(other) = eulerdisk::report::experiment::other_clip_in(&out, clip) {
         bail!(
             "{} holds the analysis of {}; refusing to replace it with {} \
@@ -431,6 +432,7 @@ fn run_study(args: &StudyArgs) -> Result<Status> {
     let Some(root) = &args.root else {
         bail!("give a footage folder, or --published");
     };
+    eulerdisk::report::check_folder(&args.out)?;
     let clips = study::discover(root, &args.out)?;
     let out = OutputLock::acquire(&args.out)?;
     let analyser = analyse::StudyAnalyser { root: root.clone() };

@@ -80,17 +80,27 @@ fn parent_of(path: &Path) -> &Path {
     }
 }
 
+/// Checks that `dir` can be an output folder: neither it nor a folder above it is
+/// a file (checked before work starts, so the user hears it at once).
+///
+/// # Errors
+/// `NotAFolder` naming the file in the way.
+pub fn check_folder(dir: &Path) -> Result<(), ReportError> {
+    match dir.ancestors().find(|a| a.is_file()) {
+        Some(file) => Err(ReportError::NotAFolder {
+            path: file.to_path_buf(),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// Creates `dir` and its parents; a file in the way is named as such (not "File
 /// exists").
 ///
 /// # Errors
 /// `NotAFolder` when `dir` or one of its ancestors is a file; `Io` otherwise.
 pub fn create_folder(dir: &Path) -> Result<(), ReportError> {
-    if let Some(file) = dir.ancestors().find(|a| a.is_file()) {
-        return Err(ReportError::NotAFolder {
-            path: file.to_path_buf(),
-        });
-    }
+    check_folder(dir)?;
     std::fs::create_dir_all(dir).map_err(io_error(dir))
 }
 
@@ -202,12 +212,7 @@ pub fn write_folder<T, E: From<ReportError>>(
     dest: &Path,
     fill: impl FnOnce(&Path) -> Result<T, E>,
 ) -> Result<T, E> {
-    if dest.is_file() {
-        return Err(ReportError::NotAFolder {
-            path: dest.to_path_buf(),
-        }
-        .into());
-    }
+    check_folder(dest)?;
     let _lock = OutputLock::acquire(dest)?;
     let parent = parent_of(dest);
     let staging_prefix = sibling(dest, "staging-");
