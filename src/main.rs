@@ -10,7 +10,7 @@ use clap::{Args, Parser, Subcommand};
 use eulerdisk::compare::CompareOptions;
 use eulerdisk::model::dissipation::{Dissipation, ModelKind};
 use eulerdisk::model::params::Preset;
-use eulerdisk::model::simulate::{InitialState, SimulationSpec, simulate};
+use eulerdisk::model::simulate::{InitialState, MAX_SAMPLES, SimulationSpec, simulate};
 use eulerdisk::model::tuning::tune_eta;
 use eulerdisk::render::{
     Effects, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Timing, power_law_motion,
@@ -544,6 +544,15 @@ fn run_simulate(args: &SimulateArgs) -> Result<()> {
         (None, Some(target)) => {
             if args.model == ModelKind::None {
                 bail!("--stop-at needs a dissipation model other than `none`");
+            }
+            // Tuning simulates to twice the target, sampled every --dt.
+            let longest = MAX_SAMPLES as f64 * args.dt / 2.0;
+            if !(target > 0.0 && target <= longest) {
+                bail!(
+                    "--stop-at {target} s: give a time between 0 and {longest} s \
+                     (at most {MAX_SAMPLES} samples of --dt {} s to twice the target)",
+                    args.dt
+                );
             }
             let tuned = tune_eta(&spec, target, 1e-4, 1e-6)
                 .with_context(|| format!("cannot tune η to stop at {target} s"))?;

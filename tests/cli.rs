@@ -214,3 +214,43 @@ fn a_read_only_output_folder_is_an_error_naming_it() {
         "{err}"
     );
 }
+
+/// Issue 13.4: `simulate --model none --t-end 1e9` grew without limit (481 MB after
+/// 36 s), `--psi-dot 1e9` and `--stop-at 1e9` ran past 120 s, and `render --size
+/// 100000x100000` aborted with an allocation failure. Each now stops with an error
+/// that names the bound: the first after MAX_SAMPLES output samples (100 s of motion
+/// at the default 0.1 ms), the others before any work.
+#[test]
+fn simulate_and_render_bound_their_work() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, words) in [
+        (
+            &["simulate", "--model", "none", "--t-end", "1e9"][..],
+            "t = 100.0",
+        ),
+        (
+            &["simulate", "--model", "none", "--psi-dot", "1e9"][..],
+            "speed of sound",
+        ),
+        (
+            &["simulate", "--model", "contour", "--stop-at", "1e9"][..],
+            "between 0 and 50 s",
+        ),
+        (
+            &["render", "--size", "100000x100000", "-o", "big.mp4"][..],
+            "exceed the limit",
+        ),
+        (
+            &["render", "--halt", "1e9", "-o", "long.mp4"][..],
+            "at most 100000 frames",
+        ),
+    ] {
+        let out = eulerdisk(dir.path(), args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let err = stderr(&out);
+        assert!(
+            err.contains(words) && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+    }
+}

@@ -42,6 +42,15 @@ const INITIAL_SLIP_STEP: f64 = 1e-6;
 const MAX_STEPS: usize = 50_000_000;
 /// Guard against endless chattering between modes.
 const MAX_SWITCHES: usize = 200_000;
+/// Most output samples a run keeps (about 250 MB with their SI copies): memory is
+/// bounded whatever t_end, and a run that needs more stops with
+/// [`SimulationError::TooManySamples`].
+pub const MAX_SAMPLES: usize = 1_000_000;
+/// Fastest rim speed R·max(|ψ̇|, |θ̇|, |φ̇|) accepted at the start [m/s]: the speed
+/// of sound in air. The rigid rolling disk of Chapter 4 (and its air film) has long
+/// stopped describing anything real there, and the integrator's steps would shrink
+/// without end.
+pub const MAX_RIM_SPEED_M_S: f64 = 343.0;
 
 /// Initial conditions in SI, ordered as eq. (4.43): angles in rad, rates in rad/s,
 /// slip position in m and slip velocity in m/s (intermediate frame).
@@ -278,6 +287,15 @@ pub enum SimulationError {
         /// Time [s].
         t: f64,
     },
+    /// The run would keep more output samples than [`MAX_SAMPLES`].
+    #[error(
+        "stopped at t = {t:.6} s: {MAX_SAMPLES} output samples reached before the motion \
+         ended (a memory bound); lower t_end (--t-end) or raise the output interval (--dt)"
+    )]
+    TooManySamples {
+        /// Time reached [s].
+        t: f64,
+    },
 }
 
 /// One mode's vector field, for the integrator.
@@ -358,6 +376,10 @@ struct PhaseOutput {
     last: (f64, StateVector),
     /// Set when the integration stopped, without an event, to change integrator.
     handover: bool,
+    /// Samples this phase may still record before [`MAX_SAMPLES`] is reached.
+    room: usize,
+    /// Set when the phase stopped because `room` ran out.
+    full: bool,
 }
 
 /// Records the uniform output samples inside one accepted step [t_prev, t_curr] and
@@ -397,6 +419,10 @@ fn record_step(
 
     let t_stop = earliest.map_or(t_curr, |(_, t)| t);
     while out.next_output <= t_stop {
+        if out.states.len() >= out.room {
+            out.full = true;
+            return true;
+        }
         let t = out.next_output;
         out.states.push((t, state_at(t)));
         out.next_output += out.output_step;
@@ -674,6 +700,16 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
             spec.initial.phi
         )));
     }
+    let i = &spec.initial;
+    let fastest = i.psi_dot.abs().max(i.theta_dot.abs()).max(i.phi_dot.abs());
+    if !(fastest * p.radius <= MAX_RIM_SPEED_M_S) {
+        return Err(SimulationError::BadInput(format!(
+            "an initial rate of {fastest} rad/s moves the rim at {:.3e} m/s, beyond \
+             {MAX_RIM_SPEED_M_S} m/s (the speed of sound in air): give rates below {:.0} rad/s",
+            fastest * p.radius,
+            MAX_RIM_SPEED_M_S / p.radius
+        )));
+    }
 
     let units = Units::of(p);
     let mut y = units.to_scaled(&spec.initial);
@@ -725,6 +761,8 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
             hit: None,
             last: (tau, y),
             handover: false,
+            room: MAX_SAMPLES.saturating_sub(scaled_samples.len()),
+            full: false,
         };
         let slip_speed = y[X_DOT].hypot(y[Y_DOT]);
         if mode == Mode::Slipping && stiff {
@@ -766,6 +804,11 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
         }
         next_output = out.next_output;
         scaled_samples.extend(out.states.iter().map(|&(t, s)| (t, s, mode)));
+        if out.full || scaled_samples.len() >= MAX_SAMPLES {
+            return Err(SimulationError::TooManySamples {
+                t: out.last.0 * units.time,
+            });
+        }
 
         if out.hit.is_none() && out.handover {
             // Same phase, other integrator.

@@ -308,6 +308,10 @@ pub fn peak_z_rim(params: &DiskParams, phi: f64, elevation: f64) -> f64 {
     2.0 * r * phi.sin() + (r * (1.0 - phi.cos()) - h * phi.sin()) * elevation.tan()
 }
 
+/// Largest frame rendered [px] (3840 × 2160, 4K UHD): a frame and its background
+/// are held in memory as floats, 16 frames at a time.
+pub const MAX_FRAME_PIXELS: u64 = 3840 * 2160;
+
 /// Renders the frames of one clip on demand and holds its ground truth.
 pub struct Renderer {
     spec: RenderSpec,
@@ -753,6 +757,13 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
     if spec.width < 16 || spec.height < 16 {
         return fail(format!(
             "frames must be at least 16 × 16 px, got {} × {}",
+            spec.width, spec.height
+        ));
+    }
+    if u64::from(spec.width) * u64::from(spec.height) > MAX_FRAME_PIXELS {
+        return fail(format!(
+            "frames of {} × {} px exceed the limit of {MAX_FRAME_PIXELS} px (3840 × 2160, \
+             4K UHD): each is rendered in memory, 16 at a time",
             spec.width, spec.height
         ));
     }
