@@ -530,9 +530,24 @@ pub fn analyse_clip(
     let model = ThesisRim {
         radius: params.radius,
     };
-    let signal_err = |error| AnalyseError::Signal {
-        path: clip.to_path_buf(),
-        error,
+    // A slow-motion clip stored at a playback rate (24–60 fps, below 100) with no
+    // `fps` in the config is timed 8× too slow: its rest tail, motion and peaks all
+    // look wrong, and the frame rate is the probable cause, so it is named first.
+    let stored_rate =
+        (fps.source == footage::FpsSource::ContainerFps && fps.fps < 100.0).then_some(fps.fps);
+    let signal_err = |error| match stored_rate {
+        Some(rate) => AnalyseError::Clip {
+            path: clip.to_path_buf(),
+            reason: format!(
+                "probably the frame rate: the clip is stored at {rate:.2} fps and no `fps` is \
+                 configured; if it was filmed in slow motion, set `fps` (e.g. fps = 480) in \
+                 eulerdisk.toml or the clip's own .toml. The analysis said: {error}"
+            ),
+        },
+        None => AnalyseError::Signal {
+            path: clip.to_path_buf(),
+            error,
+        },
     };
     let series =
         signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;

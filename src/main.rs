@@ -396,8 +396,12 @@ fn run_analyse(
     for warning in &experiment.warnings {
         eprintln!("warning: {warning}");
     }
+    let flagged = match experiment.skips_in_window {
+        0 => String::new(),
+        k => format!("; WARNING: {k} flagged frame(s) (dropped frames?) in the window"),
+    };
     println!(
-        "{}: n = {:.3} (95 % CI {:.3} … {:.3}), {} peaks in the last {} s; fps {} ({:?})",
+        "{}: n = {:.3} (95 % CI {:.3} … {:.3}), {} peaks in the last {} s; fps {} ({:?}){flagged}",
         clip.display(),
         fit.n,
         fit.ci95_n.0,
@@ -449,6 +453,12 @@ fn run_study(args: &StudyArgs) -> Result<Status> {
         StudyEvent::Finished { clip, outcome } => {
             let k = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
             let line = match outcome {
+                Outcome::Analysed(s) if !s.warnings.is_empty() => format!(
+                    "{clip}: n = {:.3} ({} warning(s): {})",
+                    s.n,
+                    s.warnings.len(),
+                    s.warnings.join("; ")
+                ),
                 Outcome::Analysed(s) => format!("{clip}: n = {:.3}", s.n),
                 Outcome::Reused(s) => format!("{clip}: n = {:.3} (unchanged, reused)", s.n),
                 Outcome::Failed(reason) => format!("{clip}: FAILED: {reason}"),

@@ -39,7 +39,7 @@ pub enum VisionError {
     /// A calibration point could not be located on the rest frame.
     #[error(
         "frame {frame}: calibration point {point} not found on the rest frame; \
-         give it in the calibration override"
+         give all four points in the config's [calibration] table (x_l, x_r, z_t, z_base [px])"
     )]
     CalibrationPointNotFound { frame: usize, point: &'static str },
 
