@@ -220,7 +220,7 @@ pub fn load_experiment(dir: &Path) -> Result<Experiment, CompareError> {
                 peak.t, peak.phi
             )));
         }
-        if !(peak.t <= 1.0 / fps) {
+        if peak.t.is_nan() || peak.t > 1.0 / fps {
             return Err(impossible(format!(
                 "a peak at t = {} s, after the halt (t = 0): peaks are motion before it",
                 peak.t

@@ -613,7 +613,7 @@ fn lost_from_previous(path: &Path, results: &StudyResults) -> Option<KeptReport>
         .filter(|e| !now.contains(e.clip.as_str()))
         .map(|e| e.clip.clone())
         .collect();
-    (!lost.is_empty()).then(|| KeptReport {
+    (!lost.is_empty()).then_some(KeptReport {
         analysed: previous.experiments.len(),
         lost,
     })

@@ -94,3 +94,131 @@ fn a_clip_stored_at_playback_rate_is_blamed_on_its_frame_rate() {
         "{err}"
     );
 }
+
+/// Issue 13, property: random bytes and random TOML never panic. Configs built from
+/// the real keys with values of random type and size, and raw random text, parse
+/// to a config or an error naming the file; random bytes as a video, as a frame
+/// folder's PNG, as a shard's study.json and as a compare experiment give errors.
+#[test]
+fn random_bytes_and_random_toml_never_panic() {
+    use eulerdisk::analyse::analyse_clip;
+    use eulerdisk::config::ExperimentConfig;
+    use eulerdisk::rng::SplitMix64;
+    use std::path::Path;
+
+    let mut rng = SplitMix64::new(13);
+    let keys = [
+        "fps",
+        "plate",
+        "two_view",
+        "material",
+        "disk.preset",
+        "disk.radius_m",
+        "disk.mass_kg",
+        "vision.gamma",
+        "vision.band_half_width_px",
+        "vision.split_row",
+        "vision.roi",
+        "calibration.x_l",
+        "calibration.x_r",
+        "calibration.z_t",
+        "calibration.z_base",
+        "fit.window_s",
+        "fit.halt",
+    ];
+    let values = [
+        "0",
+        "-1",
+        "1e308",
+        "-1e308",
+        "nan",
+        "inf",
+        "-inf",
+        "4294967295",
+        "4294967296",
+        "18446744073709551615",
+        "0.5",
+        "480",
+        "true",
+        "\"dark\"",
+        "\"free\"",
+        "\"\"",
+        "[]",
+        "[0, 0, 4294967295, 4294967295]",
+        "[4294967295, 4294967295, 1, 1]",
+        "[1, 2, 3]",
+        "{}",
+        "1979-05-27",
+        "'''x'''",
+    ];
+    let pick = |rng: &mut SplitMix64, n: usize| (rng.next_u64() % n as u64) as usize;
+    for _ in 0..2000 {
+        let mut text = String::new();
+        for _ in 0..1 + pick(&mut rng, 6) {
+            let key = keys[pick(&mut rng, keys.len())];
+            let value = values[pick(&mut rng, values.len())];
+            match key.split_once('.') {
+                Some((table, leaf)) => text.push_str(&format!("[{table}]\n{leaf} = {value}\n")),
+                None => text.push_str(&format!("{key} = {value}\n")),
+            }
+        }
+        if let Err(e) = ExperimentConfig::parse(&text, Path::new("r.toml")) {
+            assert!(e.to_string().contains("r.toml"), "{text}: {e}");
+        }
+        let bytes: Vec<u8> = (0..pick(&mut rng, 200))
+            .map(|_| rng.next_u64() as u8)
+            .collect();
+        let raw = String::from_utf8_lossy(&bytes);
+        if let Err(e) = ExperimentConfig::parse(&raw, Path::new("r.toml")) {
+            assert!(e.to_string().contains("r.toml"), "{e}");
+        }
+    }
+
+    let dir = tempfile::tempdir().unwrap();
+    let config: ExperimentConfig =
+        ExperimentConfig::parse("fps = 480\n", Path::new("c.toml")).unwrap();
+    let quiet = |_: usize, _: Option<usize>| {};
+    for i in 0..20 {
+        let len = 1 + pick(&mut rng, 5000);
+        let bytes: Vec<u8> = (0..len).map(|_| rng.next_u64() as u8).collect();
+        let video = dir.path().join(format!("r{i}.mp4"));
+        std::fs::write(&video, &bytes).unwrap();
+        let err = analyse_clip(&video, &config, &quiet)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(&format!("r{i}.mp4")), "{err}");
+        let frames = dir.path().join(format!("frames{i}"));
+        std::fs::create_dir(&frames).unwrap();
+        std::fs::write(frames.join("f1.png"), &bytes).unwrap();
+        std::fs::write(frames.join("f2.png"), &bytes).unwrap();
+        assert!(analyse_clip(&frames, &config, &quiet).is_err());
+        let shard = dir.path().join(format!("shard{i}"));
+        std::fs::create_dir(&shard).unwrap();
+        std::fs::write(shard.join("study.json"), &bytes).unwrap();
+        assert!(eulerdisk::study::merge(std::slice::from_ref(&shard)).is_err());
+        std::fs::write(shard.join("result.json"), &bytes).unwrap();
+        assert!(eulerdisk::compare::load_experiment(&shard).is_err());
+    }
+}
+
+/// Issue 13.5: `band_half_width_px = 100000` changed n from 0.431 to 0.395 without
+/// a word. Checked against the disk's width as calibrated (the dark fixture's disk
+/// is about 430 px wide: at most 21 px either side), it is refused with the unit.
+#[test]
+fn a_band_wider_than_the_disk_allows_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(fixture("side-dark-n050.mp4"), dir.path().join("clip.mp4")).unwrap();
+    std::fs::write(
+        dir.path().join("clip.toml"),
+        "fps = 480\n[vision]\nband_half_width_px = 100000\n",
+    )
+    .unwrap();
+    let out = eulerdisk(dir.path(), &["analyse", "clip.mp4"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("clip.mp4") && err.contains("band_half_width_px = 100000 px"),
+        "{err}"
+    );
+    assert!(!dir.path().join("out/clip.mp4").exists(), "nothing written");
+}

@@ -702,7 +702,8 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
     }
     let i = &spec.initial;
     let fastest = i.psi_dot.abs().max(i.theta_dot.abs()).max(i.phi_dot.abs());
-    if !(fastest * p.radius <= MAX_RIM_SPEED_M_S) {
+    let finite = [i.psi_dot, i.theta_dot, i.phi_dot].iter().all(|v| v.is_finite());
+    if !finite || fastest * p.radius > MAX_RIM_SPEED_M_S {
         return Err(SimulationError::BadInput(format!(
             "an initial rate of {fastest} rad/s moves the rim at {:.3e} m/s, beyond \
              {MAX_RIM_SPEED_M_S} m/s (the speed of sound in air): give rates below {:.0} rad/s",
