@@ -219,14 +219,21 @@ fn a_read_only_output_folder_is_an_error_naming_it() {
 /// 36 s), `--psi-dot 1e9` and `--stop-at 1e9` ran past 120 s, and `render --size
 /// 100000x100000` aborted with an allocation failure. Each now stops with an error
 /// that names the bound: the first after MAX_SAMPLES output samples (100 s of motion
-/// at the default 0.1 ms), the others before any work.
+/// at the default 0.1 ms); with coarse samples, after MAX_STEPS integrator steps
+/// (about 5 000 s of Coulomb-only motion); the others before any work.
 #[test]
 fn simulate_and_render_bound_their_work() {
     let dir = tempfile::tempdir().unwrap();
-    for (args, words) in [
+    let runs = [
         (
             &["simulate", "--model", "none", "--t-end", "1e9"][..],
             "t = 100.0",
+        ),
+        (
+            &[
+                "simulate", "--model", "none", "--t-end", "1e9", "--dt", "1000",
+            ][..],
+            "no progress: 5000000 integrator steps",
         ),
         (
             &["simulate", "--model", "none", "--psi-dot", "1e9"][..],
@@ -244,8 +251,20 @@ fn simulate_and_render_bound_their_work() {
             &["render", "--halt", "1e9", "-o", "long.mp4"][..],
             "at most 100000 frames",
         ),
-    ] {
-        let out = eulerdisk(dir.path(), args);
+    ]
+    .map(|(args, words)| {
+        // All at once: the step-bound run takes some seconds.
+        let child = std::process::Command::new(env!("CARGO_BIN_EXE_eulerdisk"))
+            .args(args)
+            .current_dir(dir.path())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("run eulerdisk");
+        (args, words, child)
+    });
+    for (args, words, child) in runs {
+        let out = child.wait_with_output().unwrap();
         assert_eq!(out.status.code(), Some(1), "{args:?}");
         let err = stderr(&out);
         assert!(
