@@ -236,3 +236,96 @@ fn study_page_loads_in_headless_chromium_without_errors() {
         assert!(console.is_empty(), "{page}: console messages: {console:#?}");
     }
 }
+
+/// Issue 13, fault injection with real kills: a 12-clip study (2 broken clips) is
+/// killed with SIGKILL three times, each after a random number of finished clips
+/// (seeded), and resumed; the final report equals an uninterrupted run's, lists
+/// the 2 failures, exits 2, and no staging folder of a killed run is left.
+#[test]
+fn a_study_killed_three_times_resumes_to_the_uninterrupted_report() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("footage");
+    let good = std::fs::read(fixture("side-dark-n050.mp4")).unwrap();
+    std::fs::create_dir_all(&root).unwrap();
+    std::fs::write(root.join("eulerdisk.toml"), "fps = 480\n").unwrap();
+    for i in 0..12 {
+        let folder = root.join(format!("m{}", i % 2));
+        std::fs::create_dir_all(&folder).unwrap();
+        let bytes: &[u8] = if i % 6 == 5 { b"not a video" } else { &good };
+        std::fs::write(folder.join(format!("run{i}.mp4")), bytes).unwrap();
+    }
+    clips_failed(&eulerdisk(
+        dir.path(),
+        &["study", "footage", "-o", "reference"],
+    ));
+
+    let mut rng = eulerdisk::rng::SplitMix64::new(13);
+    let mut kills = 0;
+    for _ in 0..3 {
+        // Killed after 1–3 clips this run analysed (reused ones do not count): at
+        // most 9 of the 12 are done before the last run, and the 2 broken clips are
+        // tried in every run, so a kill always comes before the end.
+        let kill_after = 1 + (rng.next_u64() % 3) as usize;
+        let mut child = Command::new(env!("CARGO_BIN_EXE_eulerdisk"))
+            .args(["study", "footage", "-o", "killed", "--resume"])
+            .current_dir(dir.path())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+        let mut finished = 0;
+        for line in stderr.lines() {
+            let line = line.unwrap();
+            if line.starts_with('[') && !line.contains("reused") {
+                finished += 1;
+                if finished == kill_after {
+                    child.kill().unwrap();
+                    kills += 1;
+                    break;
+                }
+            }
+        }
+        child.wait().unwrap();
+    }
+    assert_eq!(kills, 3);
+    let last = eulerdisk(
+        dir.path(),
+        &["study", "footage", "-o", "killed", "--resume"],
+    );
+    clips_failed(&last);
+    let reference = study_json(&dir.path().join("reference"));
+    let resumed = study_json(&dir.path().join("killed"));
+    assert_eq!(resumed, reference);
+    assert_eq!(resumed["failures"].as_array().unwrap().len(), 2);
+    for m in ["m0", "m1"] {
+        for entry in std::fs::read_dir(dir.path().join("killed/experiments").join(m)).unwrap() {
+            let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+            assert!(
+                !name.contains("staging") && !name.contains("replaced"),
+                "{name}"
+            );
+        }
+    }
+}
+
+/// Issue 13.1/13.2: two runs into one output folder at once (two shards into one
+/// `-o`) mixed their results; the second is refused while the first holds the
+/// folder's lock, with exit status 1 and the reason.
+#[test]
+fn a_second_study_into_a_held_folder_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("footage");
+    footage_tree(&root);
+    let held = eulerdisk::report::OutputLock::acquire(&dir.path().join("out")).unwrap();
+    let out = eulerdisk(
+        dir.path(),
+        &["study", "footage", "-o", "out", "--shard", "1/2"],
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("another eulerdisk run"), "{err}");
+    assert!(!dir.path().join("out/study.json").exists());
+    drop(held);
+}
