@@ -222,3 +222,50 @@ fn a_band_wider_than_the_disk_allows_is_refused() {
     );
     assert!(!dir.path().join("out/clip.mp4").exists(), "nothing written");
 }
+
+/// Issue 13.6: errors advised keys that do not exist (`prominence_sigmas`,
+/// `rest_tail_s`, "the calibration override"). Every backticked dotted or plain key
+/// in the advice of these errors is a key the config accepts (a type error is
+/// fine; an unknown field is not).
+#[test]
+fn advice_names_only_real_config_keys() {
+    use eulerdisk::config::ExperimentConfig;
+    use eulerdisk::signal::SignalError;
+    use eulerdisk::vision::VisionError;
+    use std::path::Path;
+    let messages = [
+        SignalError::TooFewPeaks {
+            found: 1,
+            needed: 3,
+            window_start: -0.5,
+            window_end: 0.0,
+        }
+        .to_string(),
+        VisionError::NoDisk {
+            frame: 1,
+            gamma: 0.5,
+        }
+        .to_string(),
+        VisionError::NoSplit { frame: 1 }.to_string(),
+        VisionError::CalibrationPointNotFound {
+            frame: 1,
+            point: "x_l",
+        }
+        .to_string(),
+    ];
+    let mut checked = 0;
+    for message in &messages {
+        assert!(!message.contains("prominence_sigmas") && !message.contains("override"));
+        for key in message.split('`').skip(1).step_by(2) {
+            let text = match key.split_once('.') {
+                Some((table, leaf)) => format!("[{table}]\n{leaf} = 0\n"),
+                None => format!("{key} = 0\n"),
+            };
+            if let Err(e) = ExperimentConfig::parse(&text, Path::new("k.toml")) {
+                assert!(!e.to_string().contains("unknown field"), "{key}: {e}");
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked >= 4, "{messages:#?}");
+}

@@ -32,7 +32,7 @@ pub enum VisionError {
     /// bright blob lying wholly inside the view.
     #[error(
         "frame {frame}: no disk in view (nothing brighter than γ = {gamma:.3} lies wholly \
-         inside the frame); check the lighting, the region of interest or set γ"
+         inside the frame); check the lighting, `vision.roi`, or set `vision.gamma` in the config"
     )]
     NoDisk { frame: usize, gamma: f64 },
 
@@ -87,7 +87,7 @@ pub enum VisionError {
     /// No row separates the mirror side view from the plan view.
     #[error(
         "frame {frame}: no dark, uniform row separates the side view (top) from the plan \
-         view (bottom); give the split row in the configuration"
+         view (bottom); give it as `vision.split_row` [px] in the config"
     )]
     NoSplit { frame: usize },
 
