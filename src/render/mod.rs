@@ -1122,6 +1122,13 @@ mod tests {
         let written = write_clip(&r, &folder).expect("write");
         let files = crate::footage::frame_files(&folder).expect("frames");
         assert_eq!(files.len(), 17);
+        // Issue 13.7: the folder gets the umask's permissions, as one made by hand.
+        let by_hand = dir.path().join("by-hand");
+        std::fs::create_dir(&by_hand).expect("mkdir");
+        let mode = |p: &std::path::Path| {
+            std::os::unix::fs::PermissionsExt::mode(&p.metadata().unwrap().permissions())
+        };
+        assert_eq!(mode(&folder), mode(&by_hand));
         assert!(files[16].ends_with("frame_000017.png"));
         let text = std::fs::read_to_string(&written.truth).expect("truth");
         let truth: GroundTruth = serde_json::from_str(&text).expect("json");
