@@ -109,12 +109,15 @@ fn stderr(out: &std::process::Output) -> String {
 #[test]
 fn analyse_and_compare_refuse_what_would_mix_or_mislead() {
     let dir = tempfile::tempdir().unwrap();
-    let fixture =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/side-dark-n050.mp4");
-    for clip in ["a/run1.mp4", "b/run1.mp4"] {
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+    for (clip, fixture) in [
+        ("a/run1.mp4", "side-dark-n050.mp4"),
+        ("b/run1.mp4", "two-view-n045.mp4"),
+        ("c/run1.mp4", "side-dark-n050.mp4"),
+    ] {
         let path = dir.path().join(clip);
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::copy(&fixture, &path).unwrap();
+        std::fs::copy(fixtures.join(fixture), &path).unwrap();
     }
     std::fs::write(dir.path().join("plain"), b"x").unwrap();
     std::fs::create_dir(dir.path().join("configs")).unwrap();
@@ -151,6 +154,9 @@ fn analyse_and_compare_refuse_what_would_mix_or_mislead() {
         err.contains("a/run1.mp4") && err.contains("b/run1.mp4"),
         "{err}"
     );
+    // An identical copy is the same clip: no refusal.
+    let out = eulerdisk(dir.path(), &["analyse", "c/run1.mp4"]);
+    assert!(out.status.success(), "{}", stderr(&out));
 
     let out = eulerdisk(
         dir.path(),
