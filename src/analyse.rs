@@ -348,24 +348,13 @@ pub fn analyse_clip(
     // a baseline six times longer than the thesis's 2H / (z_base − z_t) (eq. 3.10),
     // which is also computed and compared.
     let cal = calibration.calibration;
-    // The rim height is read on the centre line; a band wider than a tenth of the
-    // radius either side reads it where the rim is lower by more than 0.5 %
-    // (√(1 − 0.1²) = 0.995).
-    let widest_band = 0.05 * (cal.x_r - cal.x_l);
-    if vision_config.band_half_width_px.is_some()
-        && side_config.half_width_px as f64 > widest_band.max(1.0)
-    {
-        return Err(AnalyseError::Clip {
-            path: clip.to_path_buf(),
-            reason: format!(
-                "vision.band_half_width_px = {} px is more than a tenth of the disk's radius \
-                 either side of the centre line (the disk is {:.0} px wide, so at most {:.0} px): \
-                 the rim would be read where it is lower than on the centre line",
-                side_config.half_width_px,
-                cal.x_r - cal.x_l,
-                widest_band.max(1.0).floor()
-            ),
-        });
+    if let Some(band) = vision_config.band_half_width_px {
+        crate::config::band_fits_disk(band, cal.x_r - cal.x_l).map_err(|reason| {
+            AnalyseError::Clip {
+                path: clip.to_path_buf(),
+                reason,
+            }
+        })?;
     }
     let metres_per_px = 2.0 * params.radius / (cal.x_r - cal.x_l);
     let thickness_scale = cal.metres_per_px(params.half_thickness);
@@ -530,25 +519,7 @@ pub fn analyse_clip(
     let model = ThesisRim {
         radius: params.radius,
     };
-    // A slow-motion clip stored at a playback rate (24–60 fps, below 100) with no
-    // `fps` in the config is timed 8× too slow: its rest tail, motion and peaks all
-    // look wrong, and the frame rate is the probable cause, so it is named first.
-    let stored_rate =
-        (fps.source == footage::FpsSource::ContainerFps && fps.fps < 100.0).then_some(fps.fps);
-    let signal_err = |error| match stored_rate {
-        Some(rate) => AnalyseError::Clip {
-            path: clip.to_path_buf(),
-            reason: format!(
-                "probably the frame rate: the clip is stored at {rate:.2} fps and no `fps` is \
-                 configured; if it was filmed in slow motion, set `fps` (e.g. fps = 480) in \
-                 eulerdisk.toml or the clip's own .toml. The analysis said: {error}"
-            ),
-        },
-        None => AnalyseError::Signal {
-            path: clip.to_path_buf(),
-            error,
-        },
-    };
+    let signal_err = |error| signal_error(clip, &fps, error);
     let series =
         signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;
     for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
@@ -741,6 +712,28 @@ impl EnergyFit {
             }
         }
         self
+    }
+}
+
+/// A signal-stage failure of `clip`. A slow-motion clip stored at a playback rate
+/// (24–60 fps, below 100) with no `fps` in the config is timed 8× too slow: its
+/// rest tail, motion and peaks all look wrong, and the frame rate is the probable
+/// cause, so it is named first.
+fn signal_error(clip: &Path, fps: &CaptureFps, error: SignalError) -> AnalyseError {
+    if fps.source == footage::FpsSource::ContainerFps && fps.fps < 100.0 {
+        return AnalyseError::Clip {
+            path: clip.to_path_buf(),
+            reason: format!(
+                "probably the frame rate: the clip is stored at {:.2} fps and no `fps` is \
+                 configured; if it was filmed in slow motion, set `fps` (e.g. fps = 480) in \
+                 eulerdisk.toml or the clip's own .toml. The analysis said: {error}",
+                fps.fps
+            ),
+        };
+    }
+    AnalyseError::Signal {
+        path: clip.to_path_buf(),
+        error,
     }
 }
 

@@ -303,20 +303,10 @@ impl ExperimentConfig {
                     ),
                 );
             }
-            // A band reaching beyond a tenth of the radius reads the rim off the
-            // centre line (analyse checks the same against the found calibration).
-            if let Some(band) = vision.band_half_width_px
-                && f64::from(band) > (0.05 * (c.x_r - c.x_l)).max(1.0)
-            {
-                return fail(
-                    "vision.band_half_width_px",
-                    format!(
-                        "`vision.band_half_width_px` = {band} px is more than a tenth of the \
-                         disk's radius either side of the centre line (the disk is {} px wide \
-                         by the calibration)",
-                        c.x_r - c.x_l
-                    ),
-                );
+            // analyse checks the same against a calibration it finds.
+            if let Some(band) = vision.band_half_width_px {
+                band_fits_disk(band, c.x_r - c.x_l)
+                    .or_else(|reason| fail("vision.band_half_width_px", reason))?;
             }
         }
         positive(
@@ -352,6 +342,25 @@ impl ExperimentConfig {
             .and_then(|f| f.window_s)
             .unwrap_or(DEFAULT_WINDOW_S)
     }
+}
+
+/// Checks the rim band against the disk's width at rest, `x_r − x_l` [px]. The rim
+/// height is read on the centre line; a band wider than a tenth of the radius either
+/// side reads it where the rim is lower by more than 0.5 % (√(1 − 0.1²) = 0.995).
+///
+/// # Errors
+/// The reason, naming the key, both widths and the unit.
+pub fn band_fits_disk(band_half_width_px: u32, disk_width_px: f64) -> Result<(), String> {
+    let widest = (0.05 * disk_width_px).max(1.0).floor();
+    if f64::from(band_half_width_px) > widest {
+        return Err(format!(
+            "`vision.band_half_width_px` = {band_half_width_px} px is more than a tenth of the \
+             disk's radius either side of the centre line (the disk is {disk_width_px:.0} px \
+             wide, so at most {widest:.0} px): the rim would be read where it is lower than \
+             on the centre line"
+        ));
+    }
+    Ok(())
 }
 
 /// Lowest and highest capture frame rate accepted [frames/s]: a 1 fps time-lapse

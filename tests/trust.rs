@@ -217,7 +217,7 @@ fn a_band_wider_than_the_disk_allows_is_refused() {
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("clip.mp4") && err.contains("band_half_width_px = 100000 px"),
+        err.contains("clip.mp4") && err.contains("`vision.band_half_width_px` = 100000 px"),
         "{err}"
     );
     assert!(!dir.path().join("out/clip.mp4").exists(), "nothing written");
