@@ -348,6 +348,14 @@ pub fn analyse_clip(
     // a baseline six times longer than the thesis's 2H / (z_base − z_t) (eq. 3.10),
     // which is also computed and compared.
     let cal = calibration.calibration;
+    if let Some(band) = vision_config.band_half_width_px {
+        crate::config::band_fits_disk(band, cal.x_r - cal.x_l).map_err(|reason| {
+            AnalyseError::Clip {
+                path: clip.to_path_buf(),
+                reason,
+            }
+        })?;
+    }
     let metres_per_px = 2.0 * params.radius / (cal.x_r - cal.x_l);
     let thickness_scale = cal.metres_per_px(params.half_thickness);
     if (thickness_scale / metres_per_px - 1.0).abs() > 0.05 {
@@ -511,10 +519,7 @@ pub fn analyse_clip(
     let model = ThesisRim {
         radius: params.radius,
     };
-    let signal_err = |error| AnalyseError::Signal {
-        path: clip.to_path_buf(),
-        error,
-    };
+    let signal_err = |error| signal_error(clip, &fps, error);
     let series =
         signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;
     for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
@@ -710,6 +715,28 @@ impl EnergyFit {
     }
 }
 
+/// A signal-stage failure of `clip`. A slow-motion clip stored at a playback rate
+/// (24–60 fps, below 100) with no `fps` in the config is timed 8× too slow: its
+/// rest tail, motion and peaks all look wrong, and the frame rate is the probable
+/// cause, so it is named first.
+fn signal_error(clip: &Path, fps: &CaptureFps, error: SignalError) -> AnalyseError {
+    if fps.source == footage::FpsSource::ContainerFps && fps.fps < 100.0 {
+        return AnalyseError::Clip {
+            path: clip.to_path_buf(),
+            reason: format!(
+                "probably the frame rate: the clip is stored at {:.2} fps and no `fps` is \
+                 configured; if it was filmed in slow motion, set `fps` (e.g. fps = 480) in \
+                 eulerdisk.toml or the clip's own .toml. The analysis said: {error}",
+                fps.fps
+            ),
+        };
+    }
+    AnalyseError::Signal {
+        path: clip.to_path_buf(),
+        error,
+    }
+}
+
 /// The config that applies to `clip`: the folder files from `root` down, the
 /// clip's own `CLIP.toml`, then `extra` (a `-c` file) last.
 ///
@@ -725,7 +752,11 @@ pub fn config_for(
         if !extra.is_file() {
             return Err(crate::config::ConfigError::Unreadable {
                 path: extra.to_path_buf(),
-                reason: "no such file".into(),
+                reason: if extra.is_dir() {
+                    "a folder, not a config file (-c takes a TOML file)".into()
+                } else {
+                    "no such file".into()
+                },
             });
         }
         layers.push(extra.to_path_buf());

@@ -185,10 +185,14 @@ impl CompareOptions {
     }
 }
 
-/// Reads `dir/result.json` (written by `report::experiment::write_experiment`).
+/// Reads `dir/result.json` (written by `report::experiment::write_experiment`)
+/// and checks that it describes a possible motion: a capture rate within
+/// 1–100 000 frames/s, every peak's φ within [0, π/2) and no peak after the halt
+/// (t = 0) by more than a frame.
 ///
 /// # Errors
-/// [`CompareError::Read`] naming `dir`.
+/// [`CompareError::Read`] naming `dir`; [`CompareError::Data`] for an impossible
+/// experiment.
 pub fn load_experiment(dir: &Path) -> Result<Experiment, CompareError> {
     let path = dir.join("result.json");
     let read = |reason: String| CompareError::Read {
@@ -196,7 +200,34 @@ pub fn load_experiment(dir: &Path) -> Result<Experiment, CompareError> {
         reason,
     };
     let bytes = std::fs::read(&path).map_err(|e| read(e.to_string()))?;
-    serde_json::from_slice(&bytes).map_err(|e| read(e.to_string()))
+    let experiment: Experiment = serde_json::from_slice(&bytes).map_err(|e| read(e.to_string()))?;
+    let impossible = |reason: String| CompareError::Data {
+        dir: dir.to_path_buf(),
+        reason: format!("result.json: {reason}"),
+    };
+    let fps = experiment.plan.fps.fps;
+    if !(crate::config::MIN_FPS..=crate::config::MAX_FPS).contains(&fps) {
+        return Err(impossible(format!(
+            "fps = {fps} frames/s lies outside {}–{} frames/s",
+            crate::config::MIN_FPS,
+            crate::config::MAX_FPS
+        )));
+    }
+    for peak in &experiment.series.peaks.peaks {
+        if !(0.0..std::f64::consts::FRAC_PI_2).contains(&peak.phi) && !peak.phi.is_nan() {
+            return Err(impossible(format!(
+                "the peak at t = {} s has φ = {} rad, outside [0, π/2) (a disk on its rim)",
+                peak.t, peak.phi
+            )));
+        }
+        if peak.t.is_nan() || peak.t > 1.0 / fps {
+            return Err(impossible(format!(
+                "a peak at t = {} s, after the halt (t = 0): peaks are motion before it",
+                peak.t
+            )));
+        }
+    }
+    Ok(experiment)
 }
 
 /// A measured value at one instant (experiment time, halt at 0).
@@ -1003,6 +1034,22 @@ pub fn compare(
         return Err(opt_err(format!(
             "--lead must be a positive time, got {}",
             options.lead_s
+        )));
+    }
+    if !(options.contact_gap_m.is_finite()
+        && options.contact_gap_m > 0.0
+        && options.contact_gap_m < experiment.plan.disk.radius)
+    {
+        return Err(opt_err(format!(
+            "--contact-gap must be a gap between 0 and the disk's radius {} m, got {} m",
+            experiment.plan.disk.radius, options.contact_gap_m
+        )));
+    }
+    if let Some(mu) = options.mu
+        && !(mu.is_finite() && mu > 0.0)
+    {
+        return Err(opt_err(format!(
+            "--mu must be a positive friction coefficient, got {mu}"
         )));
     }
     if model == ModelKind::None {

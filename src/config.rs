@@ -3,7 +3,8 @@
 //! Every field is optional; what is missing is found automatically (threshold,
 //! calibration, split row) or defaulted (the Euler's-disk preset, a dark plate, a
 //! 0.5 s fit window). Unknown keys are errors, so a typo (`fsp = 480`) is reported
-//! with its line instead of silently ignored.
+//! with its line and column instead of silently ignored; so is a value outside its
+//! physical range, with the unit.
 //!
 //! Configs are layered: a study folder's `eulerdisk.toml` applies to every clip
 //! below it, a deeper folder's file overrides it key by key, and a clip's own
@@ -155,45 +156,53 @@ impl ExperimentConfig {
     /// Parse one TOML text; `path` names it in errors.
     ///
     /// # Errors
-    /// `Invalid` with TOML's line and column for syntax errors and unknown keys,
-    /// or with the reason a value makes no sense.
+    /// `Invalid` with TOML's line and column for syntax errors, unknown keys and
+    /// values out of range.
     pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
-        let table: toml::Table = toml::from_str(text).map_err(|e| invalid(path, e))?;
-        Self::from_table(table, path)
-    }
-
-    fn from_table(table: toml::Table, path: &Path) -> Result<Self, ConfigError> {
-        let config: Self = toml::Value::Table(table)
-            .try_into()
-            .map_err(|e| invalid(path, e))?;
-        config.validate().map_err(|reason| ConfigError::Invalid {
-            path: path.to_path_buf(),
-            reason,
-        })?;
-        Ok(config)
+        Self::load_texts(&[(path.to_path_buf(), text.to_string())])
     }
 
     /// Read and merge config files in order (later files override earlier ones key
     /// by key, tables merged recursively); missing files are skipped.
     ///
     /// # Errors
-    /// The first file that cannot be read or parsed, or the merged result when it
-    /// is invalid (named by the last file that contributed).
+    /// The first file that cannot be read or parsed; a value out of range, named
+    /// by the file, line and column where it is set.
     pub fn load_layered(files: &[PathBuf]) -> Result<Self, ConfigError> {
-        let mut merged = toml::Table::new();
-        let mut last = PathBuf::from("(defaults)");
+        let mut texts = Vec::new();
         for file in files.iter().filter(|f| f.is_file()) {
             let text = std::fs::read_to_string(file).map_err(|e| ConfigError::Unreadable {
                 path: file.clone(),
                 reason: e.to_string(),
             })?;
-            let table: toml::Table = toml::from_str(&text).map_err(|e| invalid(file, e))?;
-            // Check each layer alone too, so a typo is blamed on its own file.
-            Self::from_table(table.clone(), file)?;
-            merge(&mut merged, table);
-            last = file.clone();
+            texts.push((file.clone(), text));
         }
-        Self::from_table(merged, &last)
+        Self::load_texts(&texts)
+    }
+
+    /// Parse, check and merge layers given as (file, text), outermost first.
+    fn load_texts(layers: &[(PathBuf, String)]) -> Result<Self, ConfigError> {
+        let mut merged = toml::Table::new();
+        for (file, text) in layers {
+            // Deserialised from the text itself, so TOML's errors carry the line
+            // and column, and a typo is blamed on its own file.
+            let alone: Self = toml::from_str(text).map_err(|e| invalid(file, e))?;
+            alone
+                .validate()
+                .map_err(|(key, reason)| out_of_range(layers, &key, &reason))?;
+            let table: toml::Table = toml::from_str(text).map_err(|e| invalid(file, e))?;
+            merge(&mut merged, table);
+        }
+        let last = layers
+            .last()
+            .map_or_else(|| PathBuf::from("(defaults)"), |(f, _)| f.clone());
+        let config: Self = toml::Value::Table(merged)
+            .try_into()
+            .map_err(|e| invalid(&last, e))?;
+        config
+            .validate()
+            .map_err(|(key, reason)| out_of_range(layers, &key, &reason))?;
+        Ok(config)
     }
 
     /// The config files that apply to `clip` below the study `root`, outermost
@@ -212,44 +221,99 @@ impl ExperimentConfig {
         files
     }
 
-    fn validate(&self) -> Result<(), String> {
-        let positive = |name: &str, value: Option<f64>| match value {
-            Some(v) if !(v.is_finite() && v > 0.0) => {
-                Err(format!("`{name}` = {v} must be a positive number"))
-            }
+    /// Every value against its physical range; an error is (the key, the reason
+    /// with the unit).
+    fn validate(&self) -> Result<(), (String, String)> {
+        let fail = |key: &str, reason: String| Err((key.to_string(), reason));
+        let positive = |key: &str, value: Option<f64>, unit: &str| match value {
+            Some(v) if !(v.is_finite() && v > 0.0) => fail(
+                key,
+                format!("`{key}` = {v} must be a positive number [{unit}]"),
+            ),
             _ => Ok(()),
         };
-        positive("fps", self.fps)?;
-        if let Some(disk) = &self.disk {
-            positive("disk.mass_kg", disk.mass_kg)?;
-            positive("disk.radius_m", disk.radius_m)?;
-            positive("disk.half_thickness_m", disk.half_thickness_m)?;
-            positive("disk.inertia_a_kg_m2", disk.inertia_a_kg_m2)?;
-            positive("disk.inertia_c_kg_m2", disk.inertia_c_kg_m2)?;
+        if let Some(fps) = self.fps
+            && !(MIN_FPS..=MAX_FPS).contains(&fps)
+        {
+            return fail(
+                "fps",
+                format!("`fps` = {fps} frames/s must lie within {MIN_FPS}–{MAX_FPS} frames/s"),
+            );
         }
-        if let Some(gamma) = self.vision.as_ref().and_then(|v| v.gamma)
+        if let Some(disk) = &self.disk {
+            positive("disk.mass_kg", disk.mass_kg, "kg")?;
+            positive("disk.radius_m", disk.radius_m, "m")?;
+            positive("disk.half_thickness_m", disk.half_thickness_m, "m")?;
+            positive("disk.inertia_a_kg_m2", disk.inertia_a_kg_m2, "kg m²")?;
+            positive("disk.inertia_c_kg_m2", disk.inertia_c_kg_m2, "kg m²")?;
+        }
+        let vision = self.vision.clone().unwrap_or_default();
+        if let Some(gamma) = vision.gamma
             && !(gamma > 0.0 && gamma < 1.0)
         {
-            return Err(format!(
-                "`vision.gamma` = {gamma} must lie strictly between 0 and 1 \
-                 (a fraction of full white, as MATLAB's im2bw level)"
-            ));
+            return fail(
+                "vision.gamma",
+                format!(
+                    "`vision.gamma` = {gamma} must lie strictly between 0 and 1 \
+                     (a fraction of full white, as MATLAB's im2bw level)"
+                ),
+            );
+        }
+        if let Some([x, y, w, h]) = vision.roi {
+            let fits = |start: u32, len: u32| len > 0 && start.checked_add(len).is_some();
+            if !(fits(x, w) && fits(y, h)) {
+                return fail(
+                    "vision.roi",
+                    format!(
+                        "`vision.roi` = [{x}, {y}, {w}, {h}] px ([x, y, width, height]) needs a \
+                         width and height above 0 and x + width, y + height below {} px",
+                        u32::MAX
+                    ),
+                );
+            }
+            if let Some(band) = vision.band_half_width_px
+                && 2 * u64::from(band) + 1 > u64::from(w)
+            {
+                return fail(
+                    "vision.band_half_width_px",
+                    format!(
+                        "`vision.band_half_width_px` = {band} px: the band (2 × {band} + 1 \
+                         columns) is wider than the region of interest ({w} px)"
+                    ),
+                );
+            }
         }
         if let Some(c) = &self.calibration {
             if c.x_r.partial_cmp(&c.x_l) != Some(std::cmp::Ordering::Greater) {
-                return Err(format!(
-                    "calibration: x_r = {} must lie right of x_l = {}",
-                    c.x_r, c.x_l
-                ));
+                return fail(
+                    "calibration.x_r",
+                    format!(
+                        "calibration: x_r = {} px must lie right of x_l = {} px",
+                        c.x_r, c.x_l
+                    ),
+                );
             }
             if c.z_base.partial_cmp(&c.z_t) != Some(std::cmp::Ordering::Greater) {
-                return Err(format!(
-                    "calibration: z_base = {} must lie below z_t = {} (image rows grow downward)",
-                    c.z_base, c.z_t
-                ));
+                return fail(
+                    "calibration.z_base",
+                    format!(
+                        "calibration: z_base = {} px must lie below z_t = {} px \
+                         (image rows grow downward)",
+                        c.z_base, c.z_t
+                    ),
+                );
+            }
+            // analyse checks the same against a calibration it finds.
+            if let Some(band) = vision.band_half_width_px {
+                band_fits_disk(band, c.x_r - c.x_l)
+                    .or_else(|reason| fail("vision.band_half_width_px", reason))?;
             }
         }
-        positive("fit.window_s", self.fit.as_ref().and_then(|f| f.window_s))?;
+        positive(
+            "fit.window_s",
+            self.fit.as_ref().and_then(|f| f.window_s),
+            "s",
+        )?;
         Ok(())
     }
 
@@ -278,6 +342,71 @@ impl ExperimentConfig {
             .and_then(|f| f.window_s)
             .unwrap_or(DEFAULT_WINDOW_S)
     }
+}
+
+/// Checks the rim band against the disk's width at rest, `x_r − x_l` [px]. The rim
+/// height is read on the centre line; a band wider than a tenth of the radius either
+/// side reads it where the rim is lower by more than 0.5 % (√(1 − 0.1²) = 0.995).
+///
+/// # Errors
+/// The reason, naming the key, both widths and the unit.
+pub fn band_fits_disk(band_half_width_px: u32, disk_width_px: f64) -> Result<(), String> {
+    let widest = (0.05 * disk_width_px).max(1.0).floor();
+    if f64::from(band_half_width_px) > widest {
+        return Err(format!(
+            "`vision.band_half_width_px` = {band_half_width_px} px is more than a tenth of the \
+             disk's radius either side of the centre line (the disk is {disk_width_px:.0} px \
+             wide, so at most {widest:.0} px): the rim would be read where it is lower than \
+             on the centre line"
+        ));
+    }
+    Ok(())
+}
+
+/// Lowest and highest capture frame rate accepted [frames/s]: a 1 fps time-lapse
+/// to the fastest high-speed cameras.
+pub const MIN_FPS: f64 = 1.0;
+pub const MAX_FPS: f64 = 100_000.0;
+
+/// A value out of range, named by the last layer that sets `key` (a dotted path)
+/// with the line and column of its value.
+fn out_of_range(layers: &[(PathBuf, String)], key: &str, reason: &str) -> ConfigError {
+    for (file, text) in layers.iter().rev() {
+        if let Some((line, column)) = locate(text, key) {
+            return ConfigError::Invalid {
+                path: file.clone(),
+                reason: format!("line {line}, column {column}: {reason}"),
+            };
+        }
+    }
+    ConfigError::Invalid {
+        path: layers
+            .last()
+            .map_or_else(|| PathBuf::from("(defaults)"), |(f, _)| f.clone()),
+        reason: reason.to_string(),
+    }
+}
+
+/// Line and column (1-based) of the value of the dotted `key` in a TOML text.
+fn locate(text: &str, key: &str) -> Option<(usize, usize)> {
+    let root = toml::de::DeTable::parse(text).ok()?;
+    let mut table = root.get_ref();
+    let mut parts = key.split('.').peekable();
+    while let Some(part) = parts.next() {
+        let value = table.get(part)?;
+        if parts.peek().is_none() {
+            let start = value.span().start;
+            let before = &text[..start];
+            let line = before.matches('\n').count() + 1;
+            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            return Some((line, column));
+        }
+        match value.get_ref() {
+            toml::de::DeValue::Table(t) => table = t,
+            _ => return None,
+        }
+    }
+    None
 }
 
 fn invalid(path: &Path, e: impl std::fmt::Display) -> ConfigError {
@@ -373,6 +502,74 @@ mod tests {
         assert_eq!(
             ExperimentConfig::default().disk_params(),
             Preset::EulerDisk.params()
+        );
+    }
+
+    /// Issue 13.6: config errors named the key but not the line the README
+    /// promises. Unknown keys, type errors and values out of range now carry the
+    /// line and column, and the unknown-key message lists the real keys.
+    #[test]
+    fn errors_carry_the_line_and_column() {
+        let err = |text: &str| {
+            ExperimentConfig::parse(text, Path::new("e.toml"))
+                .unwrap_err()
+                .to_string()
+        };
+        let typo = err("fps = 480\n[vision]\ngama = 0.3\n");
+        assert!(
+            typo.contains("line 3, column 1") && typo.contains("gamma"),
+            "{typo}"
+        );
+        let range = err("plate = \"dark\"\n[fit]\nwindow_s = -1\n");
+        assert!(
+            range.contains("line 3, column 12") && range.contains("[s]"),
+            "{range}"
+        );
+        let wrong_type = err("\nfps = \"fast\"\n");
+        assert!(wrong_type.contains("line 2"), "{wrong_type}");
+        // Across layers, the value is blamed on the file that sets it.
+        let dir = tempfile::tempdir().unwrap();
+        let (outer, inner) = (dir.path().join("a.toml"), dir.path().join("b.toml"));
+        std::fs::write(&outer, "\n\nfps = 1e9\n").unwrap();
+        std::fs::write(&inner, "plate = \"light\"\n").unwrap();
+        let e = ExperimentConfig::load_layered(&[outer, inner])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("a.toml") && e.contains("line 3"), "{e}");
+    }
+
+    /// Issue 13.5: values outside their physical range, with the unit: an fps
+    /// outside 1–100 000 frames/s, an ROI whose integer arithmetic would wrap, and
+    /// a band wider than the ROI or than a tenth of the calibrated disk's radius.
+    #[test]
+    fn values_outside_their_physical_range_are_refused_with_the_unit() {
+        for (text, words) in [
+            ("fps = 0.5", "frames/s"),
+            ("fps = 1e6", "frames/s"),
+            ("[vision]\nroi = [4294967295, 0, 10, 10]", "x + width"),
+            ("[vision]\nroi = [0, 0, 0, 10]", "width and height above 0"),
+            (
+                "[vision]\nroi = [0, 0, 100, 100]\nband_half_width_px = 100000",
+                "wider than the region",
+            ),
+            (
+                "[vision]\nband_half_width_px = 100000\n\
+                 [calibration]\nx_l = 100.0\nx_r = 600.0\nz_t = 700.0\nz_base = 742.0",
+                "tenth of the disk's radius",
+            ),
+        ] {
+            let err = ExperimentConfig::parse(text, Path::new("x.toml"))
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(words) && err.contains("line"), "{text}: {err}");
+        }
+        assert!(
+            ExperimentConfig::parse(
+                "fps = 480\n[vision]\nband_half_width_px = 20\n\
+            [calibration]\nx_l = 100.0\nx_r = 600.0\nz_t = 700.0\nz_base = 742.0",
+                Path::new("x.toml")
+            )
+            .is_ok()
         );
     }
 }

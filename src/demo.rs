@@ -169,7 +169,7 @@ pub fn write_demo_index(
             li { a href=(format!("{study_dir}/index.html")) { "Study report" } ": per-material tables, box plot, t-tests, trends" }
             @for e in &results.experiments {
                 li {
-                    a href=(format!("{study_dir}/experiments/{}/index.html", e.clip.trim_end_matches(".mp4"))) { (e.clip) }
+                    a href=(format!("{study_dir}/experiments/{}/index.html", e.clip)) { (e.clip) }
                 }
             }
             @if let Some(link) = comparison {

@@ -10,12 +10,13 @@ use clap::{Args, Parser, Subcommand};
 use eulerdisk::compare::CompareOptions;
 use eulerdisk::model::dissipation::{Dissipation, ModelKind};
 use eulerdisk::model::params::Preset;
-use eulerdisk::model::simulate::{InitialState, SimulationSpec, simulate};
+use eulerdisk::model::simulate::{InitialState, MAX_SAMPLES, SimulationSpec, simulate};
 use eulerdisk::model::tuning::tune_eta;
 use eulerdisk::render::{
     Effects, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Timing, power_law_motion,
     trajectory_motion, write_clip,
 };
+use eulerdisk::report::OutputLock;
 use eulerdisk::report::compare::{comparison_dir, write_comparison};
 use eulerdisk::report::experiment::write_experiment;
 use eulerdisk::report::simulation::write_simulation;
@@ -28,7 +29,14 @@ use std::io::IsTerminal;
 
 /// Slow-motion footage of spinning disks, turned into physics.
 #[derive(Parser)]
-#[command(version, about, propagate_version = true)]
+#[command(
+    version,
+    about,
+    propagate_version = true,
+    after_help = "Exit status: 0 success; 1 error (nothing could run); \
+                  2 a study or merge finished but some clips failed, or a previous \
+                  report was kept"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -59,9 +67,12 @@ enum Command {
         /// and the clip's own `CLIP.toml`.
         #[arg(short, long)]
         config: Option<PathBuf>,
-        /// Output folder (default: out/<clip name>).
+        /// Output folder (default: out/<clip file name>, extension included).
         #[arg(short, long)]
         out: Option<PathBuf>,
+        /// Replace an output folder that holds another clip's analysis.
+        #[arg(long)]
+        force: bool,
     },
     /// Analyse every clip below a folder, in parallel, and write the study report:
     /// per-material tables, box plots, t-tests (Tables 3.2, 3.3), trends.
@@ -191,6 +202,10 @@ struct StudyArgs {
     /// Reuse results whose clip, config and eulerdisk version are unchanged.
     #[arg(long)]
     resume: bool,
+    /// Replace the previous report even when this run lost clips it had analysed
+    /// (without it, such a run keeps the previous report and exits with status 2).
+    #[arg(long)]
+    force: bool,
     /// Welch's t-test instead of the pooled-variance test of the thesis.
     #[arg(long)]
     welch: bool,
@@ -278,9 +293,20 @@ struct RenderArgs {
     out: PathBuf,
 }
 
+/// How a command that ran ended (an error is exit status 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Status {
+    /// Everything asked for was done: exit status 0.
+    Complete,
+    /// A study or merge finished, but some clips failed or the previous report was
+    /// kept: exit status 2.
+    ClipsFailed,
+}
+
 fn main() -> ExitCode {
     match run(Cli::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(Status::Complete) => ExitCode::SUCCESS,
+        Ok(Status::ClipsFailed) => ExitCode::from(2),
         Err(err) => {
             eprintln!("error: {err:#}");
             ExitCode::from(1)
@@ -288,7 +314,8 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(cli: Cli) -> Result<()> {
+fn run(cli: Cli) -> Result<Status> {
+    let done = |r: Result<()>| r.map(|()| Status::Complete);
     match cli.command {
         Command::Info { clip, json } => {
             let info = footage::probe(&clip)?;
@@ -297,19 +324,24 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 println!("{info}");
             }
-            Ok(())
+            Ok(Status::Complete)
         }
-        Command::Simulate(args) => run_simulate(&args),
-        Command::Render(args) => run_render(&args),
-        Command::Analyse { clip, config, out } => run_analyse(&clip, config.as_deref(), out),
+        Command::Simulate(args) => done(run_simulate(&args)),
+        Command::Render(args) => done(run_render(&args)),
+        Command::Analyse {
+            clip,
+            config,
+            out,
+            force,
+        } => done(run_analyse(&clip, config.as_deref(), out, force)),
         Command::Study(args) => run_study(&args),
         Command::Merge { shards, out, welch } => run_merge(&shards, &out, welch),
-        Command::Compare(args) => run_compare(&args),
+        Command::Compare(args) => done(run_compare(&args)),
         Command::Reproduce {
             out,
             skip_table_4_1,
-        } => run_reproduce(&out, !skip_table_4_1),
-        Command::Demo { out } => run_demo(&out),
+        } => done(run_reproduce(&out, !skip_table_4_1)),
+        Command::Demo { out } => done(run_demo(&out)),
     }
 }
 
@@ -327,13 +359,28 @@ fn progress_bar(len: u64, what: &str) -> Option<ProgressBar> {
     Some(bar)
 }
 
-fn run_analyse(clip: &Path, config: Option<&Path>, out: Option<PathBuf>) -> Result<()> {
+fn run_analyse(
+    clip: &Path,
+    config: Option<&Path>,
+    out: Option<PathBuf>,
+    force: bool,
+) -> Result<()> {
     let root = clip.parent().unwrap_or(Path::new("."));
     let config = analyse::config_for(root, clip, config)?;
     let name = clip
-        .file_stem()
+        .file_name()
         .map_or_else(|| "clip".into(), |s| s.to_string_lossy().into_owned());
     let out = out.unwrap_or_else(|| Path::new("out").join(&name));
+    eulerdisk::report::check_folder(&out)?;
+    if !force && let Some(other) = eulerdisk::report::experiment::other_clip_in(&out, clip) {
+        bail!(
+            "{} holds the analysis of {}; refusing to replace it with {} \
+             (give another -o, or --force)",
+            out.display(),
+            other.display(),
+            clip.display()
+        );
+    }
     let bar = progress_bar(0, "frames");
     let experiment = analyse::analyse_clip(clip, &config, &|done, total| {
         if let Some(bar) = &bar {
@@ -344,13 +391,17 @@ fn run_analyse(clip: &Path, config: Option<&Path>, out: Option<PathBuf>) -> Resu
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    write_experiment(&out, &experiment)?;
+    eulerdisk::report::write_folder(&out, |dir| write_experiment(dir, &experiment))?;
     let fit = &experiment.peaks_fit.fit;
     for warning in &experiment.warnings {
         eprintln!("warning: {warning}");
     }
+    let flagged = match experiment.skips_in_window {
+        0 => String::new(),
+        k => format!("; WARNING: {k} flagged frame(s) (dropped frames?) in the window"),
+    };
     println!(
-        "{}: n = {:.3} (95 % CI {:.3} … {:.3}), {} peaks in the last {} s; fps {} ({:?})",
+        "{}: n = {:.3} (95 % CI {:.3} … {:.3}), {} peaks in the last {} s; fps {} ({:?}){flagged}",
         clip.display(),
         fit.n,
         fit.ci95_n.0,
@@ -375,17 +426,19 @@ fn report_options(welch: bool) -> StudyReportOptions {
     }
 }
 
-fn run_study(args: &StudyArgs) -> Result<()> {
+fn run_study(args: &StudyArgs) -> Result<Status> {
     let options = report_options(args.welch);
     if args.published {
         write_published_report(&args.out, options)?;
         println!("report: {}", args.out.join("index.html").display());
-        return Ok(());
+        return Ok(Status::Complete);
     }
     let Some(root) = &args.root else {
         bail!("give a footage folder, or --published");
     };
-    let clips = study::discover(root)?;
+    eulerdisk::report::check_folder(&args.out)?;
+    let clips = study::discover(root, &args.out)?;
+    let out = OutputLock::acquire(&args.out)?;
     let analyser = analyse::StudyAnalyser { root: root.clone() };
     let bar = progress_bar(0, "clips");
     let done = std::sync::atomic::AtomicUsize::new(0);
@@ -400,6 +453,12 @@ fn run_study(args: &StudyArgs) -> Result<()> {
         StudyEvent::Finished { clip, outcome } => {
             let k = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
             let line = match outcome {
+                Outcome::Analysed(s) if !s.warnings.is_empty() => format!(
+                    "{clip}: n = {:.3} ({} warning(s): {})",
+                    s.n,
+                    s.warnings.len(),
+                    s.warnings.join("; ")
+                ),
                 Outcome::Analysed(s) => format!("{clip}: n = {:.3}", s.n),
                 Outcome::Reused(s) => format!("{clip}: n = {:.3} (unchanged, reused)", s.n),
                 Outcome::Failed(reason) => format!("{clip}: FAILED: {reason}"),
@@ -416,33 +475,59 @@ fn run_study(args: &StudyArgs) -> Result<()> {
     let run_options = study::RunOptions {
         shard: args.shard,
         resume: args.resume,
+        force: args.force,
     };
-    let results = study::run(clips, &args.out, run_options, &analyser, &events)?;
+    let study_run = study::run(clips, &out, run_options, &analyser, &events)?;
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    write_study_report(&args.out, &results, options)?;
-    println!(
-        "{} clips analysed, {} failed; report: {}",
+    let results = &study_run.results;
+    let counts = format!(
+        "{} clips analysed, {} failed",
         results.experiments.len(),
-        results.failures.len(),
+        results.failures.len()
+    );
+    if let Some(kept) = &study_run.kept_previous {
+        eprintln!(
+            "{counts}; kept the previous report ({} clips analysed) because this run \
+             did not analyse {} of its clips: {}. Fix the cause and run again, or give \
+             --force to replace it; report: {}",
+            kept.analysed,
+            kept.lost.len(),
+            kept.lost.join(", "),
+            args.out.join("index.html").display()
+        );
+        return Ok(Status::ClipsFailed);
+    }
+    write_study_report(&args.out, results, options)?;
+    println!(
+        "{counts}; report: {}",
         args.out.join("index.html").display()
     );
-    Ok(())
+    Ok(if study_run.is_complete() {
+        Status::Complete
+    } else {
+        Status::ClipsFailed
+    })
 }
 
-fn run_merge(shards: &[PathBuf], out: &Path, welch: bool) -> Result<()> {
+fn run_merge(shards: &[PathBuf], out: &Path, welch: bool) -> Result<Status> {
     let results = study::merge(shards)?;
+    let _lock = OutputLock::acquire(out)?;
     eulerdisk::report::write_json(&out.join(study::STUDY_FILE), &results)?;
     write_study_report(out, &results, report_options(welch))?;
     println!(
-        "merged {} shards: {} clips, {} failed; report: {}",
+        "merged {} shards: {} clips analysed, {} failed; report: {}",
         shards.len(),
         results.experiments.len(),
         results.failures.len(),
         out.join("index.html").display()
     );
-    Ok(())
+    Ok(if results.failures.is_empty() {
+        Status::Complete
+    } else {
+        Status::ClipsFailed
+    })
 }
 
 fn run_simulate(args: &SimulateArgs) -> Result<()> {
@@ -469,6 +554,15 @@ fn run_simulate(args: &SimulateArgs) -> Result<()> {
         (None, Some(target)) => {
             if args.model == ModelKind::None {
                 bail!("--stop-at needs a dissipation model other than `none`");
+            }
+            // Tuning simulates to twice the target, sampled every --dt.
+            let longest = MAX_SAMPLES as f64 * args.dt / 2.0;
+            if !(target > 0.0 && target <= longest) {
+                bail!(
+                    "--stop-at {target} s: give a time between 0 and {longest} s \
+                     (at most {MAX_SAMPLES} samples of --dt {} s to twice the target)",
+                    args.dt
+                );
             }
             let tuned = tune_eta(&spec, target, 1e-4, 1e-6)
                 .with_context(|| format!("cannot tune η to stop at {target} s"))?;
@@ -683,6 +777,7 @@ fn run_demo(out: &Path) -> Result<()> {
         out: study_out.clone(),
         shard: None,
         resume: false,
+        force: true,
         welch: false,
         published: false,
     })?;
@@ -690,7 +785,7 @@ fn run_demo(out: &Path) -> Result<()> {
     let results: study::StudyResults = serde_json::from_slice(&bytes)?;
     // One comparison with the simulator: the two-view clip (true n = 0.45) against
     // augmented contour friction, whose p = 0.722 the thesis chose for n = 0.45.
-    let experiment_dir = study_out.join("experiments/two-view/stainless steel/run1");
+    let experiment_dir = study_out.join("experiments/two-view/stainless steel/run1.mp4");
     let model = ModelKind::AugmentedContour;
     eprintln!("demo: comparing the two-view clip with {model:?} friction…");
     let compared = eulerdisk::compare::load_experiment(&experiment_dir).and_then(|e| {

@@ -8,18 +8,28 @@
 //!   euler/stainless-steel/run07.mp4   metadata from folder names: disk/material/run
 //!   ▼
 //! run(): rayon over the clips of this shard; per clip a ClipAnalyser writes
-//!        OUT/experiments/<clip>/ and returns an ExperimentSummary
+//!        OUT/experiments/<clip path with extension>/ and returns an ExperimentSummary
 //!   ▼
 //! OUT/study.json                 StudyResults: summaries + failures, sorted
 //! ```
 //!
-//! Each clip's folder holds `summary.json`, written last and atomically, with the
-//! clip's resume key (a hash of the clip's bytes, its resolved plan and the crate
-//! version): `--resume` reuses a clip whose key is unchanged and redoes the rest,
-//! including every clip that failed or was interrupted. `--shard K/N` takes every
-//! N-th clip of the sorted list starting at the K-th; [`merge`] combines the
-//! shards' `study.json` into the one a single run makes.
+//! One clip, one folder, by construction: the folder is the clip's path below the
+//! root *with* its extension, so `run1.mp4` and `run1.mov` never share one. A clip's
+//! folder is written whole ([`report::write_folder`]: staged, renamed into place,
+//! under a lock), and holds `summary.json` with the clip's resume key (a hash of the
+//! clip's bytes, its resolved plan and the crate version): `--resume` reuses a
+//! clip whose key is unchanged and redoes the rest, including every clip that
+//! failed or was interrupted. A study holds the lock of its output folder for the
+//! whole run, so two studies (or two shards) never write one folder at once.
+//!
+//! The report tells the truth: a run that would lose a clip the previous
+//! `study.json` had analysed keeps the previous report unless forced
+//! ([`RunOptions::force`]). `--shard K/N` takes every N-th clip of the sorted list
+//! starting at the K-th and records K/N and its clip list; [`merge`] refuses a
+//! missing shard or a shard with a clip unaccounted for, and otherwise writes the
+//! `study.json` a single run makes.
 
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
@@ -68,14 +78,11 @@ pub struct ClipEntry {
 }
 
 impl ClipEntry {
-    /// The clip's experiment folder below `out`: its relative path without the
-    /// extension, so `euler/steel/run07.mp4` → `OUT/experiments/euler/steel/run07`.
+    /// The clip's experiment folder below `out`: its relative path with the
+    /// extension, so `euler/steel/run07.mp4` → `OUT/experiments/euler/steel/run07.mp4`
+    /// and two clips never share a folder.
     pub fn experiment_dir(&self, out: &Path) -> PathBuf {
-        let mut dir = out.join("experiments").join(&self.relative);
-        if self.path.is_file() {
-            dir.set_extension("");
-        }
-        dir
+        out.join("experiments").join(&self.relative)
     }
 }
 
@@ -98,15 +105,19 @@ struct ManifestToml {
 
 /// The clips below `root`, in natural order of their relative paths: video files,
 /// and folders of frame images (a frame folder is one clip; it is not searched
-/// further). Metadata comes from `root/study.toml` or `root/study.csv` when present
+/// further). Symbolic links are followed; a link back into its own ancestry (a
+/// loop), or two paths to one clip or folder, are refused rather than counted
+/// twice. Output folders are never footage: `exclude` (the study's own output)
+/// and any folder holding an eulerdisk result (`study.json`, `summary.json` or
+/// `result.json`) are skipped. Metadata comes from `root/study.toml` or `root/study.csv` when present
 /// (a listed clip missing on disk is an error; an unlisted clip gets folder-name
 /// metadata), else from the folder names: `DISK/MATERIAL/RUN`, `MATERIAL/RUN`, or
 /// `DISK/MATERIAL/ORIENTATION/RUN`.
 ///
 /// # Errors
-/// The root cannot be listed or holds no clip; the manifest is malformed or names
-/// a clip that does not exist.
-pub fn discover(root: &Path) -> Result<Vec<ClipEntry>, StudyError> {
+/// The root cannot be listed or holds no clip; a symlink loop or a clip reached
+/// twice; the manifest is malformed or names a clip that does not exist.
+pub fn discover(root: &Path, exclude: &Path) -> Result<Vec<ClipEntry>, StudyError> {
     let root_error = |reason: String| StudyError::Root {
         path: root.to_path_buf(),
         reason,
@@ -114,8 +125,13 @@ pub fn discover(root: &Path) -> Result<Vec<ClipEntry>, StudyError> {
     if !root.is_dir() {
         return Err(root_error("not a folder".into()));
     }
-    let mut paths = Vec::new();
-    collect_clips(root, &mut paths).map_err(|e| root_error(e.to_string()))?;
+    let mut walk = Walk {
+        exclude: exclude.canonicalize().ok(),
+        seen: Vec::new(),
+        clips: Vec::new(),
+    };
+    walk.visit(root, &mut Vec::new()).map_err(root_error)?;
+    let paths = walk.clips;
     let mut clips: Vec<ClipEntry> = paths
         .into_iter()
         .map(|path| {
@@ -154,37 +170,93 @@ pub fn discover(root: &Path) -> Result<Vec<ClipEntry>, StudyError> {
     Ok(clips)
 }
 
-fn collect_clips(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
-    let mut has_frames = false;
-    let mut subdirs = Vec::new();
-    let mut videos = Vec::new();
-    for entry in std::fs::read_dir(dir)? {
-        let path = entry?.path();
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
-        if name.as_deref().is_none_or(|n| n.starts_with('.')) {
-            continue;
+/// The state of [`discover`]'s walk: every folder and clip reached so far by its
+/// real (canonical) path, so nothing is counted twice.
+struct Walk {
+    exclude: Option<PathBuf>,
+    /// (canonical path, path as reached).
+    seen: Vec<(PathBuf, PathBuf)>,
+    clips: Vec<PathBuf>,
+}
+
+/// File names that mark a folder as eulerdisk output rather than footage.
+const OUTPUT_MARKERS: [&str; 3] = [STUDY_FILE, SUMMARY_FILE, "result.json"];
+
+impl Walk {
+    /// Remembers `path` by its real path; a second path to it is an error.
+    fn first_visit(&mut self, path: &Path) -> Result<(), String> {
+        let real = path
+            .canonicalize()
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        if let Some((_, earlier)) = self.seen.iter().find(|(r, _)| *r == real) {
+            return Err(format!(
+                "{} and {} are the same {} (a symbolic link); it would be counted twice, \
+                 so remove one of them",
+                earlier.display(),
+                path.display(),
+                if path.is_dir() { "folder" } else { "clip" }
+            ));
         }
-        let ext = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase())
-            .unwrap_or_default();
-        if path.is_dir() {
-            subdirs.push(path);
-        } else if VIDEO_EXTENSIONS.contains(&ext.as_str()) {
-            videos.push(path);
-        } else if FRAME_EXTENSIONS.contains(&ext.as_str()) {
-            has_frames = true;
+        self.seen.push((real, path.to_path_buf()));
+        Ok(())
+    }
+
+    /// Collects the clips below `dir`; `ancestry` holds the real paths of the
+    /// folders above it, to tell a loop from a mere second path.
+    fn visit(&mut self, dir: &Path, ancestry: &mut Vec<PathBuf>) -> Result<(), String> {
+        let real = dir
+            .canonicalize()
+            .map_err(|e| format!("{}: {e}", dir.display()))?;
+        if ancestry.contains(&real) {
+            return Err(format!(
+                "{}: a symbolic-link loop (it leads back to {}); remove the link",
+                dir.display(),
+                real.display()
+            ));
         }
+        if self.exclude.as_ref() == Some(&real)
+            || OUTPUT_MARKERS.iter().any(|m| dir.join(m).is_file())
+        {
+            return Ok(());
+        }
+        self.first_visit(dir)?;
+        let listed = |e: std::io::Error| format!("{}: {e}", dir.display());
+        let mut has_frames = false;
+        let mut subdirs = Vec::new();
+        let mut videos = Vec::new();
+        for entry in std::fs::read_dir(dir).map_err(listed)? {
+            let path = entry.map_err(listed)?.path();
+            let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+            if name.as_deref().is_none_or(|n| n.starts_with('.')) {
+                continue;
+            }
+            let ext = path
+                .extension()
+                .map(|e| e.to_string_lossy().to_ascii_lowercase())
+                .unwrap_or_default();
+            if path.is_dir() {
+                subdirs.push(path);
+            } else if VIDEO_EXTENSIONS.contains(&ext.as_str()) {
+                videos.push(path);
+            } else if FRAME_EXTENSIONS.contains(&ext.as_str()) {
+                has_frames = true;
+            }
+        }
+        if has_frames {
+            self.clips.push(dir.to_path_buf());
+            return Ok(());
+        }
+        for video in videos {
+            self.first_visit(&video)?;
+            self.clips.push(video);
+        }
+        ancestry.push(real);
+        for sub in subdirs {
+            self.visit(&sub, ancestry)?;
+        }
+        ancestry.pop();
+        Ok(())
     }
-    if has_frames {
-        out.push(dir.to_path_buf());
-        return Ok(());
-    }
-    out.extend(videos);
-    for sub in subdirs {
-        collect_clips(&sub, out)?;
-    }
-    Ok(())
 }
 
 fn relative_name(root: &Path, path: &Path) -> String {
@@ -360,6 +432,20 @@ pub struct StudyResults {
     pub experiments: Vec<ExperimentSummary>,
     pub failures: Vec<ClipFailure>,
     pub crate_version: String,
+    /// Set by a `--shard K/N` run: which share, and every clip it owns, so
+    /// [`merge`] can tell a complete set of shards from an incomplete one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<ShardRecord>,
+}
+
+/// What a shard's `study.json` records about the share it ran.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ShardRecord {
+    pub k: usize,
+    pub n: usize,
+    /// The clips of this share (relative paths), each of which must appear among
+    /// its experiments or failures.
+    pub clips: Vec<String>,
 }
 
 impl StudyResults {
@@ -407,24 +493,61 @@ pub enum Outcome<'a> {
 pub struct RunOptions {
     pub shard: Option<Shard>,
     pub resume: bool,
+    /// Replace the previous `study.json` even when this run lost clips it had.
+    pub force: bool,
 }
 
-/// Analyse the clips (of this shard) in parallel and write `out/study.json`.
-/// A failing clip is listed and never stops the others.
+/// What [`run`] did with the output folder's report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyRun {
+    /// This run's results.
+    pub results: StudyResults,
+    /// `Some` when the previous `study.json` was kept because this run would have
+    /// lost clips it had analysed: those clips, in order.
+    pub kept_previous: Option<KeptReport>,
+}
+
+/// A previous report kept in place of a worse run (see [`RunOptions::force`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeptReport {
+    /// Clips analysed in the kept report.
+    pub analysed: usize,
+    /// Clips the kept report had analysed that this run failed or did not run.
+    pub lost: Vec<String>,
+}
+
+impl StudyRun {
+    /// True when every clip of this run was analysed and the report was written.
+    pub fn is_complete(&self) -> bool {
+        self.results.failures.is_empty() && self.kept_previous.is_none()
+    }
+}
+
+/// Analyse the clips (of this shard) in parallel and write `study.json` into the
+/// locked output folder `out` (the caller keeps the lock for the report pages).
+/// A failing clip is listed and never stops the others. When the previous `out/study.json` has analysed clips that
+/// this run failed or left out, it is kept (unless `options.force`), and the
+/// returned [`StudyRun`] says so.
 ///
 /// # Errors
-/// Only when `study.json` cannot be written.
+/// `study.json` cannot be written.
 pub fn run(
     clips: Vec<ClipEntry>,
-    out: &Path,
+    out: &report::OutputLock,
     options: RunOptions,
     analyser: &dyn ClipAnalyser,
     events: &(dyn Fn(StudyEvent) + Sync),
-) -> Result<StudyResults, StudyError> {
+) -> Result<StudyRun, StudyError> {
+    let out = out.folder();
     let clips = match options.shard {
         Some(shard) => shard.select(clips),
         None => clips,
     };
+    let shard = options.shard.map(|s| ShardRecord {
+        k: s.k,
+        n: s.n,
+        clips: clips.iter().map(|c| c.relative.clone()).collect(),
+    });
     events(StudyEvent::Started { clips: clips.len() });
     let outcomes: Vec<Result<ExperimentSummary, Box<ClipFailure>>> = clips
         .par_iter()
@@ -449,6 +572,7 @@ pub fn run(
         .collect();
     let mut results = StudyResults {
         crate_version: env!("CARGO_PKG_VERSION").into(),
+        shard,
         ..StudyResults::default()
     };
     for outcome in outcomes {
@@ -458,8 +582,41 @@ pub fn run(
         }
     }
     results.sort();
-    report::write_json(&out.join(STUDY_FILE), &results)?;
-    Ok(results)
+    let study_file = out.join(STUDY_FILE);
+    let kept_previous = if options.force {
+        None
+    } else {
+        lost_from_previous(&study_file, &results)
+    };
+    if kept_previous.is_none() {
+        report::write_json(&study_file, &results)?;
+    }
+    Ok(StudyRun {
+        results,
+        kept_previous,
+    })
+}
+
+/// The clips the previous report at `path` analysed and `results` does not have:
+/// `Some` when there is at least one (an unreadable previous report counts as none).
+fn lost_from_previous(path: &Path, results: &StudyResults) -> Option<KeptReport> {
+    let bytes = std::fs::read(path).ok()?;
+    let previous: StudyResults = serde_json::from_slice(&bytes).ok()?;
+    let now: BTreeSet<&str> = results
+        .experiments
+        .iter()
+        .map(|e| e.clip.as_str())
+        .collect();
+    let lost: Vec<String> = previous
+        .experiments
+        .iter()
+        .filter(|e| !now.contains(e.clip.as_str()))
+        .map(|e| e.clip.clone())
+        .collect();
+    (!lost.is_empty()).then_some(KeptReport {
+        analysed: previous.experiments.len(),
+        lost,
+    })
 }
 
 fn analyse_one(
@@ -477,31 +634,50 @@ fn analyse_one(
     };
     let key = analyser.resume_key(clip).map_err(fail)?;
     let dir = clip.experiment_dir(out);
-    let summary_path = dir.join(SUMMARY_FILE);
     if resume {
-        let previous = std::fs::read(&summary_path)
+        let previous = std::fs::read(dir.join(SUMMARY_FILE))
             .ok()
             .and_then(|bytes| serde_json::from_slice::<ExperimentSummary>(&bytes).ok());
         if let Some(previous) = previous.filter(|p| p.resume_key == key) {
             return Ok((previous, true));
         }
     }
-    let summary = analyser.analyse(clip, &dir, &key).map_err(fail)?;
-    report::write_json(&summary_path, &summary).map_err(|e| fail(e.to_string()))?;
+    let summary = report::write_folder(&dir, |staging| {
+        let summary = analyser
+            .analyse(clip, staging, &key)
+            .map_err(Failed::Clip)?;
+        report::write_json(&staging.join(SUMMARY_FILE), &summary)?;
+        Ok::<_, Failed>(summary)
+    })
+    .map_err(|e| fail(e.to_string()))?;
     Ok((summary, false))
 }
 
+/// Why one clip's folder was not written: the analysis, or the writing.
+#[derive(Debug, thiserror::Error)]
+enum Failed {
+    #[error("{0}")]
+    Clip(String),
+    #[error(transparent)]
+    Write(#[from] ReportError),
+}
+
 /// Combine the `study.json` of shard output folders into one [`StudyResults`],
-/// identical to what a single run over all clips writes.
+/// identical to what a single run over all clips writes. Every shard must be
+/// there: each records its K/N and the clips it owns, and merge refuses a set
+/// that lacks a K, repeats one, mixes N, or has a clip without a result.
 ///
 /// # Errors
-/// A shard folder without `study.json`, an unreadable one, or a clip that two
-/// shards both analysed.
+/// A shard folder without `study.json`, an unreadable one, one not written by
+/// `--shard`, a missing or repeated shard, a clip a shard owns but has no result
+/// for, or a clip that two shards both analysed.
 pub fn merge(shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
     let mut merged = StudyResults {
         crate_version: env!("CARGO_PKG_VERSION").into(),
         ..StudyResults::default()
     };
+    let mut ks = BTreeSet::new();
+    let mut total = None;
     for dir in shard_dirs {
         let path = dir.join(STUDY_FILE);
         let bad = |reason: String| StudyError::Merge {
@@ -514,6 +690,36 @@ pub fn merge(shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
             return Err(bad(format!(
                 "written by eulerdisk {}, this is {}",
                 shard.crate_version, merged.crate_version
+            )));
+        }
+        let Some(record) = &shard.shard else {
+            return Err(bad(
+                "not a shard: written by a `study` run without --shard".into()
+            ));
+        };
+        if *total.get_or_insert(record.n) != record.n {
+            return Err(bad(format!(
+                "shard {}/{} does not belong with shards of {}",
+                record.k,
+                record.n,
+                total.unwrap_or(0)
+            )));
+        }
+        if !ks.insert(record.k) {
+            return Err(bad(format!(
+                "shard {}/{} given more than once (more than one shard folder holds it)",
+                record.k, record.n
+            )));
+        }
+        let has = |clip: &str| {
+            shard.experiments.iter().any(|e| e.clip == clip)
+                || shard.failures.iter().any(|f| f.clip == clip)
+        };
+        if let Some(missing) = record.clips.iter().find(|c| !has(c)) {
+            return Err(bad(format!(
+                "shard {}/{} owns clip '{missing}' but has no result for it \
+                 (interrupted? run the shard again with --resume)",
+                record.k, record.n
             )));
         }
         let seen = |clip: &str| {
@@ -533,6 +739,21 @@ pub fn merge(shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
         merged.experiments.extend(shard.experiments);
         merged.failures.extend(shard.failures);
     }
+    let n = total.unwrap_or(0);
+    let missing: Vec<String> = (1..=n)
+        .filter(|k| !ks.contains(k))
+        .map(|k| format!("{k}/{n}"))
+        .collect();
+    if !missing.is_empty() {
+        return Err(StudyError::Merge {
+            path: shard_dirs.first().cloned().unwrap_or_default(),
+            reason: format!(
+                "incomplete: shard {} missing ({} of {n} given); give every shard's folder",
+                missing.join(", "),
+                ks.len()
+            ),
+        });
+    }
     merged.sort();
     Ok(merged)
 }
@@ -541,6 +762,13 @@ pub fn merge(shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
 mod tests {
     use super::*;
     use std::sync::Mutex;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+    fn quiet(_: StudyEvent) {}
+
+    fn lock(dir: &Path) -> report::OutputLock {
+        report::OutputLock::acquire(dir).unwrap()
+    }
 
     fn touch(root: &Path, rel: &str) {
         let path = root.join(rel);
@@ -581,7 +809,7 @@ mod tests {
         ] {
             touch(root.path(), rel);
         }
-        let clips = discover(root.path()).unwrap();
+        let clips = discover(root.path(), Path::new("/o")).unwrap();
         let names: Vec<&str> = clips.iter().map(|c| c.relative.as_str()).collect();
         assert_eq!(
             names,
@@ -595,7 +823,7 @@ mod tests {
         let out = Path::new("/o");
         assert_eq!(
             clips[1].experiment_dir(out),
-            Path::new("/o/experiments/euler/steel/run2")
+            Path::new("/o/experiments/euler/steel/run2.mp4")
         );
         assert_eq!(
             clips[0].experiment_dir(out),
@@ -612,7 +840,7 @@ mod tests {
             "path,disk,material,orientation,run\na.mp4,brass,glass,,3\n",
         )
         .unwrap();
-        let clips = discover(root.path()).unwrap();
+        let clips = discover(root.path(), Path::new("/o")).unwrap();
         assert_eq!(clips[0].meta.material.as_deref(), Some("glass"));
         assert_eq!(clips[0].meta.run.as_deref(), Some("3"));
         std::fs::write(
@@ -620,7 +848,9 @@ mod tests {
             "path,material\nb.mp4,glass\n",
         )
         .unwrap();
-        let err = discover(root.path()).unwrap_err().to_string();
+        let err = discover(root.path(), Path::new("/o"))
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("study.csv") && err.contains("b.mp4"), "{err}");
     }
 
@@ -628,7 +858,7 @@ mod tests {
     fn an_empty_root_is_an_error() {
         let root = tempfile::tempdir().unwrap();
         assert!(
-            discover(root.path())
+            discover(root.path(), Path::new("/o"))
                 .unwrap_err()
                 .to_string()
                 .contains("no clips")
@@ -658,9 +888,30 @@ mod tests {
     }
 
     /// An analyser whose "n" is the clip's byte length and that fails on clips
-    /// named `bad*`; it counts its analyses.
+    /// named `bad*` (or on every clip once `fail_all` is set); it counts its
+    /// analyses. It writes `frames.csv` then `result.json`, and dies (panics, as a
+    /// killed process stops) at the `kill_at`-th file write of the run.
     struct Fake {
         calls: Mutex<Vec<String>>,
+        fail_all: AtomicBool,
+        kill_at: AtomicUsize,
+    }
+
+    impl Fake {
+        fn new() -> Self {
+            Fake {
+                calls: Mutex::new(vec![]),
+                fail_all: AtomicBool::new(false),
+                kill_at: AtomicUsize::new(usize::MAX),
+            }
+        }
+
+        fn write(&self, path: &Path, text: &str) {
+            if self.kill_at.fetch_sub(1, Ordering::SeqCst) == 1 {
+                panic!("killed while writing {}", path.display());
+            }
+            std::fs::write(path, text).unwrap();
+        }
     }
 
     impl ClipAnalyser for Fake {
@@ -676,11 +927,12 @@ mod tests {
             key: &str,
         ) -> Result<ExperimentSummary, String> {
             self.calls.lock().unwrap().push(clip.relative.clone());
-            if clip.relative.contains("bad") {
+            if clip.relative.contains("bad") || self.fail_all.load(Ordering::SeqCst) {
                 return Err(format!("{}: no disk in view", clip.path.display()));
             }
-            std::fs::create_dir_all(dir).unwrap();
             let n = std::fs::metadata(&clip.path).unwrap().len() as f64;
+            self.write(&dir.join("frames.csv"), "t_s,z_rim_m\n");
+            self.write(&dir.join("result.json"), &format!("{{\"n\": {n}}}"));
             Ok(ExperimentSummary {
                 clip: clip.relative.clone(),
                 meta: clip.meta.clone(),
@@ -703,20 +955,13 @@ mod tests {
         for rel in ["m1/a.mp4", "m1/bad.mp4", "m2/b.mp4", "m2/c.mp4", "m2/d.mp4"] {
             touch(root.path(), rel);
         }
-        let clips = discover(root.path()).unwrap();
-        let out = tempfile::tempdir().unwrap();
-        let fake = Fake {
-            calls: Mutex::new(vec![]),
-        };
-        let quiet = |_: StudyEvent| {};
-        let full = run(
-            clips.clone(),
-            out.path(),
-            RunOptions::default(),
-            &fake,
-            &quiet,
-        )
-        .unwrap();
+        let clips = discover(root.path(), Path::new("/o")).unwrap();
+        let out_dir = tempfile::tempdir().unwrap();
+        let out = report::OutputLock::acquire(out_dir.path()).unwrap();
+        let fake = Fake::new();
+        let full = run(clips.clone(), &out, RunOptions::default(), &fake, &quiet)
+            .unwrap()
+            .results;
         assert_eq!(full.experiments.len(), 4);
         assert_eq!(full.failures.len(), 1);
         assert!(full.failures[0].reason.contains("bad.mp4"));
@@ -726,9 +971,11 @@ mod tests {
         fake.calls.lock().unwrap().clear();
         let resumed = RunOptions {
             resume: true,
-            shard: None,
+            ..RunOptions::default()
         };
-        let again = run(clips.clone(), out.path(), resumed, &fake, &quiet).unwrap();
+        let again = run(clips.clone(), &out, resumed, &fake, &quiet)
+            .unwrap()
+            .results;
         let mut redone = fake.calls.lock().unwrap().clone();
         redone.sort();
         assert_eq!(redone, ["m1/bad.mp4", "m2/c.mp4"]);
@@ -736,14 +983,15 @@ mod tests {
 
         // Shards in their own folders, merged, equal one run.
         let shard_dirs: Vec<PathBuf> = (1..=2)
-            .map(|k| out.path().join(format!("shard-{k}")))
+            .map(|k| out_dir.path().join(format!("shard-{k}")))
             .collect();
         for (k, dir) in shard_dirs.iter().enumerate() {
             let options = RunOptions {
-                resume: false,
                 shard: Some(Shard { k: k + 1, n: 2 }),
+                ..RunOptions::default()
             };
-            run(clips.clone(), dir, options, &fake, &quiet).unwrap();
+            let lock = report::OutputLock::acquire(dir).unwrap();
+            run(clips.clone(), &lock, options, &fake, &quiet).unwrap();
         }
         assert_eq!(merge(&shard_dirs).unwrap(), again);
         // Merging a shard twice is refused.
@@ -752,7 +1000,261 @@ mod tests {
             merge(&twice)
                 .unwrap_err()
                 .to_string()
-                .contains("more than one shard")
+                .contains("more than once")
         );
+    }
+
+    /// Runs a study of `clips` into `out` with `options`.
+    fn study(clips: &[ClipEntry], out: &Path, options: RunOptions, fake: &Fake) -> StudyRun {
+        run(clips.to_vec(), &lock(out), options, fake, &quiet).unwrap()
+    }
+
+    fn experiments_of(run: &StudyRun) -> Vec<&str> {
+        run.results
+            .experiments
+            .iter()
+            .map(|e| e.clip.as_str())
+            .collect()
+    }
+
+    /// Issue 13.1: `oak/run1.mp4` and `oak/run1.mov` both wrote
+    /// `experiments/oak/run1`, so one result was lost and `--resume` redid one
+    /// every time. Each now has its own folder, and a resume reuses both.
+    #[test]
+    fn two_clips_with_one_name_get_two_folders() {
+        let root = tempfile::tempdir().unwrap();
+        touch(root.path(), "oak/run1.mp4");
+        touch(root.path(), "oak/run1.mov");
+        let clips = discover(root.path(), Path::new("/o")).unwrap();
+        let out = tempfile::tempdir().unwrap();
+        assert_ne!(
+            clips[0].experiment_dir(out.path()),
+            clips[1].experiment_dir(out.path())
+        );
+        let fake = Fake::new();
+        study(&clips, out.path(), RunOptions::default(), &fake);
+        for clip in ["oak/run1.mp4", "oak/run1.mov"] {
+            let summary = out.path().join("experiments").join(clip).join(SUMMARY_FILE);
+            let summary: ExperimentSummary =
+                serde_json::from_slice(&std::fs::read(summary).unwrap()).unwrap();
+            assert_eq!(summary.clip, clip, "each folder holds its own clip");
+        }
+        fake.calls.lock().unwrap().clear();
+        let resumed = RunOptions {
+            resume: true,
+            ..RunOptions::default()
+        };
+        let again = study(&clips, out.path(), resumed, &fake);
+        assert!(fake.calls.lock().unwrap().is_empty(), "both reused");
+        assert_eq!(again.results.experiments.len(), 2);
+    }
+
+    /// Issue 13.2: a symlink loop counted one clip 41 times. A loop is refused,
+    /// naming the link; a second path to one clip is refused too.
+    #[test]
+    fn a_symlink_loop_or_a_clip_reached_twice_is_refused() {
+        let root = tempfile::tempdir().unwrap();
+        touch(root.path(), "oak/run1.mp4");
+        std::os::unix::fs::symlink(root.path().join("oak"), root.path().join("oak/again")).unwrap();
+        let err = discover(root.path(), Path::new("/o"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("loop") && err.contains("oak/again"), "{err}");
+        std::fs::remove_file(root.path().join("oak/again")).unwrap();
+        std::os::unix::fs::symlink(
+            root.path().join("oak/run1.mp4"),
+            root.path().join("oak/run2.mp4"),
+        )
+        .unwrap();
+        let err = discover(root.path(), Path::new("/o"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("counted twice") && err.contains("run2.mp4"),
+            "{err}"
+        );
+        // A link to footage kept elsewhere is followed (once).
+        std::fs::remove_file(root.path().join("oak/run2.mp4")).unwrap();
+        let elsewhere = tempfile::tempdir().unwrap();
+        touch(elsewhere.path(), "run9.mp4");
+        std::os::unix::fs::symlink(elsewhere.path(), root.path().join("glass")).unwrap();
+        let clips = discover(root.path(), Path::new("/o")).unwrap();
+        let names: Vec<&str> = clips.iter().map(|c| c.relative.as_str()).collect();
+        assert_eq!(names, ["glass/run9.mp4", "oak/run1.mp4"]);
+    }
+
+    /// Issue 13.2: `study .` twice took its own output (plots are PNG frames) for
+    /// clips. The output folder, and any folder of eulerdisk results, is skipped.
+    #[test]
+    fn the_output_folder_is_never_footage() {
+        let root = tempfile::tempdir().unwrap();
+        touch(root.path(), "oak/run1.mp4");
+        let out = root.path().join("out/study");
+        let first = discover(root.path(), &out).unwrap();
+        // Outputs as a real run leaves them: a plot in an experiment folder, and
+        // an `analyse` folder elsewhere below the root.
+        touch(&out, "experiments/oak/run1.mp4/series.png");
+        touch(&out, "experiments/oak/run1.mp4/summary.json");
+        touch(root.path(), "out/run1.mp4/calibration.png");
+        touch(root.path(), "out/run1.mp4/result.json");
+        let again = discover(root.path(), &out).unwrap();
+        assert_eq!(again, first);
+    }
+
+    /// Issue 13.2: `merge` of 1 of 2 shards said "merged 1 shards" and exited 0.
+    /// A missing shard, a shard with a clip unaccounted for (an interrupted run),
+    /// and a study that was not sharded are refused.
+    #[test]
+    fn merge_refuses_a_missing_shard() {
+        let root = tempfile::tempdir().unwrap();
+        for rel in ["a.mp4", "b.mp4", "c.mp4"] {
+            touch(root.path(), rel);
+        }
+        let clips = discover(root.path(), Path::new("/o")).unwrap();
+        let out = tempfile::tempdir().unwrap();
+        let fake = Fake::new();
+        let dirs: Vec<PathBuf> = (1..=2).map(|k| out.path().join(format!("s{k}"))).collect();
+        for (k, dir) in dirs.iter().enumerate() {
+            let options = RunOptions {
+                shard: Some(Shard { k: k + 1, n: 2 }),
+                ..RunOptions::default()
+            };
+            study(&clips, dir, options, &fake);
+        }
+        let err = merge(&dirs[..1]).unwrap_err().to_string();
+        assert!(err.contains("shard 2/2 missing"), "{err}");
+        assert_eq!(merge(&dirs).unwrap().experiments.len(), 3);
+
+        // Shard 1 lost a clip's result (as a run killed before study.json was
+        // complete would).
+        let path = dirs[0].join(STUDY_FILE);
+        let mut shard: StudyResults =
+            serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+        shard.experiments.pop();
+        report::write_json(&path, &shard).unwrap();
+        let err = merge(&dirs).unwrap_err().to_string();
+        assert!(err.contains("has no result for it"), "{err}");
+
+        let whole = out.path().join("whole");
+        study(&clips, &whole, RunOptions::default(), &fake);
+        let err = merge(&[whole]).unwrap_err().to_string();
+        assert!(err.contains("not a shard"), "{err}");
+    }
+
+    /// Issue 13.2: a typo in the root `eulerdisk.toml` made every clip fail and the
+    /// re-run replaced the previous complete report. The previous report is kept,
+    /// the lost clips are named, and `force` replaces it.
+    #[test]
+    fn a_failed_rerun_keeps_the_better_report() {
+        let root = tempfile::tempdir().unwrap();
+        for rel in ["a.mp4", "b.mp4"] {
+            touch(root.path(), rel);
+        }
+        let clips = discover(root.path(), Path::new("/o")).unwrap();
+        let out = tempfile::tempdir().unwrap();
+        let fake = Fake::new();
+        let good = study(&clips, out.path(), RunOptions::default(), &fake);
+        assert!(good.is_complete());
+        let before = std::fs::read(out.path().join(STUDY_FILE)).unwrap();
+
+        fake.fail_all.store(true, Ordering::SeqCst);
+        let failed = study(&clips, out.path(), RunOptions::default(), &fake);
+        assert!(!failed.is_complete());
+        assert_eq!(
+            failed.kept_previous,
+            Some(KeptReport {
+                analysed: 2,
+                lost: vec!["a.mp4".into(), "b.mp4".into()]
+            })
+        );
+        assert_eq!(std::fs::read(out.path().join(STUDY_FILE)).unwrap(), before);
+        // The failed analyses did not touch the clips' folders either.
+        assert!(out.path().join("experiments/a.mp4/result.json").is_file());
+
+        let forced = RunOptions {
+            force: true,
+            ..RunOptions::default()
+        };
+        let replaced = study(&clips, out.path(), forced, &fake);
+        assert_eq!(replaced.kept_previous, None);
+        let now: StudyResults =
+            serde_json::from_slice(&std::fs::read(out.path().join(STUDY_FILE)).unwrap()).unwrap();
+        assert_eq!(now.failures.len(), 2);
+    }
+
+    /// Issue 13, fault injection: a 40-clip study with 8 broken clips, killed at
+    /// three random points (mid-write of a clip's files), then resumed, gives the
+    /// report an uninterrupted run gives, lists the 8 failures, is not complete,
+    /// and leaves no half-written folder behind.
+    #[test]
+    fn a_study_killed_three_times_and_resumed_equals_an_uninterrupted_run() {
+        let root = tempfile::tempdir().unwrap();
+        for i in 0..40 {
+            let name = if i % 5 == 3 { "bad" } else { "run" };
+            // Different bytes per clip, so every clip has its own n.
+            let path = root.path().join(format!("m{}/{name}{i}.mp4", i % 4));
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(&path, vec![b'x'; 100 + i]).unwrap();
+        }
+        let clips = discover(root.path(), Path::new("/o")).unwrap();
+        let reference_out = tempfile::tempdir().unwrap();
+        let reference = study(
+            &clips,
+            reference_out.path(),
+            RunOptions::default(),
+            &Fake::new(),
+        );
+        assert_eq!(reference.results.failures.len(), 8);
+
+        let out = tempfile::tempdir().unwrap();
+        let resumed = RunOptions {
+            resume: true,
+            ..RunOptions::default()
+        };
+        let fake = Fake::new();
+        let mut rng = crate::rng::SplitMix64::new(13);
+        for _ in 0..3 {
+            // Each good clip not yet done writes 2 files: kill somewhere among them.
+            let to_do = clips
+                .iter()
+                .filter(|c| !c.relative.contains("bad"))
+                .filter(|c| !c.experiment_dir(out.path()).join(SUMMARY_FILE).is_file())
+                .count();
+            let kill_at = 1 + (rng.next_u64() % (2 * to_do as u64)) as usize;
+            fake.kill_at.store(kill_at, Ordering::SeqCst);
+            let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                study(&clips, out.path(), resumed, &fake)
+            }));
+            assert!(killed.is_err(), "the run was killed at write {kill_at}");
+        }
+        fake.kill_at.store(usize::MAX, Ordering::SeqCst);
+        let last = study(&clips, out.path(), resumed, &fake);
+        assert_eq!(last.results, reference.results);
+        assert!(!last.is_complete());
+        let failed: Vec<&str> = last
+            .results
+            .failures
+            .iter()
+            .map(|f| f.clip.as_str())
+            .collect();
+        assert_eq!(failed.len(), 8);
+        assert!(failed.iter().all(|c| c.contains("/bad")), "{failed:?}");
+        let on_disk: StudyResults =
+            serde_json::from_slice(&std::fs::read(out.path().join(STUDY_FILE)).unwrap()).unwrap();
+        assert_eq!(on_disk, reference.results);
+        for e in &last.results.experiments {
+            let dir = out.path().join("experiments").join(&e.clip);
+            let result = std::fs::read_to_string(dir.join("result.json")).unwrap();
+            assert_eq!(result, format!("{{\"n\": {}}}", e.n), "{}", e.clip);
+            let siblings = std::fs::read_dir(dir.parent().unwrap()).unwrap();
+            for s in siblings {
+                let name = s.unwrap().file_name().to_string_lossy().into_owned();
+                assert!(
+                    !name.contains("staging") && !name.contains("replaced"),
+                    "{name}"
+                );
+            }
+        }
+        assert_eq!(experiments_of(&last).len(), 32);
     }
 }

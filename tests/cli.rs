@@ -95,3 +95,187 @@ fn reproduce_writes_table() {
     assert!((painleve["ours"].as_f64().unwrap() - 1.105).abs() < 1e-3);
     assert!(dir.path().join("rep/reproduce.md").is_file());
 }
+
+fn stderr(out: &std::process::Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Issue 13.1, 13.5, 13.6, 13.7 on one analysed fixture: `analyse a/run1.mp4;
+/// analyse b/run1.mp4` silently replaced the first result (now refused, naming
+/// both clips); `-c` naming a folder said "no such file"; an output path that is a
+/// file said "File exists (os error 17)"; `compare` accepted `--contact-gap=-1`
+/// (a post-flat time of −2.48e9 s), φ = 3 rad and a peak after the halt; and the
+/// JSON outputs were 0600 whatever the umask.
+#[test]
+fn analyse_and_compare_refuse_what_would_mix_or_mislead() {
+    let dir = tempfile::tempdir().unwrap();
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+    for (clip, fixture) in [
+        ("a/run1.mp4", "side-dark-n050.mp4"),
+        ("b/run1.mp4", "two-view-n045.mp4"),
+        ("c/run1.mp4", "side-dark-n050.mp4"),
+    ] {
+        let path = dir.path().join(clip);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::copy(fixtures.join(fixture), &path).unwrap();
+    }
+    std::fs::write(dir.path().join("plain"), b"x").unwrap();
+    std::fs::create_dir(dir.path().join("configs")).unwrap();
+
+    let out = eulerdisk(dir.path(), &["analyse", "a/run1.mp4", "-c", "configs"]);
+    assert!(
+        stderr(&out).contains("a folder, not a config file"),
+        "{}",
+        stderr(&out)
+    );
+    let out = eulerdisk(dir.path(), &["analyse", "a/run1.mp4", "-o", "plain/x"]);
+    let err = stderr(&out);
+    assert!(
+        err.contains("plain") && err.contains("is a file") && !err.contains("os error"),
+        "{err}"
+    );
+
+    let out = eulerdisk(dir.path(), &["analyse", "a/run1.mp4"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let experiment = dir.path().join("out/run1.mp4");
+    let result = experiment.join("result.json");
+    use std::os::unix::fs::PermissionsExt;
+    let mode = |p: &std::path::Path| p.metadata().unwrap().permissions().mode() & 0o777;
+    assert_eq!(
+        mode(&result),
+        mode(&dir.path().join("plain")),
+        "the umask's permissions"
+    );
+
+    let out = eulerdisk(dir.path(), &["analyse", "b/run1.mp4"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(
+        err.contains("a/run1.mp4") && err.contains("b/run1.mp4"),
+        "{err}"
+    );
+    // An identical copy is the same clip: no refusal.
+    let out = eulerdisk(dir.path(), &["analyse", "c/run1.mp4"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+
+    let out = eulerdisk(
+        dir.path(),
+        &[
+            "compare",
+            "out/run1.mp4",
+            "--model",
+            "contour",
+            "--contact-gap=-1",
+        ],
+    );
+    assert!(stderr(&out).contains("--contact-gap"), "{}", stderr(&out));
+
+    let original: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&result).unwrap()).unwrap();
+    for (field, value, words) in [
+        ("phi", 3.0, "outside [0, π/2)"),
+        ("t", 0.5, "after the halt"),
+    ] {
+        let mut edited = original.clone();
+        edited["series"]["peaks"]["peaks"][0][field] = value.into();
+        std::fs::write(&result, serde_json::to_vec(&edited).unwrap()).unwrap();
+        let out = eulerdisk(
+            dir.path(),
+            &["compare", "out/run1.mp4", "--model", "contour"],
+        );
+        assert!(!out.status.success());
+        assert!(stderr(&out).contains(words), "{field}: {}", stderr(&out));
+    }
+}
+
+/// Issue 13.7: a folder the user cannot write is an error naming it, not a panic.
+/// (Skipped as root, who can write anywhere.)
+#[test]
+fn a_read_only_output_folder_is_an_error_naming_it() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let locked = dir.path().join("locked");
+    std::fs::create_dir(&locked).unwrap();
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+    if std::fs::write(locked.join("probe"), b"x").is_ok() {
+        eprintln!("SKIPPED: running as root, a read-only folder is writable");
+        return;
+    }
+    let out = eulerdisk(
+        dir.path(),
+        &[
+            "simulate",
+            "--model",
+            "none",
+            "--t-end",
+            "0.01",
+            "-o",
+            "locked/run",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(
+        err.contains("locked") && err.contains("ermission denied"),
+        "{err}"
+    );
+}
+
+/// Issue 13.4: `simulate --model none --t-end 1e9` grew without limit (481 MB after
+/// 36 s), `--psi-dot 1e9` and `--stop-at 1e9` ran past 120 s, and `render --size
+/// 100000x100000` aborted with an allocation failure. Each now stops with an error
+/// that names the bound: the first after MAX_SAMPLES output samples (100 s of motion
+/// at the default 0.1 ms); with coarse samples, after MAX_STEPS integrator steps
+/// (about 5 000 s of Coulomb-only motion); the others before any work.
+#[test]
+fn simulate_and_render_bound_their_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let runs = [
+        (
+            &["simulate", "--model", "none", "--t-end", "1e9"][..],
+            "t = 100.0",
+        ),
+        (
+            &[
+                "simulate", "--model", "none", "--t-end", "1e9", "--dt", "1000",
+            ][..],
+            "no progress: 5000000 integrator steps",
+        ),
+        (
+            &["simulate", "--model", "none", "--psi-dot", "1e9"][..],
+            "speed of sound",
+        ),
+        (
+            &["simulate", "--model", "contour", "--stop-at", "1e9"][..],
+            "between 0 and 50 s",
+        ),
+        (
+            &["render", "--size", "100000x100000", "-o", "big.mp4"][..],
+            "exceed the limit",
+        ),
+        (
+            &["render", "--halt", "1e9", "-o", "long.mp4"][..],
+            "at most 100000 frames",
+        ),
+    ]
+    .map(|(args, words)| {
+        // All at once: the step-bound run takes some seconds.
+        let child = std::process::Command::new(env!("CARGO_BIN_EXE_eulerdisk"))
+            .args(args)
+            .current_dir(dir.path())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("run eulerdisk");
+        (args, words, child)
+    });
+    for (args, words, child) in runs {
+        let out = child.wait_with_output().unwrap();
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let err = stderr(&out);
+        assert!(
+            err.contains(words) && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+    }
+}

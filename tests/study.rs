@@ -50,6 +50,18 @@ fn footage_tree(root: &Path) {
     }
 }
 
+/// Exit status 2: the study (or merge) finished, but clips failed or the
+/// previous report was kept.
+fn clips_failed(out: &std::process::Output) {
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "stdout: {}\nstderr: {}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn study_json(dir: &Path) -> Value {
     serde_json::from_slice(&std::fs::read(dir.join("study.json")).unwrap()).unwrap()
 }
@@ -64,7 +76,7 @@ fn study_survives_bad_clips_resumes_and_merges_shards() {
     footage_tree(&root);
 
     let out = eulerdisk(dir.path(), &["study", "footage", "-o", "full"]);
-    ok(&out);
+    clips_failed(&out);
     let full = study_json(&dir.path().join("full"));
     let experiments = full["experiments"].as_array().unwrap();
     let failures = full["failures"].as_array().unwrap();
@@ -91,13 +103,13 @@ fn study_survives_bad_clips_resumes_and_merges_shards() {
     assert!(page.contains("no disk in view"));
     assert!(
         dir.path()
-            .join("full/experiments/euler/oak/run1/index.html")
+            .join("full/experiments/euler/oak/run1.mp4/index.html")
             .is_file()
     );
 
     // Resume: every good clip is reused, the failed ones are tried again.
     let out = eulerdisk(dir.path(), &["study", "footage", "-o", "full", "--resume"]);
-    ok(&out);
+    clips_failed(&out);
     let log = String::from_utf8_lossy(&out.stderr);
     assert_eq!(log.matches("reused").count(), 4, "{log}");
     assert_eq!(log.matches("FAILED").count(), 3, "{log}");
@@ -105,12 +117,12 @@ fn study_survives_bad_clips_resumes_and_merges_shards() {
     // Shards 1/2 and 2/2, merged, equal the single run.
     for k in ["1/2", "2/2"] {
         let name = format!("shard-{}", &k[..1]);
-        ok(&eulerdisk(
+        clips_failed(&eulerdisk(
             dir.path(),
             &["study", "footage", "-o", &name, "--shard", k],
         ));
     }
-    ok(&eulerdisk(
+    clips_failed(&eulerdisk(
         dir.path(),
         &["merge", "shard-1", "shard-2", "-o", "merged"],
     ));
@@ -120,6 +132,35 @@ fn study_survives_bad_clips_resumes_and_merges_shards() {
     assert_eq!(
         merged_page, page,
         "the merged report is the single run's report"
+    );
+
+    // Issue 13.2: merging 1 of 2 shards said "merged 1 shards" and exited 0.
+    let out = eulerdisk(dir.path(), &["merge", "shard-1", "-o", "half"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("shard 2/2 missing"), "{stderr}");
+    assert!(!dir.path().join("half/study.json").exists());
+
+    // Issue 13.2: a typo in the root eulerdisk.toml made every clip fail, replaced
+    // the complete report and exited 0. The report is kept, the run says so and
+    // why (the file, the key and its line), and exits 2.
+    let before = std::fs::read(dir.path().join("full/study.json")).unwrap();
+    std::fs::write(root.join("eulerdisk.toml"), "fps = 480\nfsp = 480\n").unwrap();
+    let out = eulerdisk(dir.path(), &["study", "footage", "-o", "full", "--resume"]);
+    clips_failed(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("kept the previous report"), "{stderr}");
+    assert!(
+        stderr.contains("eulerdisk.toml") && stderr.contains("fsp") && stderr.contains("line 2"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read(dir.path().join("full/study.json")).unwrap(),
+        before
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("full/index.html")).unwrap(),
+        page
     );
 }
 
@@ -166,11 +207,11 @@ fn study_page_loads_in_headless_chromium_without_errors() {
     ));
     let root = dir.path().join("footage");
     footage_tree(&root);
-    ok(&eulerdisk(dir.path(), &["study", "footage", "-o", "full"]));
+    clips_failed(&eulerdisk(dir.path(), &["study", "footage", "-o", "full"]));
     for page in [
         "pub/index.html",
         "full/index.html",
-        "full/experiments/euler/oak/run1/index.html",
+        "full/experiments/euler/oak/run1.mp4/index.html",
     ] {
         let url = format!("file://{}", dir.path().join(page).display());
         let out = Command::new(chromium)
@@ -194,4 +235,97 @@ fn study_page_loads_in_headless_chromium_without_errors() {
         let console: Vec<&str> = log.lines().filter(|l| l.contains("CONSOLE")).collect();
         assert!(console.is_empty(), "{page}: console messages: {console:#?}");
     }
+}
+
+/// Issue 13, fault injection with real kills: a 12-clip study (2 broken clips) is
+/// killed with SIGKILL three times, each after a random number of finished clips
+/// (seeded), and resumed; the final report equals an uninterrupted run's, lists
+/// the 2 failures, exits 2, and no staging folder of a killed run is left.
+#[test]
+fn a_study_killed_three_times_resumes_to_the_uninterrupted_report() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("footage");
+    let good = std::fs::read(fixture("side-dark-n050.mp4")).unwrap();
+    std::fs::create_dir_all(&root).unwrap();
+    std::fs::write(root.join("eulerdisk.toml"), "fps = 480\n").unwrap();
+    for i in 0..12 {
+        let folder = root.join(format!("m{}", i % 2));
+        std::fs::create_dir_all(&folder).unwrap();
+        let bytes: &[u8] = if i % 6 == 5 { b"not a video" } else { &good };
+        std::fs::write(folder.join(format!("run{i}.mp4")), bytes).unwrap();
+    }
+    clips_failed(&eulerdisk(
+        dir.path(),
+        &["study", "footage", "-o", "reference"],
+    ));
+
+    let mut rng = eulerdisk::rng::SplitMix64::new(13);
+    let mut kills = 0;
+    for _ in 0..3 {
+        // Killed after 1–3 clips this run analysed (reused ones do not count): at
+        // most 9 of the 12 are done before the last run, and the 2 broken clips are
+        // tried in every run, so a kill always comes before the end.
+        let kill_after = 1 + (rng.next_u64() % 3) as usize;
+        let mut child = Command::new(env!("CARGO_BIN_EXE_eulerdisk"))
+            .args(["study", "footage", "-o", "killed", "--resume"])
+            .current_dir(dir.path())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+        let mut finished = 0;
+        for line in stderr.lines() {
+            let line = line.unwrap();
+            if line.starts_with('[') && !line.contains("reused") {
+                finished += 1;
+                if finished == kill_after {
+                    child.kill().unwrap();
+                    kills += 1;
+                    break;
+                }
+            }
+        }
+        child.wait().unwrap();
+    }
+    assert_eq!(kills, 3);
+    let last = eulerdisk(
+        dir.path(),
+        &["study", "footage", "-o", "killed", "--resume"],
+    );
+    clips_failed(&last);
+    let reference = study_json(&dir.path().join("reference"));
+    let resumed = study_json(&dir.path().join("killed"));
+    assert_eq!(resumed, reference);
+    assert_eq!(resumed["failures"].as_array().unwrap().len(), 2);
+    for m in ["m0", "m1"] {
+        for entry in std::fs::read_dir(dir.path().join("killed/experiments").join(m)).unwrap() {
+            let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+            assert!(
+                !name.contains("staging") && !name.contains("replaced"),
+                "{name}"
+            );
+        }
+    }
+}
+
+/// Issue 13.1/13.2: two runs into one output folder at once (two shards into one
+/// `-o`) mixed their results; the second is refused while the first holds the
+/// folder's lock, with exit status 1 and the reason.
+#[test]
+fn a_second_study_into_a_held_folder_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("footage");
+    footage_tree(&root);
+    let held = eulerdisk::report::OutputLock::acquire(&dir.path().join("out")).unwrap();
+    let out = eulerdisk(
+        dir.path(),
+        &["study", "footage", "-o", "out", "--shard", "1/2"],
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("another eulerdisk run"), "{err}");
+    assert!(!dir.path().join("out/study.json").exists());
+    drop(held);
 }

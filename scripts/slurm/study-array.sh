@@ -7,7 +7,9 @@
 #
 # Each task analyses every N-th clip (deterministic: clips sorted by path), writes
 # out/study/shard-K/ atomically, and reuses unchanged results on a rerun
-# (--resume), so a task that hit its time limit can simply be resubmitted.
+# (--resume), so a task that hit its time limit can simply be resubmitted. A task
+# whose shard has failed clips exits with status 2 (Slurm shows it as failed); its
+# report lists them, and merge still combines it (and also exits 2).
 #SBATCH --job-name=eulerdisk-study
 #SBATCH --cpus-per-task=4
 #SBATCH --mem=4G

@@ -38,10 +38,23 @@ const TOLERANCE: f64 = 1e-12;
 const EVENT_TOLERANCE: f64 = 1e-13;
 /// First step of a slipping phase, scaled time; RODAS4 grows it by up to 6× a step.
 const INITIAL_SLIP_STEP: f64 = 1e-6;
-/// Step limit of one phase.
-const MAX_STEPS: usize = 50_000_000;
+/// Step limit of a whole run (accepted and rejected, every phase): the thesis's runs
+/// take 3 000–5 000 steps, Coulomb friction alone about 1 000 per second of motion.
+/// A run that needs more makes no useful progress (a t_end far beyond any halt, or
+/// steps shrunk by extreme rates) and stops with [`SimulationError::NoProgress`]
+/// after some tens of seconds rather than running for hours.
+pub const MAX_STEPS: usize = 5_000_000;
 /// Guard against endless chattering between modes.
 const MAX_SWITCHES: usize = 200_000;
+/// Most output samples a run keeps (about 250 MB with their SI copies): memory is
+/// bounded whatever t_end, and a run that needs more stops with
+/// [`SimulationError::TooManySamples`].
+pub const MAX_SAMPLES: usize = 1_000_000;
+/// Fastest rim speed R·max(|ψ̇|, |θ̇|, |φ̇|) accepted at the start [m/s]: the speed
+/// of sound in air. The rigid rolling disk of Chapter 4 (and its air film) has long
+/// stopped describing anything real there, and the integrator's steps would shrink
+/// without end.
+pub const MAX_RIM_SPEED_M_S: f64 = 343.0;
 
 /// Initial conditions in SI, ordered as eq. (4.43): angles in rad, rates in rad/s,
 /// slip position in m and slip velocity in m/s (intermediate frame).
@@ -278,6 +291,26 @@ pub enum SimulationError {
         /// Time [s].
         t: f64,
     },
+    /// The run took [`MAX_STEPS`] integrator steps without ending.
+    #[error(
+        "no progress: {MAX_STEPS} integrator steps reached only t = {t:.6} s of t_end = \
+         {t_end} s; lower t_end (--t-end), or check the initial rates"
+    )]
+    NoProgress {
+        /// Time reached [s].
+        t: f64,
+        /// The time asked for [s].
+        t_end: f64,
+    },
+    /// The run would keep more output samples than [`MAX_SAMPLES`].
+    #[error(
+        "stopped at t = {t:.6} s: {MAX_SAMPLES} output samples reached before the motion \
+         ended (a memory bound); lower t_end (--t-end) or raise the output interval (--dt)"
+    )]
+    TooManySamples {
+        /// Time reached [s].
+        t: f64,
+    },
 }
 
 /// One mode's vector field, for the integrator.
@@ -358,6 +391,10 @@ struct PhaseOutput {
     last: (f64, StateVector),
     /// Set when the integration stopped, without an event, to change integrator.
     handover: bool,
+    /// Samples this phase may still record before [`MAX_SAMPLES`] is reached.
+    room: usize,
+    /// Set when the phase stopped because `room` ran out.
+    full: bool,
 }
 
 /// Records the uniform output samples inside one accepted step [t_prev, t_curr] and
@@ -397,6 +434,10 @@ fn record_step(
 
     let t_stop = earliest.map_or(t_curr, |(_, t)| t);
     while out.next_output <= t_stop {
+        if out.states.len() >= out.room {
+            out.full = true;
+            return true;
+        }
         let t = out.next_output;
         out.states.push((t, state_at(t)));
         out.next_output += out.output_step;
@@ -534,8 +575,8 @@ fn integrate_slipping(
             break Err(failure(t, "RODAS4 step size underflow"));
         };
         stats.accepted_steps += 1;
-        if stats.accepted_steps > MAX_STEPS {
-            break Err(failure(t, "too many steps"));
+        if stats.accepted_steps + stats.rejected_steps > MAX_STEPS {
+            break Err(SimulationError::NoProgress { t, t_end });
         }
         let t_next = if h_done == t_end - t {
             t_end
@@ -674,6 +715,19 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
             spec.initial.phi
         )));
     }
+    let i = &spec.initial;
+    let fastest = i.psi_dot.abs().max(i.theta_dot.abs()).max(i.phi_dot.abs());
+    let finite = [i.psi_dot, i.theta_dot, i.phi_dot]
+        .iter()
+        .all(|v| v.is_finite());
+    if !finite || fastest * p.radius > MAX_RIM_SPEED_M_S {
+        return Err(SimulationError::BadInput(format!(
+            "an initial rate of {fastest} rad/s moves the rim at {:.3e} m/s, beyond \
+             {MAX_RIM_SPEED_M_S} m/s (the speed of sound in air): give rates below {:.0} rad/s",
+            fastest * p.radius,
+            MAX_RIM_SPEED_M_S / p.radius
+        )));
+    }
 
     let units = Units::of(p);
     let mut y = units.to_scaled(&spec.initial);
@@ -725,6 +779,8 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
             hit: None,
             last: (tau, y),
             handover: false,
+            room: MAX_SAMPLES.saturating_sub(scaled_samples.len()),
+            full: false,
         };
         let slip_speed = y[X_DOT].hypot(y[Y_DOT]);
         if mode == Mode::Slipping && stiff {
@@ -734,6 +790,10 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
                     SimulationError::Integration { t, reason } => SimulationError::Integration {
                         t: t * units.time,
                         reason,
+                    },
+                    SimulationError::NoProgress { t, .. } => SimulationError::NoProgress {
+                        t: t * units.time,
+                        t_end: spec.t_end,
                     },
                     other => other,
                 },
@@ -752,13 +812,23 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
                     ExplicitRungeKutta::dop853()
                         .rtol(TOLERANCE)
                         .atol(TOLERANCE)
-                        .max_steps(MAX_STEPS),
+                        .max_steps(
+                            MAX_STEPS
+                                .saturating_sub(stats.accepted_steps + stats.rejected_steps)
+                                .max(1),
+                        ),
                 )
                 .solout(recorder)
                 .solve()
-                .map_err(|e| SimulationError::Integration {
-                    t: tau * units.time,
-                    reason: format!("{e:?}").chars().take(200).collect(),
+                .map_err(|e| match e {
+                    Error::MaxSteps { t, .. } => SimulationError::NoProgress {
+                        t: t * units.time,
+                        t_end: spec.t_end,
+                    },
+                    e => SimulationError::Integration {
+                        t: tau * units.time,
+                        reason: format!("{e:?}").chars().take(200).collect(),
+                    },
                 })?;
             stats.rhs_evaluations += solution.evals.function;
             stats.accepted_steps += solution.steps.accepted;
@@ -766,6 +836,11 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
         }
         next_output = out.next_output;
         scaled_samples.extend(out.states.iter().map(|&(t, s)| (t, s, mode)));
+        if out.full || scaled_samples.len() >= MAX_SAMPLES {
+            return Err(SimulationError::TooManySamples {
+                t: out.last.0 * units.time,
+            });
+        }
 
         if out.hit.is_none() && out.handover {
             // Same phase, other integrator.

@@ -308,6 +308,10 @@ pub fn peak_z_rim(params: &DiskParams, phi: f64, elevation: f64) -> f64 {
     2.0 * r * phi.sin() + (r * (1.0 - phi.cos()) - h * phi.sin()) * elevation.tan()
 }
 
+/// Largest frame rendered [px] (3840 × 2160, 4K UHD): a frame and its background
+/// are held in memory as floats, 16 frames at a time.
+pub const MAX_FRAME_PIXELS: u64 = 3840 * 2160;
+
 /// Renders the frames of one clip on demand and holds its ground truth.
 pub struct Renderer {
     spec: RenderSpec,
@@ -756,6 +760,13 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
             spec.width, spec.height
         ));
     }
+    if u64::from(spec.width) * u64::from(spec.height) > MAX_FRAME_PIXELS {
+        return fail(format!(
+            "frames of {} × {} px exceed the limit of {MAX_FRAME_PIXELS} px (3840 × 2160, \
+             4K UHD): each is rendered in memory, 16 at a time",
+            spec.width, spec.height
+        ));
+    }
     if !(spec.elevation_deg > 0.0 && spec.elevation_deg <= 30.0) {
         return fail(format!(
             "the camera elevation must lie in (0°, 30°], got {}°",
@@ -1111,6 +1122,13 @@ mod tests {
         let written = write_clip(&r, &folder).expect("write");
         let files = crate::footage::frame_files(&folder).expect("frames");
         assert_eq!(files.len(), 17);
+        // Issue 13.7: the folder gets the umask's permissions, as one made by hand.
+        let by_hand = dir.path().join("by-hand");
+        std::fs::create_dir(&by_hand).expect("mkdir");
+        let mode = |p: &std::path::Path| {
+            std::os::unix::fs::PermissionsExt::mode(&p.metadata().unwrap().permissions())
+        };
+        assert_eq!(mode(&folder), mode(&by_hand));
         assert!(files[16].ends_with("frame_000017.png"));
         let text = std::fs::read_to_string(&written.truth).expect("truth");
         let truth: GroundTruth = serde_json::from_str(&text).expect("json");

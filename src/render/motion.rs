@@ -90,9 +90,24 @@ impl Timing {
                 self.fps, self.halt_time, self.after_halt
             )));
         }
+        let frames = self.fps * (self.halt_time + self.after_halt);
+        if !(self.fps <= MAX_FPS && frames <= MAX_FRAMES as f64) {
+            return Err(RenderError::invalid(format!(
+                "{frames:.0} frames at {} frames/s over {} s: a clip holds at most {MAX_FRAMES} \
+                 frames at up to {MAX_FPS} frames/s (shorten --halt/--after-halt or lower --fps)",
+                self.fps,
+                self.halt_time + self.after_halt
+            )));
+        }
         Ok(())
     }
 }
+
+/// Most frames in one rendered clip (about 3.5 min at the thesis's 480 fps): the
+/// motion is held in memory frame by frame.
+pub const MAX_FRAMES: usize = 100_000;
+/// Fastest frame rate rendered [frames/s], as the analysis accepts (config::MAX_FPS).
+const MAX_FPS: f64 = crate::config::MAX_FPS;
 
 /// The spin after the disk has fallen flat: β̇ starts at `beta_dot0` and decays
 /// linearly under the rim friction torque μ m g R (eq. 4.112, ERRATA), stopping at

@@ -95,8 +95,10 @@ pub fn write_clip(renderer: &Renderer, path: &Path) -> Result<WrittenClip, Rende
             }
         }
         ClipFormat::PngFolder => {
+            // 0777 less the umask, as any folder the user makes (not tempfile's 0700).
             let tmp = tempfile::Builder::new()
                 .prefix(&format!(".{name}.partial-"))
+                .permissions(std::os::unix::fs::PermissionsExt::from_mode(0o777))
                 .tempdir_in(&dir)
                 .map_err(|e| fail(path, e.to_string()))?;
             write_pngs(renderer, tmp.path()).map_err(|(p, reason)| fail(&p, reason))?;

@@ -12,7 +12,7 @@
 //! | `series.svg/.png`, `states.svg/.png`, `energy.svg` | plots |
 //! | `calibration.png`, `threshold.png` | diagnostic images (figs. 3.3, 3.7) |
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use maud::html;
 use plotters::prelude::*;
@@ -77,6 +77,25 @@ fn plot_error(e: impl std::fmt::Display) -> ReportError {
 /// Write every output of an experiment into `dir` (created if missing).
 ///
 /// # Errors
+/// The clip whose analysis `dir` holds (from its `plan.json`), when that is another
+/// clip than `clip`: a different real path and different bytes (the same file
+/// reached another way, or an identical copy, is the same clip). One output folder
+/// must not silently change from one clip's results to another's.
+pub fn other_clip_in(dir: &Path, clip: &Path) -> Option<PathBuf> {
+    let bytes = std::fs::read(dir.join("plan.json")).ok()?;
+    let plan: serde_json::Value = serde_json::from_slice(&bytes).ok()?;
+    let previous = PathBuf::from(plan.get("clip")?.as_str()?);
+    let real = |p: &Path| p.canonicalize().unwrap_or_else(|_| p.to_path_buf());
+    if real(&previous) == real(clip) {
+        return None;
+    }
+    let same_bytes = plan
+        .get("clip_hash")
+        .and_then(|h| h.as_str())
+        .is_some_and(|h| crate::analyse::clip_hash(clip).is_ok_and(|now| now == h));
+    (!same_bytes).then_some(previous)
+}
+
 /// A file cannot be written or a plot cannot be drawn.
 pub fn write_experiment(dir: &Path, experiment: &Experiment) -> Result<(), ReportError> {
     let e = experiment;

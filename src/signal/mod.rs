@@ -293,7 +293,7 @@ pub enum SignalError {
     #[error(
         "no rest tail: the rim still moves at t = {t_moving} s (z_rim − rest = {deviation} m \
          > threshold {threshold} m), after the tail's start at {tail_start} s; the clip may \
-         end before the halt, or rest_tail_s is longer than the rest"
+         end before the halt, or film too little rest after it (at least 0.1 s is needed)"
     )]
     TailNotAtRest {
         tail_start: f64,
@@ -320,8 +320,8 @@ pub enum SignalError {
     /// Fewer than three peaks in the analysis window.
     #[error(
         "{found} peak(s) of z_rim in the window [{window_start}, {window_end}] s before the \
-         halt; at least {needed} are needed for φ, ψ and ψ̇ (lengthen window_s or lower \
-         prominence_sigmas)"
+         halt; at least {needed} are needed for φ, ψ and ψ̇ (lengthen `fit.window_s` in the \
+         config, or check the frame rate: too few frames per precession turn hide peaks)"
     )]
     TooFewPeaks {
         found: usize,
@@ -505,7 +505,7 @@ pub struct StateSeries {
     pub states: Vec<FrameState>,
     /// β analysis, for two-view clips.
     pub strip: Option<StripAnalysis>,
-    /// Frame-skip flags over the whole clip.
+    /// Frame-skip flags over the whole clip, timed with the halt at 0.
     pub flags: Vec<FrameFlag>,
 }
 
@@ -537,7 +537,7 @@ pub fn analyse(
         }
         None => None,
     };
-    let flags = frame_skips(
+    let mut flags = frame_skips(
         t,
         z_rim,
         strip.as_ref().map(|s| s.series.beta.as_slice()),
@@ -545,6 +545,11 @@ pub fn analyse(
         model,
         config,
     )?;
+    // One time base for everything returned: the halt at 0, as the peaks, states
+    // and fit window are (flags were found on the caller's clip time).
+    for flag in &mut flags {
+        flag.t = halt.shifted_t[flag.index];
+    }
     Ok(StateSeries {
         halt,
         peaks,

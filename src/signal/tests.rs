@@ -784,3 +784,44 @@ fn pixel_quantised_rim_heights() {
         "{matched}"
     );
 }
+
+/// Issue 13.3: skip flags were timed from the clip's start but checked against the
+/// fit window measured from the halt, so no flag was ever inside the window. The
+/// stage now returns flags with the halt at 0, for both kinds of gap: a timestamp
+/// gap (variable-frame-rate footage that drops frames) and a renumbered drop.
+#[test]
+fn flags_share_the_halt_time_base_and_fall_in_the_window() {
+    let (t, z, beta) = two_view(11);
+    let config = SignalConfig::default();
+    let halt = halt_time(&t, &z, &config).expect("halt");
+    // Two frames 0.2 s before the halt (inside the default 0.5 s window).
+    let drop_at = t.iter().position(|&x| x > halt.t_phi - 0.2).unwrap();
+    let keep: Vec<usize> = (0..t.len())
+        .filter(|&i| i != drop_at && i != drop_at + 1)
+        .collect();
+    let pick = |v: &[f64]| keep.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+    let (zs, bs) = (pick(&z), pick(&beta));
+    let renumbered: Vec<f64> = (0..keep.len()).map(|i| t[0] + i as f64 * FRAME).collect();
+    for (times, gap) in [(pick(&t), true), (renumbered, false)] {
+        let result = analyse(&times, &zs, Some(&bs), &thesis_model(), &config).expect("analyse");
+        let in_window = flags_within(&result.flags, -config.window_s, 0.0);
+        assert!(
+            in_window.iter().any(|f| f.index == drop_at
+                && (matches!(
+                    f.reason,
+                    SkipReason::TimestampGap {
+                        missing_frames: 2,
+                        ..
+                    }
+                ) || !gap)),
+            "gap {gap}: {:?}",
+            result.flags
+        );
+        for f in &result.flags {
+            // Halt at 0: the flag's time is its frame's on the shifted axis, 0.2 s
+            // (±2 frames of the halt's own placement) before the halt.
+            assert_eq!(f.t, result.halt.shifted_t[f.index]);
+            assert!((f.t + 0.2).abs() < 3.0 * FRAME, "{f:?}");
+        }
+    }
+}

@@ -32,14 +32,14 @@ pub enum VisionError {
     /// bright blob lying wholly inside the view.
     #[error(
         "frame {frame}: no disk in view (nothing brighter than γ = {gamma:.3} lies wholly \
-         inside the frame); check the lighting, the region of interest or set γ"
+         inside the frame); check the lighting, `vision.roi`, or set `vision.gamma` in the config"
     )]
     NoDisk { frame: usize, gamma: f64 },
 
     /// A calibration point could not be located on the rest frame.
     #[error(
         "frame {frame}: calibration point {point} not found on the rest frame; \
-         give it in the calibration override"
+         give all four points in the config's [calibration] table (x_l, x_r, z_t, z_base [px])"
     )]
     CalibrationPointNotFound { frame: usize, point: &'static str },
 
@@ -87,7 +87,7 @@ pub enum VisionError {
     /// No row separates the mirror side view from the plan view.
     #[error(
         "frame {frame}: no dark, uniform row separates the side view (top) from the plan \
-         view (bottom); give the split row in the configuration"
+         view (bottom); give it as `vision.split_row` [px] in the config"
     )]
     NoSplit { frame: usize },
 
