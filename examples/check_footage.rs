@@ -368,10 +368,16 @@ impl Measured {
                 .iter()
                 .map(|r| (field(r, "t_s"), field(r, "phi_rad")))
                 .collect(),
-            flags: read_csv(&dir.join("flags.csv"))?
-                .iter()
-                .map(|r| field(r, "index") as i64)
-                .collect(),
+            flags: {
+                // One entry per flagged frame (a frame may carry several reasons).
+                let mut f: Vec<i64> = read_csv(&dir.join("flags.csv"))?
+                    .iter()
+                    .map(|r| field(r, "index") as i64)
+                    .collect();
+                f.sort_unstable();
+                f.dedup();
+                f
+            },
         })
     }
 }
