@@ -44,7 +44,7 @@
 //!   (JᵀJ)⁻¹ Ω (JᵀJ)⁻¹ · N/(N − p), J the Jacobian of the model in (A_e, n[, t0]) and
 //!   Ω the long-run covariance of the scores g_i = J_iᵀ r_i in time order, estimated
 //!   from the residuals r themselves: prewhitened Newey–West (Andrews & Monahan
-//!   1992) — an AR(1) filter e_i = g_i − ρ g_{i−1} with ρ the residuals' lag-1
+//!   1992) — an AR(1) filter e_i = g_i − ρ g_{i−1} with ρ ≥ 0 the residuals' lag-1
 //!   autocorrelation, Bartlett weights w_l = 1 − |l|/S on what it leaves with S by
 //!   Andrews' (1991) AR(1) plug-in, and Ω = Σ_l w_l Σ_i e_i e_{i+l}ᵀ / (1 − ρ)². The
 //!   95 % intervals use the Student t quantile with dof = points − parameters plus
@@ -492,7 +492,10 @@ fn fit_with_limit(
         .collect();
     // Prewhitened (Andrews & Monahan 1992): an AR(1) filter with the residuals'
     // lag-1 autocorrelation ρ, Newey–West on what it leaves, recoloured by 1/(1 − ρ)².
-    let rho = lag1_autocorrelation(&resid);
+    // ρ < 0 would narrow the interval below the plain one; over the ~20–40 samples of
+    // a peaks series ρ̂ is biased low by about (1 + 3ρ)/N, so a negative one is not
+    // trusted.
+    let rho = lag1_autocorrelation(&resid).max(0.0);
     let whiten = |x: &[f64]| -> Vec<f64> { x.windows(2).map(|w| w[1] - rho * w[0]).collect() };
     let bandwidth = bartlett_bandwidth(&whiten(&resid));
     let innovations: Vec<DVector<f64>> = scores.windows(2).map(|w| &w[1] - &w[0] * rho).collect();
@@ -547,15 +550,15 @@ fn fit_with_limit(
 /// infinite (the series then holds about one independent sample anyway).
 const MAX_RHO: f64 = 0.98;
 
-/// Lag-1 autocorrelation of `r` (mean zero: residuals), in [−MAX_RHO, MAX_RHO];
-/// 0 for a zero series.
+/// Lag-1 autocorrelation of `r` (mean zero: residuals), at most MAX_RHO; 0 for a
+/// zero series.
 fn lag1_autocorrelation(r: &[f64]) -> f64 {
     let var: f64 = r.iter().map(|x| x * x).sum();
     if !(var.is_finite() && var > 0.0) {
         return 0.0;
     }
     let lag1: f64 = r.windows(2).map(|w| w[0] * w[1]).sum();
-    (lag1 / var).clamp(-MAX_RHO, MAX_RHO)
+    (lag1 / var).min(MAX_RHO)
 }
 
 /// Andrews' (1991) automatic bandwidth of the Bartlett kernel for residuals `r` in
