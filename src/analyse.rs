@@ -545,13 +545,10 @@ pub fn analyse_clip(
     let peak_samples = peak_energies(&params, &series);
     let peaks_fit =
         fit_series("eq. 3.8 at peaks", peak_samples, window_s, halt).map_err(fit_err)?;
-    // Each state is a local fit over `points` frames, shared with its neighbours.
-    let overlap = series.states.iter().map(|s| s.points as f64).sum::<f64>()
-        / series.states.len().max(1) as f64;
+    // Each state is a local fit over frames shared with its neighbours: the fit's
+    // interval allows for the autocorrelation this leaves in its residuals.
     let frame_samples = frame_energies(&params, &series, None);
-    let frames_fit = fit_series("eq. 3.8 per frame", frame_samples, window_s, halt)
-        .ok()
-        .map(|f| f.with_overlap(overlap));
+    let frames_fit = fit_series("eq. 3.8 per frame", frame_samples, window_s, halt).ok();
     let full_state_fit = series.strip.as_ref().and_then(|strip| {
         let samples = frame_energies(&params, &series, Some(strip));
         fit_series(
@@ -561,7 +558,6 @@ pub fn analyse_clip(
             halt,
         )
         .ok()
-        .map(|f| f.with_overlap(overlap))
     });
 
     let threshold_png = highest.map_or_else(Vec::new, |(_, edge_row, frame)| {
@@ -699,20 +695,6 @@ fn fit_series(
         fit,
         windows,
     })
-}
-
-impl EnergyFit {
-    /// The fit and its window sensitivity with uncertainties for overlapping
-    /// samples ([`PowerLawFit::with_overlap`]).
-    fn with_overlap(mut self, overlap: f64) -> Self {
-        self.fit = self.fit.with_overlap(overlap);
-        for (_, window) in &mut self.windows {
-            if let Ok(fit) = window {
-                *fit = fit.clone().with_overlap(overlap);
-            }
-        }
-        self
-    }
 }
 
 /// A signal-stage failure of `clip`. A slow-motion clip stored at a playback rate

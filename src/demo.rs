@@ -19,8 +19,8 @@ use rayon::prelude::*;
 
 use crate::model::params::Preset;
 use crate::render::{
-    Plate, PostFlatSpin, PowerLaw, RenderError, RenderSpec, Renderer, Timing, power_law_motion,
-    write_clip,
+    DEFAULT_CRF, Plate, PostFlatSpin, PowerLaw, RenderError, RenderSpec, Renderer, Timing,
+    power_law_motion, write_clip,
 };
 use crate::report::html::{page, table};
 use crate::report::{ReportError, write_atomic};
@@ -101,7 +101,7 @@ pub fn render_demo_footage(root: &Path, clips: &[DemoClip]) -> Result<Vec<PathBu
             let motion =
                 power_law_motion(&params, &PowerLaw::thesis(clip.true_n), &timing, post_flat)?;
             let renderer = Renderer::new(&spec, &motion)?;
-            Ok(write_clip(&renderer, &root.join(&clip.relative))?.clip)
+            Ok(write_clip(&renderer, &root.join(&clip.relative), DEFAULT_CRF)?.clip)
         })
         .collect()
 }

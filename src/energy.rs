@@ -37,9 +37,22 @@
 //!   in standard errors) falls below 1e-10, or, at the floating-point limit, when steps
 //!   shrink below 1e-12 (relative) or stop lowering the squared error while that offset
 //!   is below 1e-6; or when the residual is rounding noise (exact data).
-//! * Standard errors come from the linearised covariance s² (JᵀJ)⁻¹ at the optimum, with
-//!   J the Jacobian of the model in (A_e, n[, t0]) and s² = SSR/dof; the 95 % intervals
-//!   use the Student t quantile with dof = points − parameters.
+//! * Standard errors allow for autocorrelated residuals, as measured energies have:
+//!   one sample per turn at the peaks (a turn's calibration and edge errors linger
+//!   into the next), and per frame 5–30 samples per turn, each a local fit over
+//!   frames its neighbours share. The covariance is the sandwich
+//!   (JᵀJ)⁻¹ Ω (JᵀJ)⁻¹ · N/(N − p), J the Jacobian of the model in (A_e, n[, t0]) and
+//!   Ω the long-run covariance of the scores g_i = J_iᵀ r_i in time order, estimated
+//!   from the residuals r themselves: prewhitened Newey–West (Andrews & Monahan
+//!   1992) — an AR(1) filter e_i = g_i − ρ g_{i−1} with ρ ≥ 0 the residuals' lag-1
+//!   autocorrelation, Bartlett weights w_l = 1 − |l|/S on what it leaves with S by
+//!   Andrews' (1991) AR(1) plug-in, and Ω = Σ_l w_l Σ_i e_i e_{i+l}ᵀ / (1 − ρ)². The
+//!   95 % intervals use the Student t quantile with dof = points − parameters plus
+//!   the fixed-b correction of Kiefer & Vogelsang (2005) for b = S/N. For
+//!   uncorrelated residuals ρ, S → 0 and this is the usual s² (JᵀJ)⁻¹ interval
+//!   (White's form of it), kept for comparison as `se_n_uncorrelated`. On AR(1)
+//!   residuals with ρ = 0.8 it covers the true n in 92–97 % of trials where that
+//!   one covers 47 % (tested).
 
 use crate::model::params::DiskParams;
 use nalgebra::{DMatrix, DVector};
@@ -127,8 +140,16 @@ pub struct PowerLawFit {
     pub t0: f64,
     /// Standard error of A_e [J s^-n].
     pub se_a_e: f64,
-    /// Standard error of n.
+    /// Standard error of n, allowing for the residuals' autocorrelation (module docs).
     pub se_n: f64,
+    /// Standard error of n if the residuals were uncorrelated, √(s² (JᵀJ)⁻¹): with
+    /// `se_n` it shows how much their measured autocorrelation widens the interval.
+    #[serde(default)]
+    pub se_n_uncorrelated: f64,
+    /// Bartlett bandwidth S [samples] of the prewhitened long-run covariance
+    /// (Andrews' AR(1) plug-in; 0: nothing correlated left after the AR(1) filter).
+    #[serde(default)]
+    pub bandwidth: f64,
     /// Standard error of t0 [s]; `None` when t0 was fixed.
     pub se_t0: Option<f64>,
     /// 95 % confidence interval of A_e [J s^-n].
@@ -150,36 +171,6 @@ pub struct PowerLawFit {
 }
 
 impl PowerLawFit {
-    /// The same fit with uncertainties for samples that are not independent: each
-    /// sample comes from a local fit over `overlap` consecutive measurements and shares
-    /// them with its neighbours (the per-frame states, one per frame from windows of
-    /// about 1.5 turns). Their residuals are correlated over `overlap` samples, so the
-    /// points carry about points/`overlap` independent measurements: the standard
-    /// errors grow by √overlap and the t quantile takes points/`overlap` − parameters
-    /// degrees of freedom. Without it the per-frame intervals were three to four times
-    /// too narrow and missed the true n of rendered clips. `overlap` ≤ 1 changes nothing.
-    pub fn with_overlap(mut self, overlap: f64) -> Self {
-        if overlap.is_nan() || overlap <= 1.0 {
-            return self;
-        }
-        let parameters = if self.se_t0.is_some() { 3.0 } else { 2.0 };
-        let dof = (self.points as f64 / overlap - parameters).floor().max(1.0);
-        let Ok(t) = StudentsT::new(0.0, 1.0, dof) else {
-            return self;
-        };
-        let quantile = t.inverse_cdf(0.975);
-        let grow = overlap.sqrt();
-        let ci = |value: f64, se: f64| (value - quantile * se, value + quantile * se);
-        self.se_a_e *= grow;
-        self.se_n *= grow;
-        self.se_t0 = self.se_t0.map(|se| se * grow);
-        self.ci95_a_e = ci(self.a_e, self.se_a_e);
-        self.ci95_n = ci(self.n, self.se_n);
-        self.ci95_t0 = self.se_t0.map(|se| ci(self.t0, se));
-        self.dof = dof as usize;
-        self
-    }
-
     /// The fitted energy A_e (t0 − t)^n at time `t` [J]; zero at and after the halt.
     pub fn energy_at(&self, t: f64) -> f64 {
         if t < self.t0 {
@@ -491,7 +482,26 @@ fn fit_with_limit(
     let dof = points - parameters;
     let ssr_scaled = outcome.eval.ssr;
     let s2 = ssr_scaled / dof as f64;
-    let cov_scaled = inverse_normal_matrix(&jac)? * s2;
+    let bread = inverse_normal_matrix(&jac)?;
+    let mut by_time: Vec<usize> = (0..points).collect();
+    by_time.sort_by(|&i, &j| tail[j].total_cmp(&tail[i]));
+    let resid: Vec<f64> = by_time.iter().map(|&i| outcome.eval.resid[i]).collect();
+    let scores: Vec<DVector<f64>> = by_time
+        .iter()
+        .map(|&i| jac.row(i).transpose() * outcome.eval.resid[i])
+        .collect();
+    // Prewhitened (Andrews & Monahan 1992): an AR(1) filter with the residuals'
+    // lag-1 autocorrelation ρ, Newey–West on what it leaves, recoloured by 1/(1 − ρ)².
+    // ρ < 0 would narrow the interval below the plain one; over the ~20–40 samples of
+    // a peaks series ρ̂ is biased low by about (1 + 3ρ)/N, so a negative one is not
+    // trusted.
+    let rho = lag1_autocorrelation(&resid).max(0.0);
+    let whiten = |x: &[f64]| -> Vec<f64> { x.windows(2).map(|w| w[1] - rho * w[0]).collect() };
+    let bandwidth = bartlett_bandwidth(&whiten(&resid));
+    let innovations: Vec<DVector<f64>> = scores.windows(2).map(|w| &w[1] - &w[0] * rho).collect();
+    let meat = long_run_covariance(&innovations, bandwidth) / (1.0 - rho).powi(2);
+    let cov_scaled = &bread * meat * &bread * (points as f64 / dof as f64);
+    let se_n_uncorrelated = (bread[(1, 1)] * s2).sqrt();
     let a_e = e_scale * amp * span.powf(-n);
     // Jacobian of (A_e, n, t0) with respect to (a, n, d).
     let mut g = DMatrix::zeros(parameters, parameters);
@@ -512,7 +522,8 @@ fn fit_with_limit(
         .map_err(|_| {
             FitError::degenerate("no Student t distribution for these degrees of freedom")
         })?
-        .inverse_cdf(0.975);
+        .inverse_cdf(0.975)
+        + fixed_b_excess(bandwidth / points as f64);
     let ci = |value: f64, se: f64| (value - quantile * se, value + quantile * se);
     let ssr = ssr_scaled * e_scale * e_scale;
     Ok(PowerLawFit {
@@ -521,6 +532,8 @@ fn fit_with_limit(
         t0,
         se_a_e: se[0],
         se_n: se[1],
+        se_n_uncorrelated,
+        bandwidth,
         se_t0: free.then(|| se[2]),
         ci95_a_e: ci(a_e, se[0]),
         ci95_n: ci(n, se[1]),
@@ -531,6 +544,62 @@ fn fit_with_limit(
         dof,
         iterations: outcome.iterations,
     })
+}
+
+/// Largest lag-1 autocorrelation used for the bandwidth: ρ → 1 would make it
+/// infinite (the series then holds about one independent sample anyway).
+const MAX_RHO: f64 = 0.98;
+
+/// Lag-1 autocorrelation of `r` (mean zero: residuals), at most MAX_RHO; 0 for a
+/// zero series.
+fn lag1_autocorrelation(r: &[f64]) -> f64 {
+    let var: f64 = r.iter().map(|x| x * x).sum();
+    if !(var.is_finite() && var > 0.0) {
+        return 0.0;
+    }
+    let lag1: f64 = r.windows(2).map(|w| w[0] * w[1]).sum();
+    (lag1 / var).min(MAX_RHO)
+}
+
+/// Andrews' (1991) automatic bandwidth of the Bartlett kernel for residuals `r` in
+/// time order, from an AR(1) model of them: S = 1.1447 (α N)^⅓ with
+/// α = 4ρ² / (1 − ρ²)², ρ their lag-1 autocorrelation (0 if negative), at most N.
+fn bartlett_bandwidth(r: &[f64]) -> f64 {
+    let rho = lag1_autocorrelation(r).max(0.0);
+    let alpha = 4.0 * rho * rho / (1.0 - rho * rho).powi(2);
+    (1.1447 * (alpha * r.len() as f64).cbrt()).min(r.len() as f64)
+}
+
+/// Newey–West long-run covariance Σ_l w_l Γ_l of the scores g_i = J_iᵀ r_i (in time
+/// order), with Bartlett weights w_l = 1 − |l|/S for |l| < S; S = 0 gives White's
+/// Σ g_i g_iᵀ.
+fn long_run_covariance(scores: &[DVector<f64>], bandwidth: f64) -> DMatrix<f64> {
+    let k = scores.first().map_or(0, |g| g.len());
+    let mut sum = DMatrix::zeros(k, k);
+    for (lag, weight) in (0..scores.len())
+        .map(|l| (l, 1.0 - l as f64 / bandwidth.max(1.0)))
+        .take_while(|&(_, w)| w > 0.0)
+    {
+        let mut gamma = DMatrix::zeros(k, k);
+        for (a, b) in scores.iter().zip(&scores[lag..]) {
+            gamma += a * b.transpose();
+        }
+        sum += if lag == 0 {
+            gamma
+        } else {
+            (&gamma + gamma.transpose()) * weight
+        };
+    }
+    sum
+}
+
+/// How far the 97.5 % critical value of a t ratio with a Bartlett long-run variance
+/// of bandwidth b = S/N lies beyond the normal one under fixed-b asymptotics
+/// (Kiefer & Vogelsang 2005, Table 1 fit: 1.96 + 2.9694 b + 0.4160 b² − 0.5324 b³),
+/// for the uncertainty of the estimated long-run variance itself.
+fn fixed_b_excess(b: f64) -> f64 {
+    let b = b.clamp(0.0, 1.0);
+    2.9694 * b + 0.4160 * b * b - 0.5324 * b * b * b
 }
 
 /// (JᵀJ)⁻¹ by a singular-value decomposition of J with unit-norm columns, which keeps
@@ -1123,37 +1192,49 @@ mod tests {
         }
     }
 
-    /// Overlapping samples (each the mean of `w` = 9 consecutive noisy measurements,
-    /// as per-frame states share their frames): the plain interval for n is too
-    /// narrow and covers the truth far less than 95 % of the time; with
-    /// [`PowerLawFit::with_overlap`] it covers about 95 % (the binomial argument of
-    /// the test above, 200 trials, ≥ 180 required).
+    /// AR(1) residuals (ρ = 0.8, as per-frame states sharing their frames give) on an
+    /// exact power law, 720 samples 0.65–0.05 s before the halt (σ = E_min/8, so no
+    /// sample turns negative): the plain interval
+    /// n ± t·`se_n_uncorrelated` is about 3 × too narrow (√((1 + ρ)/(1 − ρ)) = 3) and
+    /// covers far less than 95 %; the interval from the residuals' autocorrelation
+    /// covers 90–98 % (binomial(200, 0.95): mean 190, sd 3.1; 180–196 is −3.2 … +2 sd).
+    /// Fixed seeds, so deterministic: 193 and 191/200 with t0 fixed, 183 and 184/200
+    /// with it free; the plain interval 93–94/200.
     #[test]
-    fn overlap_widens_the_interval_to_cover_correlated_samples() {
-        let w = 9;
-        let (a_e, t0, n) = (0.0063, 0.5, 2.0 / 3.0);
-        let mut rng = SplitMix64::new(21);
-        let (mut plain, mut widened) = (0, 0);
-        for _ in 0..200 {
-            let t: Vec<f64> = (0..=720).map(|i| -0.5 + 0.00125 * i as f64).collect();
-            let sigma = a_e * 0.1f64.powf(n) / 2.0;
-            let noise: Vec<f64> = (0..t.len() + w).map(|_| sigma * rng.gaussian()).collect();
-            let e: Vec<f64> = t
-                .iter()
-                .enumerate()
-                .map(|(i, ti)| {
-                    a_e * (t0 - ti).powf(n) + noise[i..i + w].iter().sum::<f64>() / w as f64
-                })
-                .collect();
-            let Ok(fit) = fit_power_law(&t, &e, HaltTime::Free) else {
-                continue;
-            };
-            plain += usize::from(fit.ci95_n.0 <= n && n <= fit.ci95_n.1);
-            let fit = fit.with_overlap(w as f64);
-            widened += usize::from(fit.ci95_n.0 <= n && n <= fit.ci95_n.1);
+    fn autocorrelated_residuals_widen_the_interval_to_cover_the_truth() {
+        let (a_e, t0, rho) = (0.0063, 0.0, 0.8);
+        for (halt, seed) in [(HaltTime::Fixed(t0), 21), (HaltTime::Free, 22)] {
+            for n in [0.45, 2.0 / 3.0] {
+                let mut rng = SplitMix64::new(seed);
+                let (mut plain, mut hac, mut failed) = (0, 0, 0);
+                for _ in 0..200 {
+                    let t: Vec<f64> = (0..720).map(|i| -0.65 + 0.6 * i as f64 / 719.0).collect();
+                    let sigma = a_e * 0.05f64.powf(n) / 8.0;
+                    let mut ar = sigma * rng.gaussian();
+                    let e: Vec<f64> = t
+                        .iter()
+                        .map(|ti| {
+                            ar = rho * ar + (1.0 - rho * rho).sqrt() * sigma * rng.gaussian();
+                            a_e * (t0 - ti).powf(n) + ar
+                        })
+                        .collect();
+                    let Ok(fit) = fit_power_law(&t, &e, halt) else {
+                        failed += 1;
+                        continue;
+                    };
+                    let q = StudentsT::new(0.0, 1.0, fit.dof as f64)
+                        .expect("t")
+                        .inverse_cdf(0.975);
+                    plain += usize::from((fit.n - n).abs() <= q * fit.se_n_uncorrelated);
+                    hac += usize::from(fit.ci95_n.0 <= n && n <= fit.ci95_n.1);
+                }
+                assert!(
+                    (180..=196).contains(&hac) && failed == 0,
+                    "{halt:?}, n = {n}: covered {hac}/200 ({failed} failed)"
+                );
+                assert!(plain < 150, "{halt:?}, n = {n}: plain covered {plain}/200");
+            }
         }
-        assert!(widened >= 180, "with overlap: covered {widened}/200");
-        assert!(plain < 170, "without: covered {plain}/200");
     }
 
     /// The free-t0 interval for t0 also covers (same binomial argument).

@@ -13,8 +13,8 @@ use eulerdisk::model::params::Preset;
 use eulerdisk::model::simulate::{InitialState, MAX_SAMPLES, SimulationSpec, simulate};
 use eulerdisk::model::tuning::tune_eta;
 use eulerdisk::render::{
-    Effects, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Timing, power_law_motion,
-    trajectory_motion, write_clip,
+    DEFAULT_CRF, Effects, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Timing,
+    power_law_motion, trajectory_motion, write_clip,
 };
 use eulerdisk::report::OutputLock;
 use eulerdisk::report::compare::{comparison_dir, write_comparison};
@@ -274,6 +274,10 @@ struct RenderArgs {
     /// Seed of the sensor noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// H.264 constant-rate factor of an MP4 (libx264: 0 = lossless luma, 51 = worst);
+    /// the same options and crf always give the same bytes.
+    #[arg(long, default_value_t = DEFAULT_CRF, value_parser = clap::value_parser!(u8).range(0..=51))]
+    crf: u8,
     /// Disk parameters.
     #[arg(long, value_enum, default_value = "euler-disk")]
     preset: Preset,
@@ -662,7 +666,7 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         spec.height,
         args.fps
     );
-    let written = write_clip(&renderer, &args.out)?;
+    let written = write_clip(&renderer, &args.out, args.crf)?;
     let truth = renderer.truth();
     println!(
         "halt at clip time {:.4} s, t_β = {:.4} s after it, δ = {:.4e} m/px{}",

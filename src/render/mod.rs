@@ -10,7 +10,7 @@
 //!   ▼  Renderer::new(&RenderSpec, &Motion)
 //!   │    render_frame(i) → image::RgbImage      (pure, deterministic)
 //!   │    truth()         → GroundTruth           (serde, the per-frame answers)
-//!   ▼  write::write_clip → MP4 (OpenCV) or PNG folder + `<clip>.truth.json`
+//!   ▼  write::write_clip → MP4 (H.264, libx264) or PNG folder + `<clip>.truth.json`
 //! ```
 //!
 //! # The scene (thesis §3.2.3, figs. 3.3, 3.4, 3.9, 3.19)
@@ -104,7 +104,7 @@ pub use motion::{
 };
 pub use scene::Plate;
 use scene::{Camera, DiskShape, Look, PLATE_CLASSES, Pose, Prepared, Sample, Scene, View};
-pub use write::{ClipFormat, truth_path, write_clip};
+pub use write::{ClipFormat, DEFAULT_CRF, truth_path, write_clip};
 
 /// Errors of the render stage; file errors name the file.
 #[derive(Debug, thiserror::Error)]
@@ -1119,7 +1119,7 @@ mod tests {
         assert_eq!(m.states.len(), 19);
         let dir = tempfile::tempdir().expect("tempdir");
         let folder = dir.path().join("clip");
-        let written = write_clip(&r, &folder).expect("write");
+        let written = write_clip(&r, &folder, DEFAULT_CRF).expect("write");
         let files = crate::footage::frame_files(&folder).expect("frames");
         assert_eq!(files.len(), 17);
         // Issue 13.7: the folder gets the umask's permissions, as one made by hand.
@@ -1144,7 +1144,53 @@ mod tests {
         }
         // The same clip as MP4: OpenCV counts the written frames.
         let mp4 = dir.path().join("clip.mp4");
-        write_clip(&r, &mp4).expect("mp4");
+        write_clip(&r, &mp4, DEFAULT_CRF).expect("mp4");
         assert_eq!(crate::footage::probe(&mp4).expect("probe").frame_count, 17);
+    }
+
+    /// The same renderer and crf give the same MP4 bytes, also for the later of
+    /// several encodes in one process (x264's macroblock tree, on by default, read
+    /// uninitialised heap memory and changed them; see `write::write_mp4`), and a
+    /// lower crf decodes closer to the rendered frames.
+    #[test]
+    fn mp4_bytes_repeat_and_crf_sets_the_quality() {
+        let m = motion(240.0, 0.4, 0.1);
+        let mut spec = small_spec(Plate::Dark, false);
+        (spec.width, spec.height) = (160, 96);
+        spec.effects.noise_sigma = 1.0;
+        let r = Renderer::new(&spec, &m).expect("renderer");
+        let dir = tempfile::tempdir().expect("tempdir");
+        let encode = |name: &str, crf: u8| {
+            let path = dir.path().join(name);
+            write_clip(&r, &path, crf).expect("mp4");
+            path
+        };
+        let first = std::fs::read(encode("a.mp4", DEFAULT_CRF)).expect("read");
+        for k in 0..3 {
+            let again = std::fs::read(encode(&format!("b{k}.mp4"), DEFAULT_CRF)).expect("read");
+            assert!(again == first, "encode {} of the same clip differs", k + 2);
+        }
+        // Mean absolute error of the decoded grey levels against the rendered ones.
+        let error = |crf: u8| {
+            let mut source =
+                crate::footage::FrameSource::open(&encode(&format!("crf{crf}.mp4"), crf))
+                    .expect("open");
+            let (mut sum, mut count) = (0.0, 0usize);
+            while let Some(frame) = source.next_frame().expect("decode") {
+                let truth = r.render_frame(frame.index);
+                for (x, y, p) in truth.enumerate_pixels() {
+                    let grey = (f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2])) / 3.0;
+                    sum += (f64::from(frame.view.intensity(x as usize, y as usize)) - grey).abs();
+                    count += 1;
+                }
+            }
+            assert_eq!(count, 160 * 96 * r.frame_count());
+            sum / count as f64
+        };
+        let (fine, default, coarse) = (error(8), error(DEFAULT_CRF), error(40));
+        assert!(
+            fine < default && default < coarse,
+            "mean |error| at crf 8, 23, 40: {fine:.3}, {default:.3}, {coarse:.3}"
+        );
     }
 }

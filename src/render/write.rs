@@ -1,15 +1,16 @@
-//! Writing a rendered clip: an MP4 through OpenCV's `VideoWriter` (fourcc `avc1`,
-//! else `mp4v`) or a folder of PNG frames `frame_000001.png …`, plus the ground truth
-//! as `<clip stem>.truth.json` beside it.
+//! Writing a rendered clip: an H.264 MP4 through FFmpeg's libavcodec (libx264 at a
+//! chosen crf, one encoder thread, so the bytes are reproducible) or a folder of PNG
+//! frames `frame_000001.png …`, plus the ground truth as `<clip stem>.truth.json`
+//! beside it.
 //!
 //! Both are written under a temporary name in the destination folder and renamed into
 //! place when complete, so an interrupted run never leaves a clip that looks finished.
 
 use std::path::{Path, PathBuf};
 
-use opencv::core::{CV_8UC3, Mat, MatTraitManual, Scalar};
-use opencv::prelude::{VideoWriterTrait, VideoWriterTraitConst};
-use opencv::videoio::VideoWriter;
+use ff::format::Pixel;
+use ff::software::scaling;
+use ffmpeg_next as ff;
 use rayon::prelude::*;
 
 use super::{RenderError, Renderer};
@@ -19,7 +20,7 @@ use crate::report::write_json;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ClipFormat {
-    /// MP4 video (OpenCV).
+    /// MP4 video (H.264, libx264).
     Mp4,
     /// A folder of PNG frames.
     PngFolder,
@@ -44,7 +45,7 @@ pub struct WrittenClip {
     pub truth: PathBuf,
     /// Frames written.
     pub frames: usize,
-    /// The fourcc used for an MP4.
+    /// The fourcc of an MP4's codec (`avc1`).
     pub codec: Option<String>,
 }
 
@@ -61,10 +62,20 @@ pub fn truth_path(clip: &Path) -> PathBuf {
 /// Frames rendered in parallel before they are written in order.
 const BATCH: usize = 16;
 
+/// Threads of the H.264 encoder: one, so the bytes depend on the frames and the
+/// crf only (see [`write_mp4`]).
+const X264_THREADS: usize = 1;
+
+/// The H.264 constant-rate factor of `eulerdisk render` by default: libx264's
+/// default and what OpenCV's `VideoWriter` wrote before (lower is better quality;
+/// 0 is lossless in luma, 51 the worst).
+pub const DEFAULT_CRF: u8 = 23;
+
 /// Renders every frame of `renderer` and writes the clip and its truth to `path`
-/// (MP4 if it ends in `.mp4`, else a PNG folder). An existing clip at `path` is
-/// replaced only after the new one is complete.
-pub fn write_clip(renderer: &Renderer, path: &Path) -> Result<WrittenClip, RenderError> {
+/// (MP4 if it ends in `.mp4`, H.264 at constant quality `crf`, else a PNG folder,
+/// where `crf` is unused). An existing clip at `path` is replaced only after the new
+/// one is complete. The same renderer and `crf` always give the same bytes.
+pub fn write_clip(renderer: &Renderer, path: &Path, crf: u8) -> Result<WrittenClip, RenderError> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -81,7 +92,7 @@ pub fn write_clip(renderer: &Renderer, path: &Path) -> Result<WrittenClip, Rende
     let codec = match ClipFormat::for_path(path) {
         ClipFormat::Mp4 => {
             let tmp = dir.join(format!(".{name}.partial-{}.mp4", std::process::id()));
-            let result = write_mp4(renderer, &tmp);
+            let result = write_mp4(renderer, &tmp, crf);
             match result {
                 Ok(codec) => {
                     std::fs::rename(&tmp, path).map_err(|e| fail(path, e.to_string()))?;
@@ -136,43 +147,126 @@ fn write_pngs(renderer: &Renderer, dir: &Path) -> Result<(), (PathBuf, String)> 
         })
 }
 
-fn write_mp4(renderer: &Renderer, path: &Path) -> Result<String, String> {
+/// Encodes the frames as H.264 (libx264 through libavcodec, yuv420p, preset
+/// `medium`, constant quality `crf`) in an MP4 container, with two settings that
+/// make the bytes a function of the frames and `crf` alone:
+///
+/// - `mbtree=0`: x264's macroblock-tree rate control (on by default, and in
+///   OpenCV's writer) reads heap memory it has not initialised. Identical YUV
+///   input gave different bitstreams for the second and later clips encoded in one
+///   process, or for different `MALLOC_PERTURB_` fillings, and identical ones with
+///   the tree off. This is why two runs of `eulerdisk demo` (nine clips in one
+///   process) wrote different MP4s, while separate `render` processes agreed.
+/// - one encoder thread ([`X264_THREADS`]): x264's output depends on its thread
+///   count, which by default follows the machine's cores.
+fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String> {
     let truth = renderer.truth();
-    let (w, h) = (truth.width as i32, truth.height as i32);
-    let size = opencv::core::Size::new(w, h);
-    let cv = |e: opencv::Error| format!("OpenCV: {}", e.message);
-    let mut chosen = None;
-    for code in ["avc1", "mp4v"] {
-        let c: Vec<char> = code.chars().collect();
-        let fourcc = VideoWriter::fourcc(c[0], c[1], c[2], c[3]).map_err(cv)?;
-        // Some builds print a warning and fail to open for a missing encoder.
-        if let Ok(writer) = VideoWriter::new(path, fourcc, truth.fps, size, true)
-            && writer.is_opened().unwrap_or(false)
-        {
-            chosen = Some((code.to_owned(), writer));
-            break;
-        }
+    let (w, h) = (truth.width, truth.height);
+    if w % 2 == 1 || h % 2 == 1 {
+        return Err(format!(
+            "H.264 (4:2:0) needs an even frame size, got {w} × {h}: render a PNG folder or an even size"
+        ));
     }
-    let (codec, mut writer) =
-        chosen.ok_or_else(|| "OpenCV has neither an avc1 nor an mp4v MP4 encoder".to_owned())?;
-    let mut frame = Mat::new_rows_cols_with_default(h, w, CV_8UC3, Scalar::all(0.0)).map_err(cv)?;
+    fn av(what: &'static str) -> impl Fn(ff::Error) -> String {
+        move |e| format!("FFmpeg: {what}: {e}")
+    }
+    ff::init().map_err(av("init"))?;
+    ff::util::log::set_level(ff::util::log::Level::Quiet);
+    let codec = ff::encoder::find_by_name("libx264").ok_or_else(|| {
+        "this FFmpeg (libavcodec) has no libx264 encoder; render a PNG folder instead".to_owned()
+    })?;
+    let mut output = ff::format::output_as(path, "mp4").map_err(av("open the MP4"))?;
+    let global_header = output
+        .format()
+        .flags()
+        .contains(ff::format::Flags::GLOBAL_HEADER);
+    let rate = ff::Rational::from(truth.fps);
+    let time_base = rate.invert();
+    let mut encoder = ff::codec::context::Context::new_with_codec(codec)
+        .encoder()
+        .video()
+        .map_err(av("encoder"))?;
+    encoder.set_width(w);
+    encoder.set_height(h);
+    encoder.set_format(Pixel::YUV420P);
+    encoder.set_time_base(time_base);
+    encoder.set_frame_rate(Some(rate));
+    if global_header {
+        encoder.set_flags(ff::codec::Flags::GLOBAL_HEADER);
+    }
+    let mut options = ff::Dictionary::new();
+    options.set("preset", "medium");
+    options.set("crf", &crf.to_string());
+    options.set("threads", &X264_THREADS.to_string());
+    options.set("x264-params", "mbtree=0");
+    let mut encoder = encoder.open_with(options).map_err(av("open libx264"))?;
+    let mut stream = output
+        .add_stream(codec)
+        .map_err(av("add the video stream"))?;
+    stream.set_parameters(&encoder);
+    // The muxer keeps a multiple of the frame rate (480 fps: 1/15360 s) rather
+    // than its default 1/90000 s, so frame times are exact.
+    stream.set_time_base(time_base);
+    output.write_header().map_err(av("write the MP4 header"))?;
+    let stream_time_base = output
+        .stream(0)
+        .map(|s| s.time_base())
+        .ok_or_else(|| "FFmpeg: the MP4 lost its video stream".to_owned())?;
+    let mut scaler = scaling::Context::get(
+        Pixel::RGB24,
+        w,
+        h,
+        Pixel::YUV420P,
+        w,
+        h,
+        scaling::Flags::BICUBIC,
+    )
+    .map_err(av("libswscale"))?;
+    let mut rgb = ff::frame::Video::new(Pixel::RGB24, w, h);
+    let mut yuv = ff::frame::Video::new(Pixel::YUV420P, w, h);
+    let mut packet = ff::Packet::empty();
+    let mut drain = |encoder: &mut ff::encoder::Video,
+                     output: &mut ff::format::context::Output|
+     -> Result<(), String> {
+        while encoder.receive_packet(&mut packet).is_ok() {
+            packet.set_stream(0);
+            // One frame each: without a duration the MP4's edit list ends at the
+            // last frame's start and decoders drop that frame.
+            packet.set_duration(1);
+            packet.rescale_ts(time_base, stream_time_base);
+            packet
+                .write_interleaved(output)
+                .map_err(av("write a packet"))?;
+        }
+        Ok(())
+    };
     let n = renderer.frame_count();
+    let row = 3 * w as usize;
     for start in (0..n).step_by(BATCH) {
         let images: Vec<_> = (start..(start + BATCH).min(n))
             .into_par_iter()
             .map(|i| renderer.render_frame(i))
             .collect();
-        for image in images {
-            let bytes = frame.data_bytes_mut().map_err(cv)?;
-            for (dst, src) in bytes
-                .chunks_exact_mut(3)
-                .zip(image.as_raw().chunks_exact(3))
+        for (i, image) in (start..).zip(images) {
+            let stride = rgb.stride(0);
+            for (dst, src) in rgb
+                .data_mut(0)
+                .chunks_mut(stride)
+                .zip(image.as_raw().chunks_exact(row))
             {
-                dst.copy_from_slice(&[src[2], src[1], src[0]]);
+                dst[..row].copy_from_slice(src);
             }
-            writer.write(&frame).map_err(cv)?;
+            scaler.run(&rgb, &mut yuv).map_err(av("libswscale"))?;
+            yuv.set_pts(Some(i as i64));
+
+            encoder.send_frame(&yuv).map_err(av("encode a frame"))?;
+            drain(&mut encoder, &mut output)?;
         }
     }
-    writer.release().map_err(cv)?;
-    Ok(codec)
+    encoder.send_eof().map_err(av("flush the encoder"))?;
+    drain(&mut encoder, &mut output)?;
+    output
+        .write_trailer()
+        .map_err(av("write the MP4 trailer"))?;
+    Ok("avc1".to_owned())
 }
