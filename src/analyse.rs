@@ -78,12 +78,80 @@ pub struct ExperimentPlan {
     /// the config.
     pub split_row: Option<(usize, bool)>,
     pub calibration: CalibrationReport,
-    /// Scale δ = 2H / (z_base − z_t) [m/px] (eq. 3.10 with ERRATA).
+    /// Scale at the near bottom rim, where z_rim is read [m/px].
     pub metres_per_px: f64,
+    /// How the scale was found: both estimates and the perspective they imply.
+    pub scale: ScaleReport,
     pub band_half_width_px: usize,
     pub colour_thresholds: Option<(ColourThresholds, ThresholdSource)>,
     pub window_s: f64,
     pub halt: HaltChoice,
+}
+
+/// The side view's two scales and what they say about the camera.
+///
+/// The diameter 2R/(x_r − x_l) gives the scale at the disk's centre; the thickness
+/// 2H/(z_base − z_t) (eq. 3.10, z_t the near top rim) the scale at the near rim,
+/// where z_rim is read. Through a pinhole the near rim is larger by the
+/// perspective factor f = (distance to the centre)/(distance to the near rim), so
+/// the distance from the camera to the near rim is about R/(f − 1) (exact for a
+/// camera at the plate's height; within cos ε at an elevation ε).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ScaleReport {
+    /// 2R/(x_r − x_l) [m/px].
+    pub diameter_metres_per_px: f64,
+    /// 2H/(z_base − z_t) [m/px] (eq. 3.10 with ERRATA).
+    pub thickness_metres_per_px: f64,
+    /// diameter ÷ thickness scale: 1 for a distant (orthographic) camera.
+    pub perspective_factor: f64,
+    /// R/(f − 1) [m] when f > 1: the camera's distance from the near rim.
+    pub camera_distance_m: Option<f64>,
+    /// Which scale is used: "thickness (eq. 3.10, at the near rim)" or
+    /// "diameter (…reason)".
+    pub used: String,
+}
+
+/// The perspective factors eq. 3.10's thickness scale is trusted within: a camera
+/// 0.1 m from a 38 mm disk gives 1.38; below 1 the near rim would be farther than
+/// the centre, which no side view shows, so z_t is not the near top rim (a top face
+/// lit like the side leaves only the silhouette's far rim) beyond a 3 % margin for
+/// the edges' errors.
+const PERSPECTIVE_FACTOR_RANGE: (f64, f64) = (0.97, 1.5);
+
+impl ScaleReport {
+    /// The scale to use from the calibration and the disk's size.
+    fn new(cal: &vision::Calibration, disk: &DiskParams) -> Self {
+        let diameter = 2.0 * disk.radius / (cal.x_r - cal.x_l);
+        let thickness = cal.metres_per_px(disk.half_thickness);
+        let factor = diameter / thickness;
+        let (lo, hi) = PERSPECTIVE_FACTOR_RANGE;
+        let used = if (lo..=hi).contains(&factor) {
+            "thickness (eq. 3.10, at the near rim)".to_string()
+        } else {
+            format!(
+                "diameter: the thickness scale 2H/(z_base − z_t) = {thickness:.4e} m/px gives a \
+                 perspective factor {factor:.3}, outside {lo}–{hi} (the near top rim z_t was not \
+                 told from the top face's far rim, or the disk parameters do not match the disk \
+                 filmed); φ is then too small by about the perspective factor"
+            )
+        };
+        ScaleReport {
+            diameter_metres_per_px: diameter,
+            thickness_metres_per_px: thickness,
+            perspective_factor: factor,
+            camera_distance_m: (factor > 1.0 && factor <= hi).then(|| disk.radius / (factor - 1.0)),
+            used,
+        }
+    }
+
+    /// The scale used [m/px].
+    pub fn metres_per_px(&self) -> f64 {
+        if self.used.starts_with("thickness") {
+            self.thickness_metres_per_px
+        } else {
+            self.diameter_metres_per_px
+        }
+    }
 }
 
 /// One frame's measurements.
@@ -344,9 +412,7 @@ pub fn analyse_clip(
     let calibration =
         vision::calibrate_at_rest(&rest_sides, rest[0].index, &side_config, given.as_ref())
             .map_err(vision_err)?;
-    // Scale from the disk's diameter, 2R / (x_r − x_l): elevation-independent and
-    // a baseline six times longer than the thesis's 2H / (z_base − z_t) (eq. 3.10),
-    // which is also computed and compared.
+    // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport).
     let cal = calibration.calibration;
     if let Some(band) = vision_config.band_half_width_px {
         crate::config::band_fits_disk(band, cal.x_r - cal.x_l).map_err(|reason| {
@@ -356,15 +422,10 @@ pub fn analyse_clip(
             }
         })?;
     }
-    let metres_per_px = 2.0 * params.radius / (cal.x_r - cal.x_l);
-    let thickness_scale = cal.metres_per_px(params.half_thickness);
-    if (thickness_scale / metres_per_px - 1.0).abs() > 0.05 {
-        warnings.push(format!(
-            "scale from the thickness, 2H/(z_base − z_t) = {thickness_scale:.4e} m/px (eq. 3.10), \
-             differs from the scale from the diameter, 2R/(x_r − x_l) = {metres_per_px:.4e} m/px, \
-             which is used: the camera looks down on the top face (z_t is then its far rim), \
-             or the disk parameters do not match the disk filmed"
-        ));
+    let scale = ScaleReport::new(&cal, &params);
+    let metres_per_px = scale.metres_per_px();
+    if !scale.used.starts_with("thickness") {
+        warnings.push(format!("scale from the {}", scale.used));
     }
     let side0 = &rest_sides[0];
     let gauge = RimGauge::new(
@@ -582,6 +643,7 @@ pub fn analyse_clip(
         split_row,
         calibration,
         metres_per_px,
+        scale,
         band_half_width_px: side_config.half_width_px,
         colour_thresholds,
         window_s,

@@ -557,7 +557,7 @@ fn vertical_points(
         .map(|j| (j, p[j - 1] - p[j + 1]))
         .max_by(|a, b| a.1.total_cmp(&b.1))
         .filter(|&(_, drop)| drop >= MIRROR_STEP_FRACTION * contrast);
-    let z_base = match step {
+    let (z_base, side_end) = match step {
         Some((j, _)) => {
             // The pair (j−1, j) or (j, j+1) that holds most of the drop.
             let i = if p[j - 1] - p[j] >= p[j] - p[j + 1] {
@@ -565,11 +565,76 @@ fn vertical_points(
             } else {
                 j
             };
-            area_edge(&p, i, REACH, origin).ok_or_else(|| missing("z_base"))?
+            let z = area_edge(&p, i, REACH, origin).ok_or_else(|| missing("z_base"))?;
+            (z, i)
         }
-        None => z_bottom,
+        None => (z_bottom, bottom),
     };
-    Ok((z_t, z_base))
+    let z_near = near_top_rim(&p, top, side_end, contrast, origin).unwrap_or(z_t);
+    Ok((z_near, z_base))
+}
+
+/// Least difference between the top face's and the side's mean levels, as a
+/// fraction of the disk's contrast with what lies below it, for the near top rim
+/// to count as seen (a sub-pixel edge between levels closer than this is noise).
+const NEAR_RIM_STEP_FRACTION: f32 = 0.15;
+
+/// The near top rim z_t (thesis fig. 3.3) on the band profile `p` of the disk's
+/// silhouette, rows `top..=side_end` (silhouette top to the last row of the
+/// side): where the top face, seen from above, meets the camera-facing side.
+///
+/// The two faces are lit differently, either brighter, so the profile is two
+/// plateaus: the change point that minimises the absolute deviations from the
+/// median on each side (a thin line across a face, such as a strip, moves neither
+/// median, where a local gradient or a mean would take its edge). The edge is then placed sub-pixel
+/// by the area of the steepest step of the right sign within [`REACH`] px of it.
+/// `None` when the two levels differ by less than [`NEAR_RIM_STEP_FRACTION`] of
+/// `contrast`: the top face is not seen (camera at the plate's height) or is lit
+/// like the side, and the silhouette's top is then the near top rim's estimate.
+fn near_top_rim(p: &[f32], top: usize, side_end: usize, contrast: f32, origin: f64) -> Option<f64> {
+    // Leave the silhouette's own edges out of both plateaus.
+    let (lo, hi) = (top + REACH, side_end.checked_sub(REACH)?);
+    if hi < lo + 4 {
+        return None;
+    }
+    let seg = &p[lo..=hi];
+    let median = |part: &[f32]| {
+        let mut v = part.to_vec();
+        v.sort_by(f32::total_cmp);
+        v[v.len() / 2]
+    };
+    let deviation = |part: &[f32]| {
+        let m = median(part);
+        part.iter().map(|&v| (v - m).abs()).sum::<f32>()
+    };
+    let n = seg.len();
+    let split = (2..=n - 2).min_by(|&a, &b| {
+        let cost = |k: usize| deviation(&seg[..k]) + deviation(&seg[k..]);
+        cost(a).total_cmp(&cost(b))
+    })?;
+    let difference = median(&seg[split..]) - median(&seg[..split]);
+    if difference.abs() < NEAR_RIM_STEP_FRACTION * contrast {
+        return None;
+    }
+    // The steepest step of the plateaus' sign near the split (sample lo + split − 1
+    // is the last of the top face).
+    let centre = lo + split - 1;
+    let (from, to) = (
+        centre.saturating_sub(REACH).max(top),
+        (centre + REACH).min(side_end - 1),
+    );
+    let rising = difference > 0.0;
+    let i = (from..=to).max_by(|&a, &b| {
+        let d = |k: usize| {
+            if rising {
+                p[k + 1] - p[k]
+            } else {
+                p[k] - p[k + 1]
+            }
+        };
+        d(a).total_cmp(&d(b))
+    })?;
+    area_edge(p, i, REACH, origin)
 }
 
 /// x_l and x_r: the ends of the disk, the outermost half-level crossings of the
@@ -702,6 +767,31 @@ mod tests {
         let c = Canvas::from_rects(s.w, s.h, grey(s.background), &rects);
         let report = calibrate_one(&c);
         assert_points(&report.calibration, &s);
+    }
+
+    #[test]
+    fn near_top_rim_below_a_visible_top_face_of_either_brightness() {
+        // A camera above the plate sees the top face as a band above the side; z_t
+        // is where they meet (eq. 3.10's near top rim), not the silhouette's top,
+        // whether the face is lit brighter or darker than the side, and a strip
+        // line across the face (1.5 px, dark) does not move it.
+        let s = SideScene::standard();
+        let (w, h) = (s.w as f64, s.h as f64);
+        let side = 170.0;
+        let mirror = 35.0 + 0.55 * (side - 35.0);
+        let face_top = s.z_t() - 14.4;
+        for face in [230.0, 120.0] {
+            let rects = [
+                (0.0, s.z_base, w, h, grey(35.0)),
+                (s.x_l, s.z_t(), s.x_r, s.z_base, grey(side)),
+                (s.x_l, face_top, s.x_r, s.z_t(), grey(face)),
+                (s.x_l, face_top + 5.2, s.x_r, face_top + 6.7, grey(70.0)),
+                (s.x_l, s.z_base, s.x_r, s.z_base + s.thickness, grey(mirror)),
+            ];
+            let c = Canvas::from_rects(s.w, s.h, grey(s.background), &rects);
+            let report = calibrate_one(&c);
+            assert_points(&report.calibration, &s);
+        }
     }
 
     #[test]
