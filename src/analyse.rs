@@ -74,6 +74,8 @@ pub struct ExperimentPlan {
     pub width: usize,
     pub height: usize,
     pub disk: DiskParams,
+    /// Side view or two-view, and whether the config said so or how it was detected.
+    pub layout: String,
     /// Two-view clips: the first row of the plan view [px] and whether it came from
     /// the config.
     pub split_row: Option<(usize, bool)>,
@@ -309,6 +311,10 @@ fn side_view<'a>(
     }
 }
 
+fn layout_name(two_view: bool) -> &'static str {
+    if two_view { "two-view" } else { "side view" }
+}
+
 /// Analyse one clip with its (merged) config. `progress(done, total)` is called
 /// every few hundred frames of the measuring pass.
 ///
@@ -339,7 +345,6 @@ pub fn analyse_clip(
     let mut warnings = fps.warnings.clone();
     let params = config.disk_params();
     let vision_config = config.vision.clone().unwrap_or_default();
-    let two_view = config.two_view.unwrap_or(false);
     let roi = vision_config.roi;
 
     // Pass 1: the rest frames at the end.
@@ -375,6 +380,23 @@ pub fn analyse_clip(
     let last_view = side_view(&last.view(), roi, None, last.index)
         .map_err(vision_err)?
         .0;
+    let (two_view, layout) = match config.two_view {
+        Some(two_view) => (
+            two_view,
+            format!("{} (config `two_view`)", layout_name(two_view)),
+        ),
+        None => {
+            let detected = vision::detect_two_view(&last_view, last.index);
+            (
+                detected.two_view,
+                format!(
+                    "{} (detected: {})",
+                    layout_name(detected.two_view),
+                    detected.evidence
+                ),
+            )
+        }
+    };
     let split_row = if two_view {
         Some(match vision_config.split_row {
             Some(row) => (row as usize, true),
@@ -640,6 +662,7 @@ pub fn analyse_clip(
         width,
         height,
         disk: params,
+        layout,
         split_row,
         calibration,
         metres_per_px,

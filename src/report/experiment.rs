@@ -325,6 +325,7 @@ fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<Strin
             "capture fps".into(),
             format!("{} ({:?})", plan.fps.fps, plan.fps.source),
         ],
+        vec!["layout".into(), plan.layout.clone()],
         vec![
             "threshold γ".into(),
             format!(
@@ -340,8 +341,23 @@ fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<Strin
             ),
         ],
         vec![
-            "scale δ".into(),
-            format!("{:.4e} m/px (eq. 3.10)", plan.metres_per_px),
+            "scale δ at the near rim".into(),
+            format!(
+                "{:.4e} m/px from the {}",
+                plan.metres_per_px, plan.scale.used
+            ),
+        ],
+        vec![
+            "perspective".into(),
+            format!(
+                "diameter scale 2R/(x_r − x_l) = {:.4e} m/px at the disk's centre; factor {:.3}{}",
+                plan.scale.diameter_metres_per_px,
+                plan.scale.perspective_factor,
+                plan.scale
+                    .camera_distance_m
+                    .map(|d| format!(", camera ≈ {d:.2} m from the near rim"))
+                    .unwrap_or_default()
+            ),
         ],
         vec![
             "band".into(),

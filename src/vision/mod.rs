@@ -56,6 +56,6 @@ pub use gap::{GapGauge, GapSample};
 pub use rim::{RimGauge, RimHeight};
 pub use threshold::{GammaSource, INTENSITY_SCALE, Threshold};
 pub use two_view::{
-    ColourThresholds, Strip, StripFinder, ThresholdSource, auto_colour_thresholds, find_split_row,
-    split_views,
+    ColourThresholds, LayoutDetection, Strip, StripFinder, ThresholdSource, auto_colour_thresholds,
+    detect_two_view, find_split_row, split_views,
 };

@@ -107,6 +107,60 @@ pub fn find_split_row(frame: &FrameView, index: usize) -> Result<usize, VisionEr
     Ok(lo + (first + last) / 2)
 }
 
+/// Whether a frame is a two-view frame (thesis fig. 3.20), and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LayoutDetection {
+    pub two_view: bool,
+    /// What was found, for the plan and the report.
+    pub evidence: String,
+}
+
+/// Least eccentricity of the plan view's red component for it to be a strip: a
+/// strip 10 times longer than wide has 0.995; a round red speck 0.
+const MIN_STRIP_ECCENTRICITY: f64 = 0.9;
+
+/// Detects the two-view layout on a rest frame: a frame is two-view when it
+/// holds both things that make one, a dark full-width divider ([`find_split_row`])
+/// and, below it, a strip: a red, elongated component ([`auto_colour_thresholds`],
+/// then [`StripFinder`], eccentricity at least 0.9) of at least 1/1000 of the plan
+/// view's area. A side view has no strip below its darkest band (the shadow under
+/// a light plate, the black below a plate's front edge), so either test failing
+/// makes it a side view.
+pub fn detect_two_view(frame: &FrameView, index: usize) -> LayoutDetection {
+    let side = |evidence: String| LayoutDetection {
+        two_view: false,
+        evidence,
+    };
+    let Ok(row) = find_split_row(frame, index) else {
+        return side("no dark full-width band to divide two views".into());
+    };
+    let Ok((_, plan)) = split_views(frame, row, index) else {
+        return side(format!("no plan view below row {row}"));
+    };
+    let min_pixels = (plan.width * plan.height / 1000).max(StripFinder::MIN_PIXELS);
+    let strip = auto_colour_thresholds(&plan, index).ok().and_then(|t| {
+        StripFinder::new(t, ThresholdSource::Automatic)
+            .with_min_pixels(min_pixels)
+            .measure(&plan, index)
+            .ok()
+    });
+    match strip {
+        Some(s) if s.eccentricity >= MIN_STRIP_ECCENTRICITY => LayoutDetection {
+            two_view: true,
+            evidence: format!(
+                "dark divider at row {row}; below it a red strip of {} px, eccentricity {:.3}",
+                s.pixels, s.eccentricity
+            ),
+        },
+        Some(s) => side(format!(
+            "below the dark band at row {row} the red component ({} px) is not a strip: \
+             eccentricity {:.3} < {MIN_STRIP_ECCENTRICITY}",
+            s.pixels, s.eccentricity
+        )),
+        None => side(format!("no red strip below the dark band at row {row}")),
+    }
+}
+
 /// Colour thresholds of eq. 3.23 on the channels divided by the image's mean
 /// intensity: a pixel is strip when R > r, G < g and B < b.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -425,6 +479,55 @@ mod tests {
             matches!(err, VisionError::NoStrip { frame: 17, .. }),
             "{err}"
         );
+    }
+
+    /// A portrait two-view frame's bytes: the side view's middle 400 columns (rows
+    /// 0..300), a black divider (rows 300..312) and `plan` (400 × 300) below.
+    fn stacked(plan: &Canvas) -> Vec<u8> {
+        let top = SideScene::standard().dark_plate(3.0, 0.55);
+        let top_bytes = top.to_bgr(0);
+        let mut bytes = Vec::new();
+        for r in 0..300 {
+            bytes.extend_from_slice(&top_bytes[r * 3 * top.w + 3 * 120..r * 3 * top.w + 3 * 520]);
+        }
+        bytes.extend(std::iter::repeat_n(4u8, 12 * 3 * 400));
+        bytes.extend(plan.to_bgr(0));
+        bytes
+    }
+
+    fn portrait(bytes: &[u8]) -> FrameView<'_> {
+        FrameView {
+            width: 400,
+            height: 612,
+            stride: 3 * 400,
+            order: crate::footage::ChannelOrder::Bgr,
+            data: bytes,
+        }
+    }
+
+    #[test]
+    fn two_view_layout_needs_a_divider_and_a_strip_below_it() {
+        let with_strip = stacked(&plan_view(0.7, (200.0, 150.0), 180.0, 12.0));
+        let found = detect_two_view(&portrait(&with_strip), 0);
+        assert!(found.two_view, "{}", found.evidence);
+        // The same divider above a plain disk (a side view over a light plate's
+        // dark shadow or a black band below the plate): a side view.
+        let mut plain = Canvas::new(400, 300, grey(30.0));
+        plain.shape(
+            (60.0, 10.0, 340.0, 290.0),
+            8,
+            |x, y| (x - 200.0).hypot(y - 150.0) < 135.0,
+            grey(150.0),
+        );
+        let found = detect_two_view(&portrait(&stacked(&plain)), 0);
+        assert!(!found.two_view, "{}", found.evidence);
+        // A red round speck is no strip.
+        let speck = stacked(&plan_view(0.7, (200.0, 150.0), 14.0, 14.0));
+        assert!(!detect_two_view(&portrait(&speck), 0).two_view);
+        // No divider: a side view whatever lies below.
+        let side = SideScene::standard().dark_plate(3.0, 0.55);
+        let side_bytes = side.to_bgr(0);
+        assert!(!detect_two_view(&side.view(&side_bytes, 0), 0).two_view);
     }
 
     #[test]
