@@ -76,6 +76,8 @@ pub struct ExperimentPlan {
     pub disk: DiskParams,
     /// Side view or two-view, and whether the config said so or how it was detected.
     pub layout: String,
+    /// Dark or light plate, and whether the config said so or how it was detected.
+    pub plate: String,
     /// Two-view clips: the first row of the plan view [px] and whether it came from
     /// the config.
     pub split_row: Option<(usize, bool)>,
@@ -311,6 +313,67 @@ fn side_view<'a>(
     }
 }
 
+fn plate_name(plate: Plate) -> &'static str {
+    match plate {
+        Plate::Dark => "dark plate",
+        Plate::Light => "light plate",
+    }
+}
+
+/// Calibrates for the plate kind that describes the rest frames: each kind's
+/// calibration is tried, a dark plate's first, and the first that finds a disk
+/// at rest whose two scales imply a camera a side view can have (perspective
+/// factor within [`PERSPECTIVE_FACTOR_RANGE`]) is taken. A dark-plate calibration
+/// of a light plate finds a sliver of the plate or an unsteady blob; a
+/// light-plate calibration of a dark plate takes the reflection for part of the
+/// disk. With neither plausible, the first that calibrated at all is taken (its
+/// scale then falls back to the diameter, with a warning), else the dark
+/// plate's error is returned.
+fn calibrate_detecting_plate(
+    rest: &[FrameView],
+    first_index: usize,
+    side_config: &SideViewConfig,
+    given: Option<&CalibrationOverride>,
+    disk: &DiskParams,
+) -> Result<(CalibrationReport, Plate, String), VisionError> {
+    let (lo, hi) = PERSPECTIVE_FACTOR_RANGE;
+    let mut fallback = None;
+    let mut first_error = None;
+    let mut tried = Vec::new();
+    for plate in [Plate::Dark, Plate::Light] {
+        let config = SideViewConfig {
+            plate,
+            ..*side_config
+        };
+        match vision::calibrate_at_rest(rest, first_index, &config, given) {
+            Ok(report) => {
+                let factor = ScaleReport::new(&report.calibration, disk).perspective_factor;
+                if (lo..=hi).contains(&factor) {
+                    tried.push(format!(
+                        "{}: perspective factor {factor:.3}",
+                        plate_name(plate)
+                    ));
+                    return Ok((report, plate, tried.join("; ")));
+                }
+                tried.push(format!(
+                    "{}: perspective factor {factor:.3}, outside {lo}–{hi}",
+                    plate_name(plate)
+                ));
+                fallback.get_or_insert((report, plate));
+            }
+            Err(e) => {
+                tried.push(format!("{}: {e}", plate_name(plate)));
+                first_error.get_or_insert(e);
+            }
+        }
+    }
+    match (fallback, first_error) {
+        (Some((report, plate)), _) => Ok((report, plate, tried.join("; "))),
+        (None, Some(e)) => Err(e),
+        (None, None) => unreachable!("two plate kinds were tried"),
+    }
+}
+
 fn layout_name(two_view: bool) -> &'static str {
     if two_view { "two-view" } else { "side view" }
 }
@@ -409,7 +472,7 @@ pub fn analyse_clip(
         None
     };
     let split = split_row.map(|(row, _)| row);
-    let side_config = SideViewConfig {
+    let mut side_config = SideViewConfig {
         gamma: vision_config.gamma,
         half_width_px: vision_config
             .band_half_width_px
@@ -431,9 +494,28 @@ pub fn analyse_clip(
                 .0,
         );
     }
-    let calibration =
-        vision::calibrate_at_rest(&rest_sides, rest[0].index, &side_config, given.as_ref())
+    let (calibration, plate) = match config.plate {
+        Some(plate) => (
+            vision::calibrate_at_rest(&rest_sides, rest[0].index, &side_config, given.as_ref())
+                .map_err(vision_err)?,
+            format!("{} (config `plate`)", plate_name(plate)),
+        ),
+        None => {
+            let (report, kind, evidence) = calibrate_detecting_plate(
+                &rest_sides,
+                rest[0].index,
+                &side_config,
+                given.as_ref(),
+                &params,
+            )
             .map_err(vision_err)?;
+            side_config.plate = kind;
+            (
+                report,
+                format!("{} (detected: {evidence})", plate_name(kind)),
+            )
+        }
+    };
     // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport).
     let cal = calibration.calibration;
     if let Some(band) = vision_config.band_half_width_px {
@@ -663,6 +745,7 @@ pub fn analyse_clip(
         height,
         disk: params,
         layout,
+        plate,
         split_row,
         calibration,
         metres_per_px,

@@ -326,6 +326,7 @@ fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<Strin
             format!("{} ({:?})", plan.fps.fps, plan.fps.source),
         ],
         vec!["layout".into(), plan.layout.clone()],
+        vec!["plate".into(), plan.plate.clone()],
         vec![
             "threshold γ".into(),
             format!(

@@ -37,7 +37,7 @@ use super::VisionError;
 use super::components::{Component, Labeller};
 use super::profile::{area_edge, check_frame, column_band_mean, row_band_mean};
 use super::rim::RimGauge;
-use super::threshold::Threshold;
+use super::threshold::{GammaSource, INTENSITY_SCALE, Threshold};
 use crate::config::Plate;
 use crate::footage::FrameView;
 
@@ -243,17 +243,45 @@ pub fn calibrate_at_rest(
             reason: "must be positive",
         });
     }
-    let threshold = Threshold::given_or_otsu(config.gamma, reference, ref_index)?;
+    let otsu = Threshold::given_or_otsu(config.gamma, reference, ref_index)?;
     let given = given.copied().unwrap_or_default();
     let given_flags = [given.x_l, given.x_r, given.z_t, given.z_base].map(|v| v.is_some());
     let (calibration, detected) = match given.complete() {
         Some(c) => (c, None),
         None => {
-            let d = calibrate_frame(reference, ref_index, &threshold, config)?;
+            let d = calibrate_frame(reference, ref_index, &otsu, config)?;
             (given.apply(d), Some(d))
         }
     };
     calibration.validate(reference.width, reference.height)?;
+    // A light plate's rim is told from its shadow by a level of its own.
+    let threshold = match (config.plate, config.gamma) {
+        (Plate::Light, None) => {
+            let (x0, x1) = band(
+                calibration.x_centre(),
+                config.half_width_px,
+                reference.width,
+            );
+            let reach = ((calibration.disk_height_px() / 6.0) as usize).max(4);
+            let level = super::light_plate::rim_level(
+                reference,
+                x0,
+                x1,
+                calibration.z_t,
+                calibration.z_base,
+                reach,
+            )
+            .ok_or(VisionError::NoDisk {
+                frame: ref_index,
+                gamma: otsu.gamma,
+            })?;
+            Threshold {
+                gamma: f64::from(level) / INTENSITY_SCALE,
+                source: GammaSource::RimContrast,
+            }
+        }
+        _ => otsu,
+    };
     let gauge = RimGauge::new(
         &calibration,
         &threshold,
@@ -385,6 +413,9 @@ pub fn calibrate_frame(
         frame: index,
         gamma: threshold.gamma,
     };
+    if config.plate == Plate::Light {
+        return super::light_plate::calibrate(frame, index, half_width);
+    }
     let disk = match config.plate {
         Plate::Dark => {
             let blobs = Labeller::default().components(&mask, w, h, |c| {
@@ -591,7 +622,13 @@ const NEAR_RIM_STEP_FRACTION: f32 = 0.15;
 /// `None` when the two levels differ by less than [`NEAR_RIM_STEP_FRACTION`] of
 /// `contrast`: the top face is not seen (camera at the plate's height) or is lit
 /// like the side, and the silhouette's top is then the near top rim's estimate.
-fn near_top_rim(p: &[f32], top: usize, side_end: usize, contrast: f32, origin: f64) -> Option<f64> {
+pub(super) fn near_top_rim(
+    p: &[f32],
+    top: usize,
+    side_end: usize,
+    contrast: f32,
+    origin: f64,
+) -> Option<f64> {
     // Leave the silhouette's own edges out of both plateaus.
     let (lo, hi) = (top + REACH, side_end.checked_sub(REACH)?);
     if hi < lo + 4 {

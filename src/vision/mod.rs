@@ -39,6 +39,7 @@ mod calibration;
 mod components;
 mod error;
 mod gap;
+mod light_plate;
 mod profile;
 mod rim;
 mod threshold;

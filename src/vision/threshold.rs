@@ -16,6 +16,9 @@ pub enum GammaSource {
     Given,
     /// Otsu's method on the intensity histogram of the calibration frame.
     Otsu,
+    /// Light plate: halfway between the disk's side and the shadow below its rim
+    /// on the centre band of the rest frame.
+    RimContrast,
 }
 
 /// The side-view threshold γ and where it came from.

@@ -119,11 +119,19 @@ pub struct LayoutDetection {
 /// strip 10 times longer than wide has 0.995; a round red speck 0.
 const MIN_STRIP_ECCENTRICITY: f64 = 0.9;
 
+/// A pixel is red when its red channel exceeds this (0–255) and both others
+/// times [`RED_DOMINANCE`]: the strip of eq. 3.23 under any white light; white
+/// paper (R ≈ G ≈ B) never is.
+const RED_MIN_LEVEL: f32 = 60.0;
+const RED_DOMINANCE: f32 = 1.6;
+
 /// Detects the two-view layout on a rest frame: a frame is two-view when it
-/// holds both things that make one, a dark full-width divider ([`find_split_row`])
-/// and, below it, a strip: a red, elongated component ([`auto_colour_thresholds`],
-/// then [`StripFinder`], eccentricity at least 0.9) of at least 1/1000 of the plan
-/// view's area. A side view has no strip below its darkest band (the shadow under
+/// holds all that makes one, a dark full-width divider ([`find_split_row`]), a
+/// side view above it (at least 1 % of it brighter than the frame's Otsu level:
+/// a side view's dark background above the disk is no view) and, below it, a
+/// strip: at least 1/1000 of the plan view's area red, and an
+/// elongated component ([`auto_colour_thresholds`], then [`StripFinder`],
+/// eccentricity at least 0.9) of that size. A side view has no strip below its darkest band (the shadow under
 /// a light plate, the black below a plate's front edge), so either test failing
 /// makes it a side view.
 pub fn detect_two_view(frame: &FrameView, index: usize) -> LayoutDetection {
@@ -134,10 +142,33 @@ pub fn detect_two_view(frame: &FrameView, index: usize) -> LayoutDetection {
     let Ok(row) = find_split_row(frame, index) else {
         return side("no dark full-width band to divide two views".into());
     };
-    let Ok((_, plan)) = split_views(frame, row, index) else {
+    let Ok((upper, plan)) = split_views(frame, row, index) else {
         return side(format!("no plan view below row {row}"));
     };
+    // A side view above the divider: something as bright as the frame's bright
+    // class (Otsu) on at least 1 % of it, not only the dark above a disk.
+    let level = super::threshold::Threshold::otsu(frame, index).map_or(f32::MAX, |t| t.level());
+    let bright = (0..upper.height)
+        .flat_map(|y| (0..upper.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| upper.intensity(x, y) > level)
+        .count();
+    if bright * 100 < upper.width * upper.height {
+        return side(format!("nothing bright above the dark band at row {row}"));
+    }
     let min_pixels = (plan.width * plan.height / 1000).max(StripFinder::MIN_PIXELS);
+    // Red, not merely redder than the rest (white paper over a bluish plate is).
+    let red = (0..plan.height)
+        .flat_map(|y| (0..plan.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let [r, g, b] = plan.rgb(x, y).map(f32::from);
+            r > RED_MIN_LEVEL && r > RED_DOMINANCE * g && r > RED_DOMINANCE * b
+        })
+        .count();
+    if red < min_pixels {
+        return side(format!(
+            "{red} red pixels below the dark band at row {row}, fewer than a strip's {min_pixels}"
+        ));
+    }
     let strip = auto_colour_thresholds(&plan, index).ok().and_then(|t| {
         StripFinder::new(t, ThresholdSource::Automatic)
             .with_min_pixels(min_pixels)
@@ -524,6 +555,12 @@ mod tests {
         // A red round speck is no strip.
         let speck = stacked(&plan_view(0.7, (200.0, 150.0), 14.0, 14.0));
         assert!(!detect_two_view(&portrait(&speck), 0).two_view);
+        // Dark above the band (a side view's background above a disk with its
+        // strip): no side view there, so no two-view frame.
+        let mut dark_above = stacked(&plan_view(0.7, (200.0, 150.0), 180.0, 12.0));
+        dark_above[..300 * 3 * 400].fill(6);
+        let found = detect_two_view(&portrait(&dark_above), 0);
+        assert!(!found.two_view, "{}", found.evidence);
         // No divider: a side view whatever lies below.
         let side = SideScene::standard().dark_plate(3.0, 0.55);
         let side_bytes = side.to_bgr(0);
