@@ -69,12 +69,15 @@ fn light_plate_clip_calibrates_on_the_shadow_and_tracks_the_rim() {
     let e = analyse(&format!("{name}.mp4"), "fps = 480\nplate = \"light\"\n");
     let cal = &e.plan.calibration.calibration;
     let tc = &truth["calibration"];
-    // Ends of the disk: sub-pixel area edges, averaged over the 5 rest frames;
-    // measured within 0.04 px. The shading falls off towards the ends (grazing
-    // light), which pulls an edge inwards by up to ≈ 0.12 px: 0.2 px.
+    // Ends of the disk, found by their edges (the light plate needs no threshold):
+    // the median over the side's rows of each row's steepest step, by its area,
+    // averaged over the rest frames. The side's shading falls off towards the
+    // ends (grazing light) and the step's run takes part of it: measured +0.24 px
+    // at x_r, −0.16 px at x_l (outwards both). The ends place the centre line (the band is ±2 px)
+    // and the perspective factor (0.24 px of 440 is 0.05 %), not the scale: 0.3 px.
     for (name, got) in [("x_l", cal.x_l), ("x_r", cal.x_r)] {
         let want = f(&tc[name]) + HALF;
-        assert!((got - want).abs() < 0.2, "{name}: {got} vs {want}");
+        assert!((got - want).abs() < 0.3, "{name}: {got} vs {want}");
     }
     // Plate line: the rim above the shadow (the second edge from the bottom).
     // Rendered losslessly (PNG) it is within 0.01 px; MPEG-4 coding of the noisy,

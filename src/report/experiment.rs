@@ -371,7 +371,7 @@ fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<Strin
         vec![
             "fit window".into(),
             format!(
-                "last {} s before the halt, t0 {:?}",
+                "the {} s before the measured halt t_φ, to the last sample; t0 {:?}",
                 plan.window_s, plan.halt
             ),
         ],

@@ -292,6 +292,13 @@ pub fn calibrate_at_rest(
     let ref_rim = gauge.measure(reference, ref_index)?;
 
     let tol = config.rest_tolerance_px;
+    // The rim gauge's own edge rows at rest (light plate, z_base detected).
+    let rezero = config.plate == Plate::Light && !given_flags[3];
+    let edge_row = |rim: &super::RimHeight| match rim {
+        super::RimHeight::Edge { edge_row, .. } => Some(*edge_row),
+        _ => None,
+    };
+    let mut rest_edges = vec![edge_row(&ref_rim)];
     // Detected points summed over the rest frames: their mean is the calibration.
     let mut sum = detected.map(|d| [d.x_l, d.x_r, d.z_t, d.z_base]);
     for (k, f) in others.iter().enumerate() {
@@ -316,6 +323,7 @@ pub fn calibrate_at_rest(
             }
         }
         let rim = gauge.measure(f, index)?;
+        rest_edges.push(edge_row(&rim));
         let shift = match (rim.z_rim_px(), ref_rim.z_rim_px()) {
             (Some(a), Some(b)) => a - b,
             (None, None) => 0.0,
@@ -339,6 +347,18 @@ pub fn calibrate_at_rest(
             })
         }
         None => calibration,
+    };
+    // On a light plate z_base is the rim gauge's own edge at rest: the gauge places
+    // the disk's bottom by the step from its threshold crossing, the calibration by
+    // the first departure from the side's level, and their runs can differ by tenths
+    // of a pixel (0.3–0.6 px on the open footage), an offset in every z_rim.
+    let rest_edges: Option<Vec<f64>> = rest_edges.into_iter().collect();
+    let calibration = match rest_edges {
+        Some(edges) if rezero => Calibration {
+            z_base: edges.iter().sum::<f64>() / edges.len() as f64,
+            ..calibration
+        },
+        _ => calibration,
     };
     calibration.validate(reference.width, reference.height)?;
     Ok(CalibrationReport {
