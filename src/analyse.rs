@@ -367,10 +367,10 @@ fn calibrate_detecting_plate(
             }
         }
     }
-    match (fallback, first_error) {
-        (Some((report, plate)), _) => Ok((report, plate, tried.join("; "))),
-        (None, Some(e)) => Err(e),
-        (None, None) => unreachable!("two plate kinds were tried"),
+    match fallback {
+        Some((report, plate)) => Ok((report, plate, tried.join("; "))),
+        // Every kind failed to calibrate, so the dark plate's error was kept.
+        None => Err(first_error.unwrap_or(VisionError::NoFrames)),
     }
 }
 
