@@ -148,9 +148,16 @@ impl ScaleReport {
         }
     }
 
+    /// Whether eq. 3.10's scale at the near rim is used (its perspective factor is
+    /// plausible), rather than the diameter's.
+    pub fn at_near_rim(&self) -> bool {
+        let (lo, hi) = PERSPECTIVE_FACTOR_RANGE;
+        (lo..=hi).contains(&self.perspective_factor)
+    }
+
     /// The scale used [m/px].
     pub fn metres_per_px(&self) -> f64 {
-        if self.used.starts_with("thickness") {
+        if self.at_near_rim() {
             self.thickness_metres_per_px
         } else {
             self.diameter_metres_per_px
@@ -528,7 +535,7 @@ pub fn analyse_clip(
     }
     let scale = ScaleReport::new(&cal, &params);
     let metres_per_px = scale.metres_per_px();
-    if !scale.used.starts_with("thickness") {
+    if !scale.at_near_rim() {
         warnings.push(format!("scale from the {}", scale.used));
     }
     let side0 = &rest_sides[0];
