@@ -32,8 +32,8 @@ use crate::model::params::DiskParams;
 use crate::report::diagnostics;
 use crate::signal::{self, SignalConfig, SignalError, StateSeries, ThesisRim};
 use crate::vision::{
-    self, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge, RimGauge, RimHeight,
-    SideViewConfig, StripFinder, ThresholdSource, VisionError,
+    self, BandWindow, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge,
+    PointSource, RimGauge, RimHeight, SideViewConfig, StripFinder, ThresholdSource, VisionError,
 };
 
 /// Frames at the end of a clip that must show the disk at rest (calibration).
@@ -87,6 +87,10 @@ pub struct ExperimentPlan {
     /// How the scale was found: both estimates and the perspective they imply.
     pub scale: ScaleReport,
     pub band_half_width_px: usize,
+    /// How z_rim was measured: the mirror-edge model with its fitted plate line
+    /// and reflectivity, or the edge alone and why.
+    #[serde(default)]
+    pub rim: String,
     pub colour_thresholds: Option<(ColourThresholds, ThresholdSource)>,
     pub window_s: f64,
     pub halt: HaltChoice,
@@ -501,7 +505,7 @@ pub fn analyse_clip(
                 .0,
         );
     }
-    let (calibration, plate) = match config.plate {
+    let (mut calibration, plate) = match config.plate {
         Some(plate) => (
             vision::calibrate_at_rest(&rest_sides, rest[0].index, &side_config, given.as_ref())
                 .map_err(vision_err)?,
@@ -523,7 +527,7 @@ pub fn analyse_clip(
             )
         }
     };
-    // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport).
+    // The band must fit on the disk.
     let cal = calibration.calibration;
     if let Some(band) = vision_config.band_half_width_px {
         crate::config::band_fits_disk(band, cal.x_r - cal.x_l).map_err(|reason| {
@@ -532,11 +536,6 @@ pub fn analyse_clip(
                 reason,
             }
         })?;
-    }
-    let scale = ScaleReport::new(&cal, &params);
-    let metres_per_px = scale.metres_per_px();
-    if !scale.at_near_rim() {
-        warnings.push(format!("scale from the {}", scale.used));
     }
     let side0 = &rest_sides[0];
     let gauge = RimGauge::new(
@@ -547,11 +546,26 @@ pub fn analyse_clip(
         side0.height,
     )
     .map_err(vision_err)?;
-    // Dark plate: rim heights below 2 px from the darkness of the gap (vision::gap).
-    let gap_gauge = match side_config.plate {
-        Plate::Dark => GapGauge::new(&calibration.calibration, &side_config, &rest_sides)
-            .map_err(vision_err)?,
-        Plate::Light => None,
+    // Dark plate: rim heights below 2 px from the darkness of the gap (vision::gap),
+    // then every height from the mirror-edge model (vision::mirror_edge), whose
+    // zero is the rest frames' band rows about their edge.
+    let (gap_gauge, rest_window) = match side_config.plate {
+        Plate::Dark => {
+            let gap = GapGauge::new(&calibration.calibration, &side_config, &rest_sides)
+                .map_err(vision_err)?;
+            let edge0 = match gauge.measure(&rest_sides[0], rest[0].index) {
+                Ok(RimHeight::Edge { edge_row, .. }) => edge_row,
+                _ => cal.z_base,
+            };
+            let columns = gauge.band_columns();
+            let windows: Option<Vec<BandWindow>> = rest_sides
+                .iter()
+                .map(|f| BandWindow::read(f, &columns, edge0))
+                .collect();
+            let rest_window = windows.and_then(|w| BandWindow::mean(&w));
+            (gap, rest_window.map(|w| (w, edge0)))
+        }
+        Plate::Light => (None, None),
     };
     let colour_thresholds = match split {
         Some(row) => {
@@ -563,10 +577,10 @@ pub fn analyse_clip(
         None => None,
     };
     let (width, height) = (last.width, last.height);
-    let calibration_png = png(&diagnostics::calibration_image(
+    let last_rest = OwnedFrame::copy(
+        rest[rest.len() - 1].index,
         &rest_sides[rest_sides.len() - 1],
-        &calibration.calibration,
-    ));
+    );
     drop(rest_sides);
     drop(rest);
 
@@ -587,6 +601,8 @@ pub fn analyse_clip(
         .map(|(t, s)| StripFinder::new(*t, *s));
     let mut frames = Vec::with_capacity(expected);
     let mut gaps = Vec::with_capacity(if gap_gauge.is_some() { expected } else { 0 });
+    let mut windows = Vec::with_capacity(if rest_window.is_some() { expected } else { 0 });
+    let band_columns = gauge.band_columns();
     let mut no_edge = 0usize;
     // The frame with the highest rim so far, kept for the threshold diagnostic.
     let mut highest: Option<(f64, f64, OwnedFrame)> = None;
@@ -594,7 +610,16 @@ pub fn analyse_clip(
         let index = frame.index;
         let (side, plan) = side_view(&frame.view, roi, split, index).map_err(vision_err)?;
         let mut new_highest = None;
-        let z_rim_px = match gauge.measure(&side, index).map_err(vision_err)? {
+        let rim = gauge.measure(&side, index).map_err(vision_err)?;
+        if rest_window.is_some() {
+            let edge0 = match rim {
+                RimHeight::Edge { edge_row, .. } => Some(edge_row),
+                RimHeight::Contact => Some(cal.z_base),
+                RimHeight::NoEdge => None,
+            };
+            windows.push(edge0.and_then(|e| BandWindow::read(&side, &band_columns, e)));
+        }
+        let z_rim_px = match rim {
             RimHeight::Edge { z_rim_px, edge_row } => {
                 if highest.as_ref().is_none_or(|(z, _, _)| z_rim_px > *z) {
                     new_highest = Some((z_rim_px, edge_row));
@@ -620,7 +645,7 @@ pub fn analyse_clip(
             t: f64::NAN,
             container_time_s: frame.container_time_s,
             z_rim_px,
-            z_rim_m: z_rim_px.map(|z| z * metres_per_px),
+            z_rim_m: None,
             beta_raw,
         });
         if index % 256 == 0 {
@@ -645,9 +670,63 @@ pub fn analyse_clip(
         }
         for (record, z) in frames.iter_mut().zip(heights) {
             record.z_rim_px = z;
-            record.z_rim_m = z.map(|z| z * metres_per_px);
         }
     }
+    let rim = match &rest_window {
+        Some((rest_window, edge0)) => {
+            let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
+            match vision::remeasure_dark_rim(
+                &mut heights,
+                &windows,
+                cal.z_base,
+                rest_window,
+                *edge0,
+            ) {
+                Some(model) => {
+                    for (record, z) in frames.iter_mut().zip(heights) {
+                        record.z_rim_px = z;
+                    }
+                    if calibration.sources[3] == PointSource::Detected {
+                        calibration.calibration.z_base = model.plate_row;
+                    }
+                    format!(
+                        "mirror-edge model (vision::mirror_edge): the rim's profile learned from \
+                         the frames with an open gap, plate line {:.2} px, reflectivity {:.2}, \
+                         edge at rest {:.2} px ({:.2} px above the plate line), rest fit RMS {:.1} % \
+                         of the disk's level",
+                        model.plate_row,
+                        model.reflectivity,
+                        model.rest_edge,
+                        model.plate_row - model.rest_edge,
+                        100.0 * model.rest_rms
+                    )
+                }
+                None => {
+                    let reason = format!(
+                        "fewer than {} frames lift the rim far enough to learn its profile",
+                        vision::MIN_TEMPLATE_FRAMES
+                    );
+                    warnings.push(format!("rim heights from the edge alone: {reason}"));
+                    format!("edge and gap darkness (vision::rim, vision::gap): {reason}")
+                }
+            }
+        }
+        None => "edge (vision::rim): the second edge from the bottom on a light plate".into(),
+    };
+    // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport),
+    // from the plate line as finally placed.
+    let scale = ScaleReport::new(&calibration.calibration, &params);
+    let metres_per_px = scale.metres_per_px();
+    if !scale.at_near_rim() {
+        warnings.push(format!("scale from the {}", scale.used));
+    }
+    for record in &mut frames {
+        record.z_rim_m = record.z_rim_px.map(|z| z * metres_per_px);
+    }
+    let calibration_png = png(&diagnostics::calibration_image(
+        &last_rest.view(),
+        &calibration.calibration,
+    ));
     if no_edge == frames.len() {
         return Err(AnalyseError::Clip {
             path: clip.to_path_buf(),
@@ -758,6 +837,7 @@ pub fn analyse_clip(
         metres_per_px,
         scale,
         band_half_width_px: side_config.half_width_px,
+        rim,
         colour_thresholds,
         window_s,
         halt: config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default(),

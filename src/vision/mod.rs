@@ -40,6 +40,7 @@ mod components;
 mod error;
 mod gap;
 mod light_plate;
+mod mirror_edge;
 mod profile;
 mod rim;
 mod threshold;
@@ -54,6 +55,9 @@ pub use calibration::{
 };
 pub use error::VisionError;
 pub use gap::{GapGauge, GapSample};
+pub use mirror_edge::{
+    BandWindow, EdgeTemplate, MIN_TEMPLATE_FRAMES, MirrorEdgeModel, remeasure as remeasure_dark_rim,
+};
 pub use rim::{RimGauge, RimHeight};
 pub use threshold::{GammaSource, INTENSITY_SCALE, Threshold};
 pub use two_view::{

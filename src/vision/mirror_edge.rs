@@ -1,0 +1,487 @@
+//! The rim on a dark plate as a fitted model of the known edge: the disk's own
+//! bottom-edge profile, learned from the clip, plus its mirror image in the plate
+//! (thesis §3.2.4, fig. 3.7).
+//!
+//! # Why a model
+//!
+//! [`RimGauge`](super::RimGauge) places the bottom edge by the area of the step
+//! from the disk's level to the gap's, over three rows either side. That is exact
+//! for a sharp edge seen through a symmetric blur. A real disk's rim is rounded:
+//! its bottom millimetre darkens gradually (on the open footage the white side
+//! fades over 4–6 rows, ending 1–2.6 px above the true rim). Then the step's
+//! reading depends on what lies below it: with the gap open, the plate's own dark
+//! level; at rest, the mirror image's own rounded rim right against the disk's.
+//! The rest frame, which gives the zero of z_rim, reads the edge 0.2–0.4 px lower
+//! than the same disk lifted, so every lifted height came out that much low
+//! (φ at the peaks 4–9 % low on the small two-view side views, and n +0.1).
+//!
+//! # The model
+//!
+//! Let D(u) be the band's profile at row offset u = (row centre − e) from the
+//! disk's edge e, divided by the disk's level: 1 on the side, falling through the
+//! rounded rim to the gap's level f. Lifted far enough, a frame shows D alone; at
+//! rest, or nearly touching, the mirror image adds its own, reflected about the
+//! plate's line y_p with the plate's reflectivity ρ:
+//!
+//! ```text
+//! p(y) = g · [ D(y + ½ − e) + ρ (D(2 y_p − (y + ½) − e) − f) ]
+//! ```
+//!
+//! (pixel y covers [y, y + 1); its mirror pixel's centre is 2 y_p − y − ½, and a
+//! symmetric blur commutes with the reflection; g is the frame's light, which
+//! divides out flicker).
+//!
+//! 1. **D from the clip.** Each frame whose first-pass height z₀ (the edge and
+//!    the gap gauge) shows an open gap contributes the rows its mirror image
+//!    cannot reach, u < 2 z₀ − [`MIRROR_REACH_PX`], aligned on its first-pass
+//!    edge and divided by its own disk level; D is their mean in
+//!    [`BIN_PX`] bins. Every sub-pixel phase occurs over a clip, so D is resolved
+//!    finer than a pixel, with the blur, the rounded rim and the shading in it.
+//! 2. **The rest frames** give ρ, y_p and the edge at rest e_rest: the least
+//!    squares fit of the model to their mean profile. y_p is where the rim meets
+//!    its mirror image, the true near bottom rim at rest: the plate line z_base.
+//! 3. **Every frame** is fitted for e (and g) with ρ and y_p known, and
+//!    z_rim = e_rest − e: one edge definition, the same at rest and lifted, near
+//!    touching or not.
+//!
+//! A template learned from first-pass edges carries their alignment noise as a
+//! slight extra blur of D, the same in every fit; it does not move e_rest − e.
+
+use std::ops::Range;
+
+use super::profile::row_band_mean;
+use crate::footage::FrameView;
+
+/// Rows recorded per frame above the first-pass edge (the disk's level is read on
+/// the top [`LEVEL_ROWS`] of them).
+pub const ROWS_ABOVE: usize = 14;
+/// Rows recorded per frame below the first-pass edge.
+pub const ROWS_BELOW: usize = 12;
+/// Rows at the top of a window whose median is the disk's level.
+const LEVEL_ROWS: usize = 6;
+/// Width of the template's bins [px].
+pub const BIN_PX: f64 = 0.1;
+/// Samples a bin needs to count.
+const MIN_BIN_SAMPLES: usize = 3;
+/// How far above its own edge a mirror image's light can reach [px]: three
+/// rows of blur. A frame's rows at u < 2 z₀ − this see no mirror light.
+pub const MIRROR_REACH_PX: f64 = 3.0;
+/// Frames with an open gap the template needs.
+pub const MIN_TEMPLATE_FRAMES: usize = 20;
+/// How far from its first-pass edge a frame's fitted edge may lie [px].
+const SEARCH_PX: f64 = 2.0;
+/// The distance from the edge to the plate line at rest searched, c = y_p − e
+/// [px]: from a sharp rim (c ≈ 0) to one rounded over most of the window below.
+const PLATE_OFFSET_PX: Range<f64> = -1.0..(ROWS_BELOW as f64 - 3.0);
+
+/// The band's mean intensities on consecutive rows of one frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BandWindow {
+    /// The first row.
+    pub first_row: usize,
+    /// Band means, one per row from `first_row`.
+    pub values: Vec<f32>,
+}
+
+impl BandWindow {
+    /// The rows [round(`edge`) − [`ROWS_ABOVE`], round(`edge`) + [`ROWS_BELOW`])
+    /// of `columns`, clipped to the frame; `None` when fewer than
+    /// [`LEVEL_ROWS`] + 4 rows remain.
+    pub fn read(frame: &FrameView, columns: &Range<usize>, edge: f64) -> Option<Self> {
+        let centre = edge.round();
+        if !centre.is_finite() {
+            return None;
+        }
+        let first = (centre - ROWS_ABOVE as f64).max(0.0) as usize;
+        let end = ((centre + ROWS_BELOW as f64).max(0.0) as usize).min(frame.height);
+        if end < first + LEVEL_ROWS + 4 {
+            return None;
+        }
+        let values = (first..end)
+            .map(|y| row_band_mean(frame, y, columns.start, columns.end))
+            .collect();
+        Some(Self {
+            first_row: first,
+            values,
+        })
+    }
+
+    /// The mean of several windows of the same rows (the rest frames).
+    pub fn mean(windows: &[Self]) -> Option<Self> {
+        let first = windows.first()?;
+        if windows
+            .iter()
+            .any(|w| w.first_row != first.first_row || w.values.len() != first.values.len())
+        {
+            return None;
+        }
+        let n = windows.len() as f32;
+        let values = (0..first.values.len())
+            .map(|k| windows.iter().map(|w| w.values[k]).sum::<f32>() / n)
+            .collect();
+        Some(Self {
+            first_row: first.first_row,
+            values,
+        })
+    }
+
+    /// The disk's level: the median of the top [`LEVEL_ROWS`] rows.
+    fn level(&self) -> f64 {
+        let mut top: Vec<f64> = self.values[..LEVEL_ROWS]
+            .iter()
+            .map(|&v| f64::from(v))
+            .collect();
+        top.sort_by(f64::total_cmp);
+        0.5 * (top[LEVEL_ROWS / 2 - 1] + top[LEVEL_ROWS / 2])
+    }
+
+    /// (row centre, value) pairs.
+    fn samples(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        self.values
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| ((self.first_row + k) as f64 + 0.5, f64::from(v)))
+    }
+}
+
+/// D(u): the disk's bottom-edge profile divided by the disk's level, at offsets u
+/// from the edge [px], tabulated in [`BIN_PX`] bins.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EdgeTemplate {
+    /// Bin centres, increasing.
+    offsets: Vec<f64>,
+    /// Mean normalised level per bin.
+    levels: Vec<f64>,
+}
+
+impl EdgeTemplate {
+    /// Learns D from frames with an open gap: (window, first-pass edge row,
+    /// first-pass z_rim [px]). `None` with fewer than [`MIN_TEMPLATE_FRAMES`] frames
+    /// lifted past [`MIRROR_REACH_PX`], or no bin below the edge.
+    pub fn learn<'a>(frames: impl Iterator<Item = (&'a BandWindow, f64, f64)>) -> Option<Self> {
+        let lo = -(ROWS_ABOVE as f64);
+        let bins = ((ROWS_ABOVE + ROWS_BELOW) as f64 / BIN_PX).round() as usize;
+        let mut sum = vec![0.0; bins];
+        let mut count = vec![0usize; bins];
+        let mut used = 0;
+        for (window, edge, z) in frames {
+            let reach = 2.0 * z - MIRROR_REACH_PX;
+            if reach <= 0.0 {
+                continue;
+            }
+            let level = window.level();
+            if level <= 0.0 {
+                continue;
+            }
+            used += 1;
+            for (centre, v) in window.samples() {
+                let u = centre - edge;
+                let bin = ((u - lo) / BIN_PX).floor();
+                if u < reach && bin >= 0.0 && (bin as usize) < bins {
+                    sum[bin as usize] += v / level;
+                    count[bin as usize] += 1;
+                }
+            }
+        }
+        if used < MIN_TEMPLATE_FRAMES {
+            return None;
+        }
+        let (offsets, levels): (Vec<f64>, Vec<f64>) = (0..bins)
+            .filter(|&b| count[b] >= MIN_BIN_SAMPLES)
+            .map(|b| (lo + (b as f64 + 0.5) * BIN_PX, sum[b] / count[b] as f64))
+            .unzip();
+        (offsets.last().is_some_and(|&u| u > 1.0)).then_some(Self { offsets, levels })
+    }
+
+    /// D(u), linear between bins, constant beyond the first and last.
+    pub fn at(&self, u: f64) -> f64 {
+        let k = self.offsets.partition_point(|&o| o < u);
+        if k == 0 {
+            return self.levels[0];
+        }
+        if k == self.offsets.len() {
+            return self.levels[k - 1];
+        }
+        let (u0, u1) = (self.offsets[k - 1], self.offsets[k]);
+        let w = (u - u0) / (u1 - u0);
+        self.levels[k - 1] + w * (self.levels[k] - self.levels[k - 1])
+    }
+
+    /// The gap's level f: D far below the edge.
+    pub fn floor(&self) -> f64 {
+        self.levels[self.levels.len() - 1]
+    }
+}
+
+/// The fitted model: D, the plate's line and reflectivity, and the edge at rest.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MirrorEdgeModel {
+    template: EdgeTemplate,
+    /// y_p: the plate's line under the centre column, where the resting rim meets
+    /// its mirror image (continuous row, px).
+    pub plate_row: f64,
+    /// ρ: the mirror image's contrast relative to the disk's.
+    pub reflectivity: f64,
+    /// e_rest: the fitted edge of the rest frames (continuous row, px).
+    pub rest_edge: f64,
+    /// RMS of the rest fit relative to the disk's level.
+    pub rest_rms: f64,
+}
+
+impl MirrorEdgeModel {
+    /// Fits ρ, y_p and e_rest to the rest frames' mean window, `rest_edge0` their
+    /// first-pass edge (or the calibrated plate line when they read contact).
+    pub fn fit(template: EdgeTemplate, rest: &BandWindow, rest_edge0: f64) -> Self {
+        let level = rest.level();
+        let samples: Vec<(f64, f64)> = rest.samples().map(|(y, v)| (y, v / level)).collect();
+        let cost = |e: f64, c: f64, rho: f64| {
+            let model = |y: f64| model_value(&template, y, e, e + c, rho);
+            best_gain_ssr(&samples, model)
+        };
+        // Coarse grid over (ρ, c, e), then two finer ones about the best.
+        let grid = |best: &mut (f64, f64, f64, f64), e_range, c_range, rho_range| {
+            for rho in steps(rho_range) {
+                for c in steps(c_range) {
+                    for e in steps(e_range) {
+                        let ssr = cost(e, c, rho);
+                        if ssr < best.0 {
+                            *best = (ssr, e, c, rho);
+                        }
+                    }
+                }
+            }
+        };
+        let mut best = (f64::INFINITY, rest_edge0, 0.0, 0.0);
+        grid(
+            &mut best,
+            (rest_edge0 - SEARCH_PX, rest_edge0 + SEARCH_PX, 0.1),
+            (PLATE_OFFSET_PX.start, PLATE_OFFSET_PX.end, 0.1),
+            (0.0, 1.0, 0.05),
+        );
+        for step in [0.01, 0.001] {
+            let (_, e, c, rho) = best;
+            let span = 10.0 * step;
+            grid(
+                &mut best,
+                (e - span, e + span, step),
+                (c - span, c + span, step),
+                (
+                    (rho - 5.0 * step).max(0.0),
+                    (rho + 5.0 * step).min(1.0),
+                    step,
+                ),
+            );
+        }
+        let (ssr, e, c, rho) = best;
+        Self {
+            template,
+            plate_row: e + c,
+            reflectivity: rho,
+            rest_edge: e,
+            rest_rms: (ssr / samples.len() as f64).sqrt(),
+        }
+    }
+
+    /// The edge row of one frame's window, fitted within ±[`SEARCH_PX`] of its
+    /// first-pass edge `edge0`: a 0.05 px grid, then golden-section search.
+    pub fn edge(&self, window: &BandWindow, edge0: f64) -> f64 {
+        let samples: Vec<(f64, f64)> = window.samples().collect();
+        let cost = |e: f64| {
+            best_gain_ssr(&samples, |y| {
+                model_value(&self.template, y, e, self.plate_row, self.reflectivity)
+            })
+        };
+        let mut best = (f64::INFINITY, edge0);
+        for e in steps((edge0 - SEARCH_PX, edge0 + SEARCH_PX, 0.05)) {
+            let ssr = cost(e);
+            if ssr < best.0 {
+                best = (ssr, e);
+            }
+        }
+        golden_section(cost, best.1 - 0.05, best.1 + 0.05, 1e-4)
+    }
+
+    /// z_rim [px] of one frame: e_rest − e.
+    pub fn z_rim_px(&self, window: &BandWindow, edge0: f64) -> f64 {
+        self.rest_edge - self.edge(window, edge0)
+    }
+}
+
+/// Re-measures a clip's rim heights with the model (module docs): `heights` are
+/// the first-pass z_rim per frame [px] (`None`: no edge, left alone), `windows`
+/// each frame's band rows about its first-pass edge z_base − z, `rest` the rest
+/// frames' mean window about `rest_edge0`. Returns the model, or `None` (and
+/// changes nothing) when too few frames open the gap to learn D.
+pub fn remeasure(
+    heights: &mut [Option<f64>],
+    windows: &[Option<BandWindow>],
+    z_base: f64,
+    rest: &BandWindow,
+    rest_edge0: f64,
+) -> Option<MirrorEdgeModel> {
+    let template = EdgeTemplate::learn(
+        heights
+            .iter()
+            .zip(windows)
+            .filter_map(|(z, w)| Some((w.as_ref()?, z_base - (*z)?, (*z)?))),
+    )?;
+    let model = MirrorEdgeModel::fit(template, rest, rest_edge0);
+    for (z, w) in heights.iter_mut().zip(windows) {
+        if let (Some(height), Some(window)) = (z.as_mut(), w) {
+            *height = model.z_rim_px(window, z_base - *height);
+        }
+    }
+    Some(model)
+}
+
+/// The model's normalised value at row centre `y` (module docs).
+fn model_value(template: &EdgeTemplate, y: f64, edge: f64, plate_row: f64, rho: f64) -> f64 {
+    template.at(y - edge) + rho * (template.at(2.0 * plate_row - y - edge) - template.floor())
+}
+
+/// min over g of Σ (g m(y) − v)²: the least squares with the light g free.
+fn best_gain_ssr(samples: &[(f64, f64)], model: impl Fn(f64) -> f64) -> f64 {
+    let (mut mm, mut mv, mut vv) = (0.0, 0.0, 0.0);
+    for &(y, v) in samples {
+        let m = model(y);
+        mm += m * m;
+        mv += m * v;
+        vv += v * v;
+    }
+    if mm <= 0.0 { vv } else { vv - mv * mv / mm }
+}
+
+/// start, start + step, … up to end (inclusive within half a step).
+fn steps((start, end, step): (f64, f64, f64)) -> impl Iterator<Item = f64> {
+    let n = ((end - start) / step + 0.5).floor().max(0.0) as usize;
+    (0..=n).map(move |k| start + k as f64 * step)
+}
+
+/// The minimiser of a unimodal `f` on [a, b], to `tol`.
+fn golden_section(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> f64 {
+    let r = 0.5 * (5f64.sqrt() - 1.0);
+    let mut c = b - r * (b - a);
+    let mut d = a + r * (b - a);
+    let (mut fc, mut fd) = (f(c), f(d));
+    while b - a > tol {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - r * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + r * (b - a);
+            fd = f(d);
+        }
+    }
+    0.5 * (a + b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A rounded rim seen through blur: the side's level 1 falls to a dark band
+    /// (0.1) over the last `round_px` above the rim, then the gap (0.15); the
+    /// mirror image below the plate line with contrast ρ. Sampled by area, 8-bit.
+    fn profile(rows: Range<usize>, rim: f64, plate: f64, rho: f64, gain: f64) -> BandWindow {
+        let round_px = 2.2;
+        let disk = |x: f64| -> f64 {
+            // x: distance above the rim (px); the rounded part shades smoothly.
+            if x <= 0.0 {
+                0.15
+            } else if x < round_px {
+                let s = x / round_px;
+                0.1 + 0.9 * s * s * (3.0 - 2.0 * s)
+            } else {
+                1.0
+            }
+        };
+        let blurred = |y: f64| -> f64 {
+            // Area sampling with a 0.8 px Gaussian, by fine quadrature.
+            let (sub, sigma) = (40, 0.8f64);
+            let mut acc = 0.0;
+            let mut wsum = 0.0;
+            for i in 0..sub {
+                let yy = y + (i as f64 + 0.5) / sub as f64;
+                for j in -24..=24 {
+                    let d = j as f64 * 0.125;
+                    let w = (-0.5 * (d / sigma).powi(2)).exp();
+                    let at = yy + d;
+                    let own = disk(rim - at);
+                    let mirror = disk(at - (2.0 * plate - rim));
+                    acc += w * (own + rho * (mirror - 0.15));
+                    wsum += w;
+                }
+            }
+            acc / wsum
+        };
+        BandWindow {
+            first_row: rows.start,
+            values: rows
+                .map(|y| ((200.0 * gain * blurred(y as f64)).round()) as f32)
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn lifted_heights_and_the_plate_line_of_a_rounded_rim() {
+        // Truth: plate line at row 60.3; the rim lifted by z is at 60.3 − z.
+        let plate = 60.3;
+        let rho = 0.4;
+        let window = |z: f64, gain: f64| {
+            let rim = plate - z;
+            let first = (rim.round() as usize) - ROWS_ABOVE;
+            profile(
+                first..first + ROWS_ABOVE + ROWS_BELOW,
+                rim,
+                plate,
+                rho,
+                gain,
+            )
+        };
+        // First-pass edges: the rim plus the rounded band's half (a fixed offset
+        // the model must not need), with ±0.15 px of alignment noise.
+        let first_pass = |z: f64, k: usize| plate - z - 1.1 + 0.15 * ((k as f64 * 2.39).sin());
+        let lifts: Vec<f64> = (0..120).map(|k| 0.05 + 0.11 * k as f64).collect();
+        let windows: Vec<BandWindow> = lifts
+            .iter()
+            .enumerate()
+            .map(|(k, &z)| window(z, 1.0 + 0.08 * (k as f64).sin()))
+            .collect();
+        let template = EdgeTemplate::learn(
+            windows
+                .iter()
+                .zip(&lifts)
+                .enumerate()
+                .map(|(k, (w, &z))| (w, first_pass(z, k), z)),
+        )
+        .expect("template");
+        let rest = window(0.0, 1.0);
+        let model = MirrorEdgeModel::fit(template, &rest, plate - 1.1);
+        assert!(
+            (model.plate_row - plate).abs() < 0.05,
+            "plate line {} vs {plate}",
+            model.plate_row
+        );
+        assert!((model.reflectivity - rho).abs() < 0.05);
+        for (k, (&z, w)) in lifts.iter().zip(&windows).enumerate().step_by(7) {
+            let found = model.z_rim_px(w, first_pass(z, k));
+            assert!((found - z).abs() < 0.05, "lift {z}: found {found}");
+        }
+    }
+
+    #[test]
+    fn too_few_open_gaps_give_no_template() {
+        let w = BandWindow {
+            first_row: 0,
+            values: vec![100.0; ROWS_ABOVE + ROWS_BELOW],
+        };
+        let frames = vec![(&w, 14.0, 1.0); 100];
+        assert_eq!(EdgeTemplate::learn(frames.into_iter()), None);
+    }
+}
