@@ -1,6 +1,13 @@
 //! The halt time t_φ (thesis §3.2.4, §3.3.2): the last frame whose rim height rises
 //! above its rest level by more than the noise measured after the halt.
 //!
+//! A disk that has fallen flat does not rise again, and before that its rim rises
+//! once per precession turn, a turn that shortens towards the halt (to a few ms at
+//! 480 fps). So a span as long as the rest tail with no rise means the disk lies flat:
+//! t_φ is the last rise before the first such span, and a later lone excursion
+//! (an H.264 refresh frame, 50 frames on, read 0.15 px high on the open footage) is
+//! noise, not motion resumed.
+//!
 //! Motion is one-sided: the rim of a rolling disk is never below its rest on the plate
 //! (z_rim = R sin φ (1 + cos χ) ≥ 0, see the module docs of `signal`), so a reading
 //! below the rest level is measurement noise, however large. On H.264 footage of a
@@ -47,6 +54,8 @@ const OSCILLATION_TROUGH: f64 = -0.45;
 /// sensor noise) and refreshes a few, which read up to 0.2 px off: the band covers
 /// those.
 const BAND_WIDENING: f64 = 1.5;
+/// Re-measurements of the rest segment before t_φ is taken as settled.
+const MAX_HALT_ITERATIONS: usize = 8;
 /// Fewest rim heights a rest tail needs to measure its noise.
 pub(crate) const MIN_REST_FRAMES: usize = 8;
 
@@ -62,8 +71,11 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    oscillation (autocorrelation below −0.45 at some lag and above 0.6 at a
 ///    later one, up to 24 frames, checked
 ///    when the tail's spread exceeds twice `noise_floor`).
-/// 3. t_φ is the last frame of motion; the noise is then re-measured over
-///    every frame after t_φ, and t_φ found again with it.
+/// 3. t_φ is the last frame of motion, the last rise before the first span of
+///    `rest_tail_s` with none (module docs); the noise is then re-measured over
+///    every frame after t_φ, the threshold raised to [`BAND_WIDENING`] × the deepest
+///    reading below the rest level there (noise: the rim is never below its rest),
+///    and t_φ found again, until it settles.
 ///
 /// Errors: [`SignalError::RestTailTooShort`], [`SignalError::TailNotAtRest`],
 /// [`SignalError::TailOscillates`], [`SignalError::NoMotion`], or invalid input.
@@ -113,12 +125,21 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             correlation,
         });
     }
+    // The last frame of motion: the last rise before the first span of
+    // `rest_tail_s` without one (module docs: a disk lying flat does not rise again).
     let last_moving = |level: f64, threshold: f64| {
-        samples
+        let mut rises = samples
             .iter()
-            .rev()
             .copied()
-            .find(|&i| moving(i, level, threshold))
+            .filter(|&i| moving(i, level, threshold));
+        let mut last = rises.next()?;
+        for i in rises {
+            if t[i] - t[last] >= config.rest_tail_s {
+                break;
+            }
+            last = i;
+        }
+        Some(last)
     };
     let max_deviation = samples
         .iter()
@@ -130,15 +151,24 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             max_deviation,
         });
     };
-    // Re-measure over the whole rest segment after the first guess.
-    let rest: Vec<usize> = samples
-        .iter()
-        .copied()
-        .filter(|&i| i > first_guess)
-        .collect();
-    let (level, noise) = rest_statistics(z_rim, &rest, config.noise_floor);
-    let threshold = (config.motion_sigmas * noise).max(band);
-    let index = last_moving(level, threshold).unwrap_or(first_guess);
+    // Re-measure over the whole rest segment after the guess, until it settles. The
+    // rim is never below its rest, so every reading below the rest level in that
+    // segment is noise: the deepest one, widened as the tail's band is, bounds the
+    // noise's own excursions (H.264 refresh frames, 4–6 σ of the copied frames, in
+    // either direction) wherever they fall in the segment, not only in the tail.
+    let mut index = first_guess;
+    let (mut level, mut noise, mut threshold) = (level, noise, threshold);
+    for _ in 0..MAX_HALT_ITERATIONS {
+        let rest: Vec<usize> = samples.iter().copied().filter(|&i| i > index).collect();
+        (level, noise) = rest_statistics(z_rim, &rest, config.noise_floor);
+        let below = BAND_WIDENING * rest.iter().map(|&i| level - z_rim[i]).fold(0.0, f64::max);
+        threshold = (config.motion_sigmas * noise).max(band).max(below);
+        let next = last_moving(level, threshold).unwrap_or(index);
+        if next == index {
+            break;
+        }
+        index = next;
+    }
     let t_phi = t[index];
     Ok(Halt {
         index,

@@ -147,6 +147,34 @@ fn codec_refreshes_in_the_rest_tail_are_not_motion() {
     ));
 }
 
+/// After the halt, before the rest tail: an excursion 7.5 σ high 50 frames after the
+/// last rise (an H.264 refresh on the open footage), and one 6 σ high with a 5 σ low
+/// one, 20 frames after it. A flat disk does not rise again, so the first is not
+/// motion; the second lies within 1.5 × the deepest low reading, so it is noise too.
+/// Either leaves t_φ within a frame of the truth.
+#[test]
+fn lone_excursions_after_the_halt_are_not_motion() {
+    let (t, z, truth) = clip(NOISE, 1);
+    let halt_of = |z: &[f64]| halt_time(&t, z, &SignalConfig::default()).expect("halt");
+    let last = halt_of(&z).index;
+    let mut lone = z.clone();
+    lone[last + 50] += 7.5 * NOISE;
+    let mut paired = z.clone();
+    paired[last + 20] += 6.0 * NOISE;
+    paired[last + 30] -= 5.0 * NOISE;
+    for z in [&lone, &paired] {
+        let halt = halt_of(z);
+        assert!(
+            (halt.t_phi - (truth.t0 - 0.5 * FRAME)).abs() <= FRAME + 1e-12,
+            "t_φ = {}, t0 = {}",
+            halt.t_phi,
+            truth.t0
+        );
+    }
+    // The single-frame rule these replace took the lone excursion for the halt.
+    assert!(lone[last + 50] - halt_of(&lone).rest_level > 5.0 * NOISE);
+}
+
 /// How far a peak time may be from the truth: a tenth of a frame by the local fit
 /// (observed < 0.05) while ψ̇ changes slowly; half a frame by the parabola (the last,
 /// tiny peak, 5 frames a turn), or in the last 0.03 s, where ψ̇ ∝ τ^{−1/4} changes by
