@@ -32,8 +32,8 @@ use crate::model::params::DiskParams;
 use crate::report::diagnostics;
 use crate::signal::{self, SignalConfig, SignalError, StateSeries, ThesisRim};
 use crate::vision::{
-    self, BandWindow, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge,
-    PointSource, RimGauge, RimHeight, SideViewConfig, StripFinder, ThresholdSource, VisionError,
+    self, BandWindow, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge, RimGauge,
+    RimHeight, SideViewConfig, StripFinder, ThresholdSource, VisionError,
 };
 
 /// Frames at the end of a clip that must show the disk at rest (calibration).
@@ -505,7 +505,7 @@ pub fn analyse_clip(
                 .0,
         );
     }
-    let (mut calibration, plate) = match config.plate {
+    let (calibration, plate) = match config.plate {
         Some(plate) => (
             vision::calibrate_at_rest(&rest_sides, rest[0].index, &side_config, given.as_ref())
                 .map_err(vision_err)?,
@@ -682,31 +682,22 @@ pub fn analyse_clip(
                 rest_window,
                 *edge0,
             ) {
-                Some(model) => {
+                Ok(model) => {
                     for (record, z) in frames.iter_mut().zip(heights) {
                         record.z_rim_px = z;
                     }
-                    if calibration.sources[3] == PointSource::Detected {
-                        calibration.calibration.z_base = model.plate_row;
-                    }
                     format!(
                         "mirror-edge model (vision::mirror_edge): the rim's profile learned from \
-                         the frames with an open gap, plate line {:.2} px, reflectivity {:.2}, \
-                         edge at rest {:.2} px ({:.2} px above the plate line), rest fit RMS {:.1} % \
-                         of the disk's level",
+                         the frames with an open gap; edge at rest {:.2} px, the zero of z_rim; \
+                         fitted plate line {:.2} px (reported, not used), reflectivity {:.2}; \
+                         rest fit RMS {:.1} % of the disk's level",
+                        model.rest_edge,
                         model.plate_row,
                         model.reflectivity,
-                        model.rest_edge,
-                        model.plate_row - model.rest_edge,
                         100.0 * model.rest_rms
                     )
                 }
-                None => {
-                    let reason = format!(
-                        "fewer than {} frames lift the rim far enough to learn its profile",
-                        vision::MIN_TEMPLATE_FRAMES
-                    );
-                    warnings.push(format!("rim heights from the edge alone: {reason}"));
+                Err(reason) => {
                     format!("edge and gap darkness (vision::rim, vision::gap): {reason}")
                 }
             }

@@ -38,8 +38,11 @@
 //!    [`BIN_PX`] bins. Every sub-pixel phase occurs over a clip, so D is resolved
 //!    finer than a pixel, with the blur, the rounded rim and the shading in it.
 //! 2. **The rest frames** give ρ, y_p and the edge at rest e_rest: the least
-//!    squares fit of the model to their mean profile. y_p is where the rim meets
-//!    its mirror image, the true near bottom rim at rest: the plate line z_base.
+//!    squares fit of the model to their mean profile over the rows down to
+//!    [`REST_ROWS_BELOW_PX`] below their edge. y_p is where the rim meets its
+//!    mirror image; it is reported, not used: on the open footage it lies within
+//!    1 px of the true rim, on our own renders 0.15 px above it, so the plate line
+//!    z_base (and eq. 3.10's scale) stays the calibration's edge at rest.
 //! 3. **Every frame** is fitted for e (and g) with ρ and y_p known, and
 //!    z_rim = e_rest − e: one edge definition, the same at rest and lifted, near
 //!    touching or not.
@@ -70,6 +73,16 @@ pub const MIRROR_REACH_PX: f64 = 3.0;
 pub const MIN_TEMPLATE_FRAMES: usize = 20;
 /// How far from its first-pass edge a frame's fitted edge may lie [px].
 const SEARCH_PX: f64 = 2.0;
+/// The rim is sharp at this resolution when the fitted plate line lies less than
+/// this below the edge at rest [px]: a rim rounded over less than half a pixel.
+/// Then the first pass reads the edge exactly, and the rest fit, which sees one
+/// step for two parameters (edge and plate line), is ill-determined (our own
+/// renders: c = −0.17 to +0.37 px; the open footage's rounded rims: 0.96–1.85 px).
+pub const SHARP_RIM_PX: f64 = 0.5;
+/// Rows below the rest frames' first-pass edge that the rest fit reads [px]: a
+/// rounded band of 2 px (the open footage's is 1–2.6 px) and the mirror's blur
+/// ([`MIRROR_REACH_PX`]).
+const REST_ROWS_BELOW_PX: f64 = 2.0 + MIRROR_REACH_PX;
 /// The distance from the edge to the plate line at rest searched, c = y_p − e
 /// [px]: from a sharp rim (c ≈ 0) to one rounded over most of the window below.
 const PLATE_OFFSET_PX: Range<f64> = -1.0..(ROWS_BELOW as f64 - 3.0);
@@ -233,7 +246,16 @@ impl MirrorEdgeModel {
     /// first-pass edge (or the calibrated plate line when they read contact).
     pub fn fit(template: EdgeTemplate, rest: &BandWindow, rest_edge0: f64) -> Self {
         let level = rest.level();
-        let samples: Vec<(f64, f64)> = rest.samples().map(|(y, v)| (y, v / level)).collect();
+        // Rows down to [`REST_ROWS_BELOW_PX`] below the first-pass edge: further down
+        // the mirror image shows the plate's own texture and the disk's shadow on it
+        // (a 13-level step 5 rows down on our renders), which the model does not
+        // describe and which pulled y_p by 0.3 px.
+        let last = rest_edge0 + REST_ROWS_BELOW_PX;
+        let samples: Vec<(f64, f64)> = rest
+            .samples()
+            .filter(|&(y, _)| y <= last)
+            .map(|(y, v)| (y, v / level))
+            .collect();
         let cost = |e: f64, c: f64, rho: f64| {
             let model = |y: f64| model_value(&template, y, e, e + c, rho);
             best_gain_ssr(&samples, model)
@@ -285,7 +307,10 @@ impl MirrorEdgeModel {
     /// The edge row of one frame's window, fitted within ±[`SEARCH_PX`] of its
     /// first-pass edge `edge0`: a 0.05 px grid, then golden-section search.
     pub fn edge(&self, window: &BandWindow, edge0: f64) -> f64 {
-        let samples: Vec<(f64, f64)> = window.samples().collect();
+        // Rows down to the mirror image's edge, 2 y_p − e, and its blur (as at rest).
+        let mirror = 2.0 * self.plate_row - edge0;
+        let last = edge0.max(mirror) + MIRROR_REACH_PX;
+        let samples: Vec<(f64, f64)> = window.samples().filter(|&(y, _)| y <= last).collect();
         let cost = |e: f64| {
             best_gain_ssr(&samples, |y| {
                 model_value(&self.template, y, e, self.plate_row, self.reflectivity)
@@ -310,28 +335,35 @@ impl MirrorEdgeModel {
 /// Re-measures a clip's rim heights with the model (module docs): `heights` are
 /// the first-pass z_rim per frame [px] (`None`: no edge, left alone), `windows`
 /// each frame's band rows about its first-pass edge z_base − z, `rest` the rest
-/// frames' mean window about `rest_edge0`. Returns the model, or `None` (and
-/// changes nothing) when too few frames open the gap to learn D.
+/// frames' mean window about `rest_edge0`. Returns the model, or why it was not
+/// used (and then changes nothing): too few frames open the gap to learn D, or the
+/// rim is sharp ([`SHARP_RIM_PX`]).
 pub fn remeasure(
     heights: &mut [Option<f64>],
     windows: &[Option<BandWindow>],
     z_base: f64,
     rest: &BandWindow,
     rest_edge0: f64,
-) -> Option<MirrorEdgeModel> {
+) -> Result<MirrorEdgeModel, &'static str> {
     let template = EdgeTemplate::learn(
         heights
             .iter()
             .zip(windows)
             .filter_map(|(z, w)| Some((w.as_ref()?, z_base - (*z)?, (*z)?))),
-    )?;
+    )
+    .ok_or("too few frames lift the rim far enough to learn its profile")?;
     let model = MirrorEdgeModel::fit(template, rest, rest_edge0);
+    if model.plate_row - model.rest_edge < SHARP_RIM_PX {
+        return Err(
+            "the rim at rest meets its mirror image within half a pixel of its edge (a sharp rim)",
+        );
+    }
     for (z, w) in heights.iter_mut().zip(windows) {
         if let (Some(height), Some(window)) = (z.as_mut(), w) {
             *height = model.z_rim_px(window, z_base - *height);
         }
     }
-    Some(model)
+    Ok(model)
 }
 
 /// The model's normalised value at row centre `y` (module docs).

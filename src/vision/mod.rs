@@ -55,9 +55,7 @@ pub use calibration::{
 };
 pub use error::VisionError;
 pub use gap::{GapGauge, GapSample};
-pub use mirror_edge::{
-    BandWindow, EdgeTemplate, MIN_TEMPLATE_FRAMES, MirrorEdgeModel, remeasure as remeasure_dark_rim,
-};
+pub use mirror_edge::{BandWindow, EdgeTemplate, MirrorEdgeModel, remeasure as remeasure_dark_rim};
 pub use rim::{RimGauge, RimHeight};
 pub use threshold::{GammaSource, INTENSITY_SCALE, Threshold};
 pub use two_view::{
