@@ -420,8 +420,12 @@ mod tests {
     /// A rounded rim seen through blur: the side's level 1 falls to a dark band
     /// (0.1) over the last `round_px` above the rim, then the gap (0.15); the
     /// mirror image below the plate line with contrast ρ. Sampled by area, 8-bit.
-    fn profile(rows: Range<usize>, rim: f64, plate: f64, rho: f64, gain: f64) -> BandWindow {
-        let round_px = 2.2;
+    fn profile(
+        rows: Range<usize>,
+        (rim, plate, round_px): (f64, f64, f64),
+        rho: f64,
+        gain: f64,
+    ) -> BandWindow {
         let disk = |x: f64| -> f64 {
             // x: distance above the rim (px); the rounded part shades smoothly.
             if x <= 0.0 {
@@ -460,22 +464,41 @@ mod tests {
         }
     }
 
+    /// The band rows of a rim rounded over `round_px`, lifted by `z` above `plate`.
+    fn lifted(plate: f64, round_px: f64, rho: f64, z: f64, gain: f64) -> BandWindow {
+        let rim = plate - z;
+        let first = (rim.round() as usize) - ROWS_ABOVE;
+        profile(
+            first..first + ROWS_ABOVE + ROWS_BELOW,
+            (rim, plate, round_px),
+            rho,
+            gain,
+        )
+    }
+
+    /// A sharp rim: the rest frames show one step, and the first pass is kept.
+    #[test]
+    fn a_sharp_rim_keeps_the_first_pass() {
+        let plate = 60.3;
+        let lifts: Vec<f64> = (0..120).map(|k| 0.05 + 0.11 * k as f64).collect();
+        let windows: Vec<Option<BandWindow>> = lifts
+            .iter()
+            .map(|&z| Some(lifted(plate, 0.05, 0.4, z, 1.0)))
+            .collect();
+        let mut heights: Vec<Option<f64>> = lifts.iter().map(|&z| Some(z)).collect();
+        let before = heights.clone();
+        let rest = lifted(plate, 0.05, 0.4, 0.0, 1.0);
+        let result = remeasure(&mut heights, &windows, plate, &rest, plate);
+        assert!(result.is_err(), "{result:?}");
+        assert_eq!(heights, before);
+    }
+
     #[test]
     fn lifted_heights_and_the_plate_line_of_a_rounded_rim() {
         // Truth: plate line at row 60.3; the rim lifted by z is at 60.3 − z.
         let plate = 60.3;
         let rho = 0.4;
-        let window = |z: f64, gain: f64| {
-            let rim = plate - z;
-            let first = (rim.round() as usize) - ROWS_ABOVE;
-            profile(
-                first..first + ROWS_ABOVE + ROWS_BELOW,
-                rim,
-                plate,
-                rho,
-                gain,
-            )
-        };
+        let window = |z: f64, gain: f64| lifted(plate, 2.2, rho, z, gain);
         // First-pass edges: the rim plus the rounded band's half (a fixed offset
         // the model must not need), with ±0.15 px of alignment noise.
         let first_pass = |z: f64, k: usize| plate - z - 1.1 + 0.15 * ((k as f64 * 2.39).sin());
