@@ -405,7 +405,8 @@ fn run_analyse(
         k => format!("; WARNING: {k} flagged frame(s) (dropped frames?) in the window"),
     };
     println!(
-        "{}: n = {:.3} (95 % CI {:.3} … {:.3}), {} peaks in the last {} s; fps {} ({:?}){flagged}",
+        "{}: n = {:.3} (95 % CI {:.3} … {:.3}), {} peaks in the last {} s; fps {} ({:?}), \
+         frame times from {}{flagged}",
         clip.display(),
         fit.n,
         fit.ci95_n.0,
@@ -413,7 +414,12 @@ fn run_analyse(
         fit.points,
         experiment.plan.window_s,
         experiment.plan.fps.fps,
-        experiment.plan.fps.source
+        experiment.plan.fps.source,
+        experiment
+            .plan
+            .frame_times
+            .as_ref()
+            .map_or("index / fps", |f| f.source.label())
     );
     println!("report: {}", out.join("index.html").display());
     Ok(())
