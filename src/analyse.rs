@@ -1,7 +1,8 @@
 //! One clip from pixels to the energy exponent: the stages of DESIGN.md chained.
 //!
 //! ```text
-//! footage::  probe, capture fps (config / container tag / container fps), FrameSource
+//! footage::  probe, capture fps (config / container tag / container fps), FrameSource;
+//!   │        after pass 2, frame times: container pts on the capture clock (or index / fps)
 //!   │        pass 1: the last frames (rest after the halt)
 //!   ▼
 //! vision::   calibrate_at_rest → x_l, x_r, z_t, z_base, γ     (thesis §3.2.4)
@@ -27,7 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::{ExperimentConfig, HaltChoice, Plate};
 use crate::energy::{self, FitError, HaltTime, PowerLawFit};
-use crate::footage::{self, CaptureFps, FootageError, FrameSource, FrameView};
+use crate::footage::{self, CaptureFps, FootageError, FrameSource, FrameTiming, FrameView};
 use crate::model::params::DiskParams;
 use crate::report::diagnostics;
 use crate::signal::{self, SignalConfig, SignalError, StateSeries, ThesisRim};
@@ -70,6 +71,11 @@ pub struct ExperimentPlan {
     pub crate_version: String,
     pub config: ExperimentConfig,
     pub fps: CaptureFps,
+    /// Where the frame times came from (container pts or index / fps), with the
+    /// median and spread of the frame interval; `None` in results written before
+    /// it was recorded.
+    #[serde(default)]
+    pub frame_times: Option<FrameTiming>,
     pub frames: usize,
     pub width: usize,
     pub height: usize,
@@ -173,7 +179,9 @@ impl ScaleReport {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct FrameRecord {
     pub index: usize,
-    /// Capture time from the start of the clip, index / fps [s].
+    /// Capture time from the first frame [s]: the container's timestamp mapped to
+    /// the capture clock, or index / fps without timestamps (see
+    /// [`ExperimentPlan::frame_times`]).
     pub t_capture: f64,
     /// Time with the halt at 0 [s].
     pub t: f64,
@@ -407,7 +415,7 @@ pub fn analyse_clip(
     // One source serves both passes: the rest frames at the end, then every
     // frame from the start.
     let mut source = FrameSource::open(clip)?;
-    let fps = footage::resolve_capture_fps(
+    let mut fps = footage::resolve_capture_fps(
         config.fps,
         footage::container_capture_rate(clip),
         source.container_fps(),
@@ -416,7 +424,8 @@ pub fn analyse_clip(
         path: clip.to_path_buf(),
         reason,
     })?;
-    let mut warnings = fps.warnings.clone();
+    // The fps's own warnings come first, once the frame times have settled it.
+    let mut warnings = Vec::new();
     let params = config.disk_params();
     let vision_config = config.vision.clone().unwrap_or_default();
     let roi = vision_config.roi;
@@ -641,7 +650,8 @@ pub fn analyse_clip(
         };
         frames.push(FrameRecord {
             index,
-            t_capture: index as f64 / fps.fps,
+            // Set from the container's timestamps once every frame is read.
+            t_capture: f64::NAN,
             t: f64::NAN,
             container_time_s: frame.container_time_s,
             z_rim_px,
@@ -735,8 +745,16 @@ pub fn analyse_clip(
         ));
     }
 
+    // Frame times: the container's timestamps on the capture clock, else index / fps.
+    let stamps: Vec<Option<f64>> = frames.iter().map(|f| f.container_time_s).collect();
+    let (t, frame_times) = footage::frame_times(&stamps, &mut fps);
+    drop(stamps);
+    for (record, &t) in frames.iter_mut().zip(&t) {
+        record.t_capture = t;
+    }
+    warnings.splice(0..0, fps.warnings.iter().cloned());
+
     // Signal.
-    let t: Vec<f64> = frames.iter().map(|f| f.t_capture).collect();
     let z: Vec<f64> = frames
         .iter()
         .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
@@ -768,10 +786,26 @@ pub fn analyse_clip(
         record.t = *shifted;
     }
     let window = (-window_s, 0.0);
-    let skips_in_window = signal::flags_within(&series.flags, window.0, window.1).len();
+    let in_window = signal::flags_within(&series.flags, window.0, window.1);
+    let skips_in_window = in_window.len();
     if skips_in_window > 0 {
+        let gaps: Vec<String> = in_window
+            .iter()
+            .filter_map(|f| match f.reason {
+                signal::SkipReason::TimestampGap { missing_frames, .. } => Some(format!(
+                    "{missing_frames} frame(s) missing before t = {:.4} s",
+                    f.t
+                )),
+                _ => None,
+            })
+            .collect();
+        let gaps = if gaps.is_empty() {
+            String::new()
+        } else {
+            format!(" (timestamp gaps: {})", gaps.join("; "))
+        };
         warnings.push(format!(
-            "{skips_in_window} flagged frame(s) (skips or jumps) inside the fit window"
+            "{skips_in_window} flagged frame(s) (skips or jumps) inside the fit window{gaps}"
         ));
     }
 
@@ -817,6 +851,7 @@ pub fn analyse_clip(
         crate_version: env!("CARGO_PKG_VERSION").into(),
         config: config.clone(),
         fps,
+        frame_times: Some(frame_times),
         frames: frames.len(),
         width,
         height,
@@ -861,15 +896,35 @@ fn png(image: &image::RgbImage) -> Vec<u8> {
 /// towards the halt it reads high at the peak, by 1 % 0.4 s before the halt and by
 /// 5–10 % in the last 0.05 s on exact rim heights of an n = 0.67 motion, which
 /// raised the fitted n by 0.01; the central difference is centred on the peak.
+///
+/// A difference across a timestamp gap counts one turn where the gap hid more (its
+/// peaks are missing): there the forward difference is used if it does not cross
+/// the gap, else the peak is left out.
 fn peak_energies(params: &DiskParams, series: &StateSeries) -> Vec<EnergySample> {
     let precession = &series.peaks.precession;
-    series
-        .peaks
-        .peaks
+    let peaks = &series.peaks.peaks;
+    // Times (halt at 0) of the frames that follow a timestamp gap.
+    let gaps: Vec<f64> = series
+        .flags
+        .iter()
+        .filter(|f| matches!(f.reason, signal::SkipReason::TimestampGap { .. }))
+        .map(|f| f.t)
+        .collect();
+    let clear = |a: usize, b: usize| {
+        let (ta, tb) = (peaks[a].t, peaks[b].t);
+        !gaps.iter().any(|&g| ta < g && g <= tb)
+    };
+    let last = peaks.len().saturating_sub(1);
+    peaks
         .iter()
         .zip(precession)
-        .filter_map(|(peak, p)| {
-            let psi_dot = p.psi_dot_central.or(p.psi_dot_forward)?;
+        .enumerate()
+        .filter_map(|(k, (peak, p))| {
+            let central = p
+                .psi_dot_central
+                .filter(|_| k > 0 && k < last && clear(k - 1, k + 1));
+            let forward = p.psi_dot_forward.filter(|_| k < last && clear(k, k + 1));
+            let psi_dot = central.or(forward)?;
             Some(EnergySample {
                 t: peak.t,
                 phi: peak.phi,
@@ -948,7 +1003,11 @@ fn fit_series(
 /// rest tail, motion and peaks all look wrong, and the frame rate is the probable
 /// cause, so it is named first.
 fn signal_error(clip: &Path, fps: &CaptureFps, error: SignalError) -> AnalyseError {
-    if fps.source == footage::FpsSource::ContainerFps && fps.fps < 100.0 {
+    let stored_rate = matches!(
+        fps.source,
+        footage::FpsSource::ContainerFps | footage::FpsSource::ContainerTimestamps
+    );
+    if stored_rate && fps.fps < 100.0 {
         return AnalyseError::Clip {
             path: clip.to_path_buf(),
             reason: format!(

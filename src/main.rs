@@ -10,7 +10,9 @@ use clap::{Args, Parser, Subcommand};
 use eulerdisk::compare::CompareOptions;
 use eulerdisk::model::dissipation::{Dissipation, ModelKind};
 use eulerdisk::model::params::Preset;
-use eulerdisk::model::simulate::{InitialState, MAX_SAMPLES, SimulationSpec, simulate};
+use eulerdisk::model::simulate::{
+    InitialState, MAX_SAMPLES, RunSummary, SimulationSpec, simulate, simulate_streaming,
+};
 use eulerdisk::model::tuning::tune_eta;
 use eulerdisk::render::{
     DEFAULT_CRF, Effects, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Timing,
@@ -19,7 +21,7 @@ use eulerdisk::render::{
 use eulerdisk::report::OutputLock;
 use eulerdisk::report::compare::{comparison_dir, write_comparison};
 use eulerdisk::report::experiment::write_experiment;
-use eulerdisk::report::simulation::write_simulation;
+use eulerdisk::report::simulation::{TrajectoryWriter, write_simulation};
 use eulerdisk::report::study::{StudyReportOptions, write_published_report, write_study_report};
 use eulerdisk::stats::VarianceModel;
 use eulerdisk::study::{self, Outcome, StudyEvent};
@@ -405,7 +407,8 @@ fn run_analyse(
         k => format!("; WARNING: {k} flagged frame(s) (dropped frames?) in the window"),
     };
     println!(
-        "{}: n = {:.3} (95 % CI {:.3} … {:.3}), {} peaks in the last {} s; fps {} ({:?}){flagged}",
+        "{}: n = {:.3} (95 % CI {:.3} … {:.3}), {} peaks in the last {} s; fps {} ({:?}), \
+         frame times from {}{flagged}",
         clip.display(),
         fit.n,
         fit.ci95_n.0,
@@ -413,7 +416,12 @@ fn run_analyse(
         fit.points,
         experiment.plan.window_s,
         experiment.plan.fps.fps,
-        experiment.plan.fps.source
+        experiment.plan.fps.source,
+        experiment
+            .plan
+            .frame_times
+            .as_ref()
+            .map_or("index / fps", |f| f.source.label())
     );
     println!("report: {}", out.join("index.html").display());
     Ok(())
@@ -550,10 +558,24 @@ fn run_simulate(args: &SimulateArgs) -> Result<()> {
     spec.output_interval = args.dt;
     spec.flat_angle = args.flat_angle;
 
-    let trajectory = match (args.eta, args.stop_at) {
+    let title = |spec: &SimulationSpec| {
+        format!("{:?}, {:?}, η = {:.3e}", args.preset, args.model, spec.eta)
+    };
+    // The trajectory goes to the CSV as it is integrated: memory does not grow
+    // with --t-end (tuning's runs, bounded by --stop-at's check, are kept whole).
+    let streamed = |spec: &SimulationSpec| -> Result<(RunSummary, Vec<PathBuf>)> {
+        let mut writer = TrajectoryWriter::create(&args.out)?;
+        let run = simulate_streaming(spec, &mut |sample| {
+            writer.push(sample).map_err(|e| e.to_string())
+        })
+        .context("simulation failed")?;
+        let written = writer.finish(&title(spec), spec, &run)?;
+        Ok((run, written))
+    };
+    let (run, written) = match (args.eta, args.stop_at) {
         (Some(eta), None) => {
             spec.eta = eta;
-            simulate(&spec).context("simulation failed")?
+            streamed(&spec)?
         }
         (None, Some(target)) => {
             if args.model == ModelKind::None {
@@ -575,20 +597,31 @@ fn run_simulate(args: &SimulateArgs) -> Result<()> {
                 tuned.eta, tuned.simulations
             );
             spec.eta = tuned.eta;
-            tuned.trajectory
+            let trajectory = tuned.trajectory;
+            let written = write_simulation(&args.out, &title(&spec), &spec, &trajectory)?;
+            let run = RunSummary {
+                samples: trajectory.samples.len(),
+                start: *trajectory
+                    .samples
+                    .first()
+                    .context("tuning kept no samples")?,
+                phases: trajectory.phases,
+                end_reason: trajectory.end_reason,
+                end: trajectory.end,
+                stats: trajectory.stats,
+            };
+            (run, written)
         }
-        (None, None) if args.model == ModelKind::None => simulate(&spec)?,
+        (None, None) if args.model == ModelKind::None => streamed(&spec)?,
         _ => bail!("give --eta or --stop-at for the `{:?}` model", args.model),
     };
-    let title = format!("{:?}, {:?}, η = {:.3e}", args.preset, args.model, spec.eta);
-    let written = write_simulation(&args.out, &title, &spec, &trajectory)?;
     println!(
         "ended: {:?} at t = {:.6} s, φ = {:.3e} rad, ψ̇ = {:.4} rad/s, {} slip phase(s)",
-        trajectory.end_reason,
-        trajectory.end_time(),
-        trajectory.end.phi,
-        trajectory.end.psi_dot,
-        trajectory.slip_phases().count()
+        run.end_reason,
+        run.end.t,
+        run.end.phi,
+        run.end.psi_dot,
+        run.slip_phases().count()
     );
     for path in written {
         println!("wrote {}", path.display());

@@ -218,6 +218,10 @@ pub enum FpsSource {
     ContainerCaptureRate(String),
     /// The container's stored (playback) fps, used for want of anything better.
     ContainerFps,
+    /// The rate of the container's median timestamp interval, for want of anything
+    /// better: it replaces [`FpsSource::ContainerFps`] once the timestamps are read
+    /// (a stored average rate is lowered by gaps; see [`super::frame_times`]).
+    ContainerTimestamps,
 }
 
 /// The capture fps used to time frames, with its source and any warning.

@@ -5,7 +5,8 @@
 //! that only the pixels the side view reads are converted to colour) or a folder
 //! of PNG/TIFF/JPEG frames (read by the `image` crate, in natural name order).
 //! This stage owns everything about frames as they come off the disk: metadata,
-//! the capture fps and where it came from, timestamps, frame-skip flags, the
+//! the capture fps and where it came from, frame times (the container's
+//! timestamps mapped to capture time, [`frame_times`]), frame-skip flags, the
 //! region of interest and the mirror split. The frames it delivers go on to
 //! `vision`, which turns them into `z_rim(t)` and `β(t)`.
 //!
@@ -20,6 +21,7 @@ mod error;
 mod frame;
 mod info;
 mod source;
+mod timing;
 
 pub use capture_rate::{
     CaptureFps, ContainerCaptureRate, FpsSource, container_capture_rate, resolve_capture_fps,
@@ -31,3 +33,4 @@ pub use info::{
     natural_cmp, probe,
 };
 pub use source::{Frame, FrameSource};
+pub use timing::{FrameTiming, TimeSource, frame_times};

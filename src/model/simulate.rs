@@ -46,9 +46,11 @@ const INITIAL_SLIP_STEP: f64 = 1e-6;
 pub const MAX_STEPS: usize = 5_000_000;
 /// Guard against endless chattering between modes.
 const MAX_SWITCHES: usize = 200_000;
-/// Most output samples a run keeps (about 250 MB with their SI copies): memory is
-/// bounded whatever t_end, and a run that needs more stops with
-/// [`SimulationError::TooManySamples`].
+/// Most output samples a run produces (100 s of motion at the default 0.1 ms): about
+/// 200 MB in a [`Trajectory`] from [`simulate`], 330 MB of CSV from
+/// [`simulate_streaming`] into a file. A run that needs more stops with
+/// [`SimulationError::TooManySamples`]. Streamed, the run's memory does not depend
+/// on t_end at all; this bounds what it writes.
 pub const MAX_SAMPLES: usize = 1_000_000;
 /// Fastest rim speed R·max(|ψ̇|, |θ̇|, |φ̇|) accepted at the start [m/s]: the speed
 /// of sound in air. The rigid rolling disk of Chapter 4 (and its air film) has long
@@ -236,6 +238,31 @@ pub struct SolverStats {
     pub rejected_steps: usize,
 }
 
+/// What a streamed run ([`simulate_streaming`]) returns: everything of a
+/// [`Trajectory`] but its samples, which went to the caller's sink.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RunSummary {
+    /// Contact phases in order.
+    pub phases: Vec<Phase>,
+    /// Why it stopped.
+    pub end_reason: EndReason,
+    /// The first sample (the initial state, SI).
+    pub start: Sample,
+    /// Final state (SI).
+    pub end: Sample,
+    /// Samples produced.
+    pub samples: usize,
+    /// Solver work.
+    pub stats: SolverStats,
+}
+
+impl RunSummary {
+    /// The slipping phases.
+    pub fn slip_phases(&self) -> impl Iterator<Item = &Phase> {
+        self.phases.iter().filter(|p| p.mode == Mode::Slipping)
+    }
+}
+
 /// A simulated trajectory.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Trajectory {
@@ -302,14 +329,23 @@ pub enum SimulationError {
         /// The time asked for [s].
         t_end: f64,
     },
-    /// The run would keep more output samples than [`MAX_SAMPLES`].
+    /// The run would produce more output samples than [`MAX_SAMPLES`].
     #[error(
         "stopped at t = {t:.6} s: {MAX_SAMPLES} output samples reached before the motion \
-         ended (a memory bound); lower t_end (--t-end) or raise the output interval (--dt)"
+         ended (a bound on the output); lower t_end (--t-end) or raise the output interval \
+         (--dt)"
     )]
     TooManySamples {
         /// Time reached [s].
         t: f64,
+    },
+    /// The caller's sink refused a sample (e.g. the CSV could not be written).
+    #[error("output failed at t = {t:.6} s: {reason}")]
+    Output {
+        /// Time of the sample [s].
+        t: f64,
+        /// The sink's message.
+        reason: String,
     },
 }
 
@@ -381,20 +417,23 @@ impl Events<'_> {
     }
 }
 
-/// What one phase produced: uniform output samples and the event that ended it.
-struct PhaseOutput {
+/// Where a phase's uniform output samples go (scaled time, state) as they are
+/// found; an error stops the run.
+type Emit<'e> = dyn FnMut(f64, &StateVector) -> Result<(), SimulationError> + 'e;
+
+/// What one phase produced: uniform output samples, handed to `emit` as they are
+/// found, and the event that ended it.
+struct PhaseOutput<'e> {
     next_output: f64,
     output_step: f64,
-    states: Vec<(f64, StateVector)>,
+    emit: &'e mut Emit<'e>,
     previous: Option<[(Trigger, f64); 4]>,
     hit: Option<(Trigger, f64, StateVector)>,
     last: (f64, StateVector),
     /// Set when the integration stopped, without an event, to change integrator.
     handover: bool,
-    /// Samples this phase may still record before [`MAX_SAMPLES`] is reached.
-    room: usize,
-    /// Set when the phase stopped because `room` ran out.
-    full: bool,
+    /// Set when `emit` failed; the phase stopped there.
+    error: Option<SimulationError>,
 }
 
 /// Records the uniform output samples inside one accepted step [t_prev, t_curr] and
@@ -434,12 +473,11 @@ fn record_step(
 
     let t_stop = earliest.map_or(t_curr, |(_, t)| t);
     while out.next_output <= t_stop {
-        if out.states.len() >= out.room {
-            out.full = true;
+        let t = out.next_output;
+        if let Err(e) = (out.emit)(t, &state_at(t)) {
+            out.error = Some(e);
             return true;
         }
-        let t = out.next_output;
-        out.states.push((t, state_at(t)));
         out.next_output += out.output_step;
     }
     match earliest {
@@ -460,13 +498,13 @@ fn record_step(
 ///
 /// While slipping, it stops the integration (a hand-over to RODAS4, no event) once the
 /// slip speed falls below `hand_back_speed`, where the slip equations become stiff.
-struct PhaseRecorder<'a, 'b> {
+struct PhaseRecorder<'a, 'b, 'e> {
     events: Events<'a>,
-    out: &'b mut PhaseOutput,
+    out: &'b mut PhaseOutput<'e>,
     hand_back_speed: f64,
 }
 
-impl Solout<f64, StateVector> for PhaseRecorder<'_, '_> {
+impl Solout<f64, StateVector> for PhaseRecorder<'_, '_, '_> {
     fn solout<I>(
         &mut self,
         t_curr: f64,
@@ -693,8 +731,31 @@ fn locate_root(a: f64, b: f64, ga: f64, mut g: impl FnMut(f64) -> f64) -> f64 {
     hi
 }
 
-/// Runs a simulation.
+/// Runs a simulation and keeps its samples (at most [`MAX_SAMPLES`]).
 pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
+    let mut samples = Vec::new();
+    let run = simulate_streaming(spec, &mut |s: &Sample| {
+        samples.push(*s);
+        Ok(())
+    })?;
+    Ok(Trajectory {
+        samples,
+        phases: run.phases,
+        end_reason: run.end_reason,
+        end: run.end,
+        stats: run.stats,
+    })
+}
+
+/// Runs a simulation, handing each output sample to `sink` as it is produced (in
+/// time order: the uniform samples, each event's state, the final state). The run
+/// holds no sample but the last, so its memory does not depend on t_end; it stops
+/// with [`SimulationError::TooManySamples`] after [`MAX_SAMPLES`] samples, and with
+/// [`SimulationError::Output`] when `sink` fails.
+pub fn simulate_streaming(
+    spec: &SimulationSpec,
+    sink: &mut dyn FnMut(&Sample) -> Result<(), String>,
+) -> Result<RunSummary, SimulationError> {
     let p = &spec.params;
     p.validate().map_err(SimulationError::BadInput)?;
     let eta_ok = spec.eta.is_finite() && spec.eta >= 0.0;
@@ -753,7 +814,16 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
         start: 0.0,
         end: 0.0,
     }];
-    let mut scaled_samples: Vec<(f64, StateVector, Mode)> = Vec::new();
+    let mut emitter = Emitter {
+        disk: &disk,
+        units: &units,
+        beta0: spec.beta0,
+        unwrap: Unwrapper::default(),
+        sink,
+        count: 0,
+        first: None,
+        last: None,
+    };
     let mut next_output = 0.0;
     let mut stats = SolverStats::default();
     let mut switches = 0usize;
@@ -771,16 +841,17 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
             flat_angle: spec.flat_angle,
             discontinuity_sign,
         };
+        let phase_mode = mode;
+        let mut emit = |t: f64, y: &StateVector| emitter.emit(t, y, phase_mode);
         let mut out = PhaseOutput {
             next_output,
             output_step,
-            states: Vec::new(),
+            emit: &mut emit,
             previous: Some(events.values(&y, &y)),
             hit: None,
             last: (tau, y),
             handover: false,
-            room: MAX_SAMPLES.saturating_sub(scaled_samples.len()),
-            full: false,
+            error: None,
         };
         let slip_speed = y[X_DOT].hypot(y[Y_DOT]);
         if mode == Mode::Slipping && stiff {
@@ -834,24 +905,29 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
             stats.accepted_steps += solution.steps.accepted;
             stats.rejected_steps += solution.steps.rejected;
         }
-        next_output = out.next_output;
-        scaled_samples.extend(out.states.iter().map(|&(t, s)| (t, s, mode)));
-        if out.full || scaled_samples.len() >= MAX_SAMPLES {
-            return Err(SimulationError::TooManySamples {
-                t: out.last.0 * units.time,
-            });
+        let PhaseOutput {
+            next_output: next,
+            hit,
+            last,
+            handover,
+            error,
+            ..
+        } = out;
+        if let Some(error) = error {
+            return Err(error);
         }
+        next_output = next;
 
-        if out.hit.is_none() && out.handover {
+        if hit.is_none() && handover {
             // Same phase, other integrator.
-            (tau, y) = out.last;
+            (tau, y) = last;
             stiff = !stiff;
             continue;
         }
-        let Some((trigger, t_hit, y_hit)) = out.hit else {
+        let Some((trigger, t_hit, y_hit)) = hit else {
             // Reached t_end.
             tau = tau_end;
-            y = out.last.1;
+            y = last.1;
             break EndReason::TimeLimit;
         };
         tau = t_hit;
@@ -875,7 +951,7 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
         // A (re)seeded slip starts at the stiff slip speed of eq. (4.41).
         stiff = true;
         hand_back_speed = 0.0;
-        scaled_samples.push((tau, y, mode));
+        emitter.emit(tau, &y, mode)?;
         if new_mode != mode {
             switches += 1;
             if switches > MAX_SWITCHES {
@@ -897,19 +973,84 @@ pub fn simulate(spec: &SimulationSpec) -> Result<Trajectory, SimulationError> {
     if let Some(last) = phases.last_mut() {
         last.end = tau * units.time;
     }
-    scaled_samples.push((tau, y, mode));
+    emitter.emit(tau, &y, mode)?;
 
-    let samples = unscale_samples(&disk, &units, spec.beta0, &scaled_samples);
-    let end = *samples
-        .last()
-        .ok_or_else(|| SimulationError::BadInput("no samples".into()))?;
-    Ok(Trajectory {
-        samples,
+    let (Some(start), Some(end)) = (emitter.first, emitter.last) else {
+        return Err(SimulationError::BadInput("no samples".into()));
+    };
+    Ok(RunSummary {
         phases,
         end_reason,
+        start,
         end,
+        samples: emitter.count,
         stats,
     })
+}
+
+/// Turns scaled states into SI samples as they are produced and hands them on,
+/// counting them against [`MAX_SAMPLES`]; keeps only the first and the last.
+struct Emitter<'a> {
+    disk: &'a ScaledDisk,
+    units: &'a Units,
+    beta0: f64,
+    /// β is unwrapped across the whole run, sample by sample.
+    unwrap: Unwrapper,
+    sink: &'a mut dyn FnMut(&Sample) -> Result<(), String>,
+    count: usize,
+    first: Option<Sample>,
+    last: Option<Sample>,
+}
+
+impl Emitter<'_> {
+    fn emit(&mut self, tau: f64, y: &StateVector, mode: Mode) -> Result<(), SimulationError> {
+        if self.count >= MAX_SAMPLES {
+            return Err(SimulationError::TooManySamples {
+                t: tau * self.units.time,
+            });
+        }
+        let sample = self.in_si(tau, y, mode);
+        (self.sink)(&sample).map_err(|reason| SimulationError::Output {
+            t: sample.t,
+            reason,
+        })?;
+        self.count += 1;
+        self.first.get_or_insert(sample);
+        self.last = Some(sample);
+        Ok(())
+    }
+
+    /// One scaled state in SI with the derived quantities; β unwrapped.
+    fn in_si(&mut self, tau: f64, y: &StateVector, mode: Mode) -> Sample {
+        let (disk, units) = (self.disk, self.units);
+        let rate = 1.0 / units.time;
+        let speed = units.length / units.time;
+        let acc = disk.accelerations(y, mode);
+        let (normal, ratio) = acc.map_or((f64::NAN, f64::NAN), |a| (a.normal, a.friction_ratio()));
+        let (phi, psi_dot, theta_dot) = (y[PHI], y[PSI_DOT] * rate, y[THETA_DOT] * rate);
+        let beta0 = self.beta0;
+        Sample {
+            t: tau * units.time,
+            psi: y[PSI],
+            psi_dot,
+            phi,
+            phi_dot: y[PHI_DOT] * rate,
+            theta: y[THETA],
+            theta_dot,
+            x: y[X] * units.length,
+            x_dot: y[X_DOT] * speed,
+            y: y[Y] * units.length,
+            y_dot: y[Y_DOT] * speed,
+            mode,
+            energy: disk.energy(y) * units.energy,
+            normal_force: normal * units.force,
+            friction_ratio: ratio,
+            beta: self.unwrap.next(strip_angle(y[PSI], phi, y[THETA], beta0)),
+            beta_dot: strip_rate(phi, y[PHI_DOT] * rate, psi_dot, y[THETA], theta_dot, beta0),
+            omega_z: vertical_spin(psi_dot, phi, theta_dot),
+            stationary_distance: disk.stationary_distance(y),
+        }
+    }
 }
 
 /// Chooses the starting mode: given slip velocity → slipping; otherwise rolling if
@@ -999,48 +1140,6 @@ impl Units {
         y[Y_DOT] = s.y_dot * t / l;
         y
     }
-}
-
-/// Converts scaled samples to SI with the derived quantities; β is unwrapped.
-fn unscale_samples(
-    disk: &ScaledDisk,
-    units: &Units,
-    beta0: f64,
-    scaled: &[(f64, StateVector, Mode)],
-) -> Vec<Sample> {
-    let rate = 1.0 / units.time;
-    let speed = units.length / units.time;
-    let mut unwrap = Unwrapper::default();
-    scaled
-        .iter()
-        .map(|&(tau, y, mode)| {
-            let acc = disk.accelerations(&y, mode);
-            let (normal, ratio) =
-                acc.map_or((f64::NAN, f64::NAN), |a| (a.normal, a.friction_ratio()));
-            let (phi, psi_dot, theta_dot) = (y[PHI], y[PSI_DOT] * rate, y[THETA_DOT] * rate);
-            Sample {
-                t: tau * units.time,
-                psi: y[PSI],
-                psi_dot,
-                phi,
-                phi_dot: y[PHI_DOT] * rate,
-                theta: y[THETA],
-                theta_dot,
-                x: y[X] * units.length,
-                x_dot: y[X_DOT] * speed,
-                y: y[Y] * units.length,
-                y_dot: y[Y_DOT] * speed,
-                mode,
-                energy: disk.energy(&y) * units.energy,
-                normal_force: normal * units.force,
-                friction_ratio: ratio,
-                beta: unwrap.next(strip_angle(y[PSI], phi, y[THETA], beta0)),
-                beta_dot: strip_rate(phi, y[PHI_DOT] * rate, psi_dot, y[THETA], theta_dot, beta0),
-                omega_z: vertical_spin(psi_dot, phi, theta_dot),
-                stationary_distance: disk.stationary_distance(&y),
-            }
-        })
-        .collect()
 }
 
 /// Removes the 2π jumps of an angle sequence.

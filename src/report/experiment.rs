@@ -325,6 +325,24 @@ fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<Strin
             "capture fps".into(),
             format!("{} ({:?})", plan.fps.fps, plan.fps.source),
         ],
+        vec![
+            "frame times".into(),
+            plan.frame_times.as_ref().map_or_else(
+                || "not recorded".into(),
+                |f| {
+                    format!(
+                        "{}: {}; frame interval median {:.4} ms, spread {:.4} ms \
+                         (1.4826 × MAD), {:.4}–{:.4} ms",
+                        f.source.label(),
+                        f.detail,
+                        1e3 * f.median_interval_s,
+                        1e3 * f.interval_spread_s,
+                        1e3 * f.min_interval_s,
+                        1e3 * f.max_interval_s
+                    )
+                },
+            ),
+        ],
         vec!["layout".into(), plan.layout.clone()],
         vec!["plate".into(), plan.plate.clone()],
         vec![

@@ -379,8 +379,8 @@ pub struct FrameState {
 
 /// φ, ψ and ψ̇ with standard errors at every frame of the peak window that has a rim
 /// height, by fitting `model` over about `state_window_periods` oscillations centred
-/// on the frame (module docs). Frames whose fit fails are left out. Only frames up to
-/// the halt enter the fits.
+/// on the frame (module docs). Frames whose fit fails, or whose window spans a
+/// timestamp gap, are left out. Only frames up to the halt enter the fits.
 pub fn frame_states(
     t: &[f64],
     z_rim: &[f64],
@@ -425,6 +425,11 @@ pub fn frame_states(
                 if hi - lo < 8 && hi < st.len() {
                     hi += 1;
                 }
+            }
+            // Across a timestamp gap the phase track miscounts the turns (the peaks
+            // inside it are missing): no state there.
+            if skips::spans_gap(&t[idx[lo]..=idx[hi - 1]], frame, config.gap_factor) {
+                return None;
             }
             let init = LocalInit {
                 phi: phi0,

@@ -280,6 +280,13 @@ pub(crate) fn rim_phase_steps(
                 return None;
             }
             let (lo, hi) = (k - m, k + m);
+            // A window across a timestamp gap is left to the gap's own flag: the
+            // phase track lacks the peaks inside the gap, and on a render whose
+            // timestamps skip 25 frames the stepped fit flagged the frame 10
+            // before the gap (F = 78).
+            if spans_gap(&t[idx[lo]..=idx[hi - 1]], frame, config.gap_factor) {
+                return None;
+            }
             let init = LocalInit {
                 phi,
                 phi_slope: phi_dot,
@@ -318,6 +325,12 @@ pub(crate) fn rim_phase_steps(
         }
     }
     flags
+}
+
+/// Whether two consecutive frame times in `t` lie more than `gap_factor` frame
+/// periods apart (a timestamp gap, as [`timestamp_gaps`] flags it).
+pub(crate) fn spans_gap(t: &[f64], frame: f64, gap_factor: f64) -> bool {
+    t.windows(2).any(|w| w[1] - w[0] > gap_factor * frame)
 }
 
 /// Half-width of the phase-step fits in oscillation periods. The statistic grows with
