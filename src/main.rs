@@ -15,8 +15,8 @@ use eulerdisk::model::simulate::{
 };
 use eulerdisk::model::tuning::tune_eta;
 use eulerdisk::render::{
-    DEFAULT_CRF, Effects, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Timing,
-    power_law_motion, trajectory_motion, write_clip,
+    DEFAULT_CRF, Effects, Nutation, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Scenery,
+    Timing, add_nutation, power_law_motion, trajectory_motion, write_clip,
 };
 use eulerdisk::report::OutputLock;
 use eulerdisk::report::compare::{comparison_dir, write_comparison};
@@ -234,17 +234,92 @@ struct RenderArgs {
     /// Side view above, plan view with the red strip below (fig. 3.19).
     #[arg(long)]
     two_view: bool,
-    /// Sensor noise σ [grey levels].
-    #[arg(long, default_value_t = 0.0)]
+    /// Pinhole side camera at this distance from the disk's near rim [m], 0.1–10
+    /// (phones: 0.2–0.5 m); default: orthographic (infinitely far). The truth gives the
+    /// perspective factor and the scale at the near rim.
+    #[arg(long, value_name = "METRES")]
+    camera_distance: Option<f64>,
+    /// Lit plate's grey level [0–255] (default 24 dark, 205 light); a light plate
+    /// brighter than the disk's side needs it above the side's (--paper-grey).
+    #[arg(long, value_name = "GREY")]
+    plate_grey: Option<f64>,
+    /// Paper's (the disk's side and top face) grey level [0–255].
+    #[arg(long, default_value_t = 238.0, value_name = "GREY")]
+    paper_grey: f64,
+    /// Plate texture: RMS relative albedo variation of a seeded grain [0–1]; 0 = plain.
+    #[arg(long, default_value_t = 0.0, value_name = "CONTRAST")]
+    texture: f64,
+    /// Plate reflectivity: fraction of its light that is mirror image [0–0.9]
+    /// (default 0.25 dark, 0 light).
+    #[arg(long, value_name = "FRACTION")]
+    reflection: Option<f64>,
+    /// Gaussian blur σ of the plate's mirror image [px] (a rough or brushed plate).
+    #[arg(long, default_value_t = 0.0, value_name = "PX")]
+    reflection_blur: f64,
+    /// Elevation of the fill light that shades the paper [deg]: below 45° the side is
+    /// brighter than the top face, above it darker.
+    #[arg(long, default_value_t = 20.0, value_name = "DEG")]
+    fill_elevation: f64,
+    /// Read noise σ [grey levels].
+    #[arg(long, default_value_t = 0.0, value_name = "GREY")]
     noise: f64,
+    /// Shot noise k [grey levels^½]: σ² = noise² + k² × level.
+    #[arg(long, default_value_t = 0.0, value_name = "K")]
+    shot_noise: f64,
     /// Gaussian blur σ [px].
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_name = "PX")]
     blur: f64,
-    /// 50 Hz mains flicker: amplitude of the 100 Hz intensity modulation.
-    #[arg(long, default_value_t = 0.0)]
+    /// Mains flicker at 100 Hz: relative amplitude of the light (0.1 = ±10 %).
+    #[arg(long, default_value_t = 0.0, value_name = "FRACTION")]
     flicker: f64,
-    /// Lateral drift before the halt [px/s].
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    /// Flicker at 50 Hz: relative amplitude of the light.
+    #[arg(long, default_value_t = 0.0, value_name = "FRACTION")]
+    flicker_50: f64,
+    /// Phase of the 100 Hz flicker at the first frame [rad].
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true,
+        value_name = "RAD"
+    )]
+    flicker_phase_100: f64,
+    /// Phase of the 50 Hz flicker at the first frame [rad].
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true,
+        value_name = "RAD"
+    )]
+    flicker_phase_50: f64,
+    /// Exposure time [s], at most 1/fps: each frame averages --exposure-samples poses
+    /// over it (motion smear).
+    #[arg(long, default_value_t = 0.0, value_name = "SECONDS")]
+    exposure: f64,
+    /// Poses averaged over the exposure [1–16].
+    #[arg(long, default_value_t = 2, value_name = "N")]
+    exposure_samples: usize,
+    /// φ oscillating about stationary rolling: relative amplitude a of
+    /// φ = φ_stat (1 + a sin χ) [0–0.5] (prescribed motion).
+    #[arg(long, default_value_t = 0.0, value_name = "FRACTION")]
+    nutation: f64,
+    /// Frequency of the nutation over the precession rate, ω/|ψ̇| (0–10].
+    #[arg(long, default_value_t = 0.5, value_name = "RATIO")]
+    nutation_ratio: f64,
+    /// Phase of the nutation at the halt [rad].
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true,
+        value_name = "RAD"
+    )]
+    nutation_phase: f64,
+    /// Lateral drift before the halt [px/s] (px at the disk's centre).
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true,
+        value_name = "PX_PER_S"
+    )]
     drift: f64,
     /// Capture indices (0-based) of frames to drop, e.g. 10,57.
     #[arg(long, value_delimiter = ',')]
@@ -258,8 +333,8 @@ struct RenderArgs {
     /// Image scale [m/px] (default: the disk spans 90 % of the width).
     #[arg(long)]
     scale: Option<f64>,
-    /// Camera elevation of the side view [deg].
-    #[arg(long, default_value_t = 3.0)]
+    /// Camera elevation of the side view [deg], in (0, 30].
+    #[arg(long, default_value_t = 3.0, value_name = "DEG")]
     elevation: f64,
     /// Flat disk filmed after the halt [s] (post-flat spin, then rest frames).
     #[arg(long, default_value_t = 0.15)]
@@ -273,7 +348,7 @@ struct RenderArgs {
     /// Strip angle on the top face β0 [rad] (eq. 3.13).
     #[arg(long, default_value_t = 0.3, allow_hyphen_values = true)]
     beta0: f64,
-    /// Seed of the sensor noise.
+    /// Seed of the sensor noise and the plate's texture.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// H.264 constant-rate factor of an MP4 (libx264: 0 = lossless luma, 51 = worst);
@@ -630,6 +705,9 @@ fn run_simulate(args: &SimulateArgs) -> Result<()> {
 }
 
 fn run_render(args: &RenderArgs) -> Result<()> {
+    if args.simulate && args.nutation > 0.0 {
+        bail!("--nutation applies to a prescribed power law, not to --simulate");
+    }
     let params = args.preset.params();
     let motion = if args.simulate {
         let eta = match (args.eta, args.model) {
@@ -669,8 +747,20 @@ fn run_render(args: &RenderArgs) -> Result<()> {
             beta_dot0: args.beta_dot_flat,
             mu: args.mu,
         };
-        power_law_motion(&params, &law, &timing, spin)?
+        let mut motion = power_law_motion(&params, &law, &timing, spin)?;
+        if args.nutation > 0.0 {
+            add_nutation(
+                &mut motion,
+                Nutation {
+                    amplitude: args.nutation,
+                    ratio: args.nutation_ratio,
+                    phase: args.nutation_phase,
+                },
+            )?;
+        }
+        motion
     };
+
     let mut spec = RenderSpec::thesis(args.plate, args.two_view);
     if let Some(size) = &args.size {
         let parsed = size
@@ -683,10 +773,29 @@ fn run_render(args: &RenderArgs) -> Result<()> {
     }
     spec.metres_per_px = args.scale;
     spec.elevation_deg = args.elevation;
+    spec.camera_distance_m = args.camera_distance;
+    spec.scenery = Scenery {
+        paper_grey: args.paper_grey,
+        plate_grey: args.plate_grey,
+        texture_contrast: args.texture,
+        reflectivity: args.reflection,
+        reflection_blur_px: args.reflection_blur,
+        fill_elevation_deg: args.fill_elevation,
+    };
     spec.effects = Effects {
         noise_sigma: args.noise,
         blur_sigma: args.blur,
         flicker_amplitude: args.flicker,
+        flicker_50hz_amplitude: args.flicker_50,
+        flicker_phase_100: args.flicker_phase_100,
+        flicker_phase_50: args.flicker_phase_50,
+        shot_noise: args.shot_noise,
+        exposure_s: args.exposure,
+        exposure_samples: if args.exposure > 0.0 {
+            args.exposure_samples
+        } else {
+            1
+        },
         drift_px_per_s: args.drift,
         seed: args.seed,
     };

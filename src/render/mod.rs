@@ -18,8 +18,9 @@
 //! A white (paper-wrapped, §3.2.3) solid cylinder of radius R and half-thickness H
 //! with an untouched dark bottom face stands on a 30 × 30 cm plate: a dark reflective
 //! plate (steel, with the disk's mirror image, fig. 3.7) or a light matt one where the
-//! shadow under the disk gives the contrast (fig. 3.9). The side camera is orthographic,
-//! looks along +y and is tilted down by a small elevation ε (default 3°). In the
+//! shadow under the disk gives the contrast (fig. 3.9). The side camera is orthographic
+//! (or a pinhole, see "Perspective" below), looks along +y and is tilted down by a
+//! small elevation ε (default 3°). In the
 //! two-view layout (fig. 3.19, portrait) the side view fills the rows above
 //! `split_row` and a plan view from above, showing the red strip across the top face
 //! (eq. 3.13), fills the rows below. See [`scene`] for frames and lights.
@@ -71,19 +72,64 @@
 //! until t_β (eq. 4.113); the clip goes on for `after_halt` seconds (default 0.15 s)
 //! of flat disk, whose last frames are the rest frames calibration uses.
 //!
+//! # Perspective (`camera_distance_m`)
+//!
+//! By default the side camera is orthographic, the limit of a distant camera. With
+//! `camera_distance_m = Some(d)` it is a pinhole (see [`scene::Camera`]) looking along
+//! f = (0, cos ε, −sin ε) through the plate point under the disk's centre at rest,
+//! which the image point (cx, cy) shows as before; d is the depth along f of the near
+//! rim's mid-height point (0, −R, H) at rest, so the centre (0, 0, H) is at depth
+//! d + R cos ε, and the focal length makes the scale there `metres_per_px` (by default,
+//! the diameter spans 90 % of the width at the centre's depth). The plan view stays
+//! orthographic. The rays are cast one by one from the pinhole (the orthographic
+//! views' parallel-ray shortcuts are kept for them), and the ground truth is exact for
+//! this projection:
+//!
+//! * x_l, x_r: the ends of the bottom rim's silhouette at rest, the extremes of the
+//!   image x of (R cos a, R sin a, 0) over a, by golden-section search (the thesis's
+//!   "edges of the bottom of the disk", fig. 3.3; the top rim, nearer the camera, is
+//!   wider: [`CameraTruth::x_l_top`]); x_centre their midpoint.
+//! * z_base: the rim edge on the column x_centre at rest, ray cast as every frame's
+//!   z_rim is, so z_rim = 0 at rest; z_t: where that column's rays pass from the side
+//!   face to the top face (the near top rim), by bisection to 1e-9 px;
+//!   [`CameraTruth::z_t_far`] the silhouette's top (the far top rim).
+//! * z_rim_px: as for the orthographic camera, the lowest white point on the column
+//!   x_centre, now along the pinhole's rays: the image height of the near bottom rim
+//!   above its rest row in the perspective projection, of the true pose (with φ's
+//!   nutation, if any, and drift).
+//! * [`CameraTruth`]: the perspective factor (d + R cos ε)/d (depth of the centre over
+//!   depth of the near rim), the vertical scale at the near bottom rim (0, −R, 0),
+//!   1/|∂row/∂z| = (q·f)² / (F |u_z (q·f) − (q·u) f_z|) with q = N − C, and the
+//!   scale at the centre's depth; δ = 2H/(z_base − z_t) (eq. 3.10) from the exact
+//!   points. peak_z_rim's closed form is the orthographic one only.
+//!
+//! # Scenery
+//!
+//! [`Scenery`] overrides the paper's and the plate's grey levels (a light plate
+//! brighter than the disk's side), adds a seeded grain texture to the plate
+//! ([`scene::PlateTexture`]; it covers the whole plate, to the frame's edges), sets the
+//! plate's reflectivity and blurs its mirror image (a Gaussian of σ px applied to the
+//! mirror image alone: the blurred background's plus the blurred change the disk
+//! makes), and moves the fill light (above 45° the top face is brighter than the side).
+//!
 //! # Camera artefacts
 //!
-//! Sensor noise (Gaussian, σ grey levels, a SplitMix64 generator seeded per frame and
-//! row, so frames are reproducible in any order), Gaussian blur (σ px), 50 Hz mains
-//! flicker (intensity × (1 + A sin(2π·100 Hz·t))), lateral drift (px/s, ending at the
-//! rest position at the halt) and dropped frames (missing from the output; the truth
-//! keeps every written frame's capture index and true time). Pixels are anti-aliased:
+//! Sensor noise: read noise σ and shot noise k, σ² = σ_read² + k² v for a pixel of
+//! level v (Gaussian, a SplitMix64 generator seeded per frame and row, so frames are
+//! reproducible in any order); Gaussian blur (σ px); mains flicker, the light gain
+//! 1 + A₁₀₀ sin(2π·100 Hz·t + p₁₀₀) + A₅₀ sin(2π·50 Hz·t + p₅₀), recorded per frame as
+//! [`FrameTruth::light_gain`]; motion smear (the mean of `exposure_samples` poses over
+//! the exposure time, centred on the capture time, which the truth describes); lateral
+//! drift (px/s at the disk's centre, ending at the rest position at the halt) and
+//! dropped frames (missing from the output; the truth keeps every written frame's
+//! capture index and true time). The motion may carry a nutation about stationary
+//! rolling ([`Nutation`]). Pixels are anti-aliased:
 //! rays are cast at the corners of 2 × 2 pixel blocks, then at the pixel corners of
 //! blocks whose corners see different surfaces, then 16 rays (a rank-1 lattice, so
 //! axis-aligned edges get 16 coverage levels; 8 where only the plate's shadow or
 //! mirror image changes) in pixels whose corners disagree. A feature thinner than
 //! 2 px that no block corner sees (the strip seen edge-on in the side view) can be
-//! missed. Rays are cast only inside the exact image extent of the disk, its mirror
+//! missed. Rays are cast only inside the image extent of the disk, its mirror
 //! image and its shadow; the rest of the frame is a background rendered once.
 
 pub mod motion;
@@ -99,11 +145,15 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::params::DiskParams;
 pub use motion::{
-    DiskState, Motion, MotionSource, PostFlatSpin, PowerLaw, Timing, power_law_motion,
-    trajectory_motion,
+    DiskState, Motion, MotionSource, Nutation, PostFlatSpin, PowerLaw, Timing, add_nutation,
+    power_law_motion, trajectory_motion,
 };
 pub use scene::Plate;
-use scene::{Camera, DiskShape, Look, PLATE_CLASSES, Pose, Prepared, Sample, Scene, View};
+use scene::{
+    Camera, Channels, DiskShape, Look, PLATE_CLASSES, Pinhole, Pose, Prepared, Sample, Scene,
+    Surface, View,
+};
+use std::f64::consts::PI;
 pub use write::{ClipFormat, DEFAULT_CRF, truth_path, write_clip};
 
 /// Errors of the render stage; file errors name the file.
@@ -131,16 +181,44 @@ impl RenderError {
 /// Camera artefacts applied after rendering.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Effects {
-    /// Sensor noise σ [grey levels], Gaussian, per channel.
+    /// Read noise σ [grey levels], Gaussian, per channel.
     pub noise_sigma: f64,
     /// Gaussian blur σ [px].
     pub blur_sigma: f64,
-    /// Mains flicker amplitude A: intensity × (1 + A sin(2π·100 Hz·t_clip)).
+    /// Mains flicker at 100 Hz (50 Hz mains, full-wave): relative amplitude A₁₀₀ of
+    /// the light gain 1 + A₁₀₀ sin(2π·100 Hz·t + p₁₀₀) + A₅₀ sin(2π·50 Hz·t + p₅₀),
+    /// t the capture time from the first frame.
     pub flicker_amplitude: f64,
-    /// Lateral drift of the disk [px/s] before the halt (it arrives at rest there).
+    /// Relative amplitude A₅₀ of the 50 Hz flicker (a lamp that flickers at the mains
+    /// frequency itself).
+    #[serde(default)]
+    pub flicker_50hz_amplitude: f64,
+    /// Phase p₁₀₀ of the 100 Hz flicker [rad].
+    #[serde(default)]
+    pub flicker_phase_100: f64,
+    /// Phase p₅₀ of the 50 Hz flicker [rad].
+    #[serde(default)]
+    pub flicker_phase_50: f64,
+    /// Shot noise k [grey levels^½]: a pixel of level v has noise σ² = σ_read² + k² v
+    /// (v after the light gain; k² is grey levels per photo-electron).
+    #[serde(default)]
+    pub shot_noise: f64,
+    /// Exposure time [s]: each frame averages `exposure_samples` poses evenly spread
+    /// over it, centred on the capture time (motion smear). 0: instantaneous.
+    #[serde(default)]
+    pub exposure_s: f64,
+    /// Poses averaged over the exposure (1: none).
+    #[serde(default = "one")]
+    pub exposure_samples: usize,
+    /// Lateral drift of the disk [px/s] before the halt (it arrives at rest there);
+    /// px at the disk's centre.
     pub drift_px_per_s: f64,
-    /// Seed of the noise generator.
+    /// Seed of the noise generator and of the plate's texture.
     pub seed: u64,
+}
+
+fn one() -> usize {
+    1
 }
 
 impl Default for Effects {
@@ -149,8 +227,65 @@ impl Default for Effects {
             noise_sigma: 0.0,
             blur_sigma: 0.0,
             flicker_amplitude: 0.0,
+            flicker_50hz_amplitude: 0.0,
+            flicker_phase_100: 0.0,
+            flicker_phase_50: 0.0,
+            shot_noise: 0.0,
+            exposure_s: 0.0,
+            exposure_samples: 1,
             drift_px_per_s: 0.0,
             seed: 1,
+        }
+    }
+}
+
+impl Effects {
+    /// The light gain at clip time `t` [s] (first captured frame at 0): mains flicker.
+    pub fn light_gain(&self, t: f64) -> f64 {
+        let tau = 2.0 * std::f64::consts::PI;
+        1.0 + self.flicker_amplitude * (tau * 100.0 * t + self.flicker_phase_100).sin()
+            + self.flicker_50hz_amplitude * (tau * 50.0 * t + self.flicker_phase_50).sin()
+    }
+}
+
+/// The look of the scene beyond the plate type: grey levels, grain, reflection and
+/// light (the defaults are [`Plate`]'s look).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Scenery {
+    /// Paper (the disk's side and top face) albedo × 255, red channel [grey level].
+    pub paper_grey: f64,
+    /// Lit plate albedo × 255, red channel [grey level]; `None`: 24 (dark), 205 (light).
+    pub plate_grey: Option<f64>,
+    /// RMS relative variation of the plate's albedo, a seeded grain texture
+    /// ([`scene::PlateTexture`]); 0: plain.
+    pub texture_contrast: f64,
+    /// Fraction of the plate's radiance that is mirror image; `None`: 0.25 (dark),
+    /// 0 (light).
+    pub reflectivity: Option<f64>,
+    /// Gaussian σ of the mirror image's blur [px] (a rough or brushed plate).
+    pub reflection_blur_px: f64,
+    /// Elevation of the fill light that shades the paper [deg]: 20° lights the side
+    /// more than the top face, above 45° the top face more.
+    pub fill_elevation_deg: f64,
+}
+
+impl Scenery {
+    /// The paper's grey level by default.
+    pub const DEFAULT_PAPER_GREY: f64 = 238.0;
+    /// The fill light's elevation by default [deg].
+    pub const DEFAULT_FILL_ELEVATION_DEG: f64 = 20.0;
+}
+
+impl Default for Scenery {
+    fn default() -> Self {
+        Scenery {
+            paper_grey: Self::DEFAULT_PAPER_GREY,
+            plate_grey: None,
+            texture_contrast: 0.0,
+            reflectivity: None,
+            reflection_blur_px: 0.0,
+            fill_elevation_deg: Self::DEFAULT_FILL_ELEVATION_DEG,
         }
     }
 }
@@ -168,9 +303,16 @@ pub struct RenderSpec {
     pub two_view: bool,
     /// Camera elevation ε of the side view [deg], in (0, 30].
     pub elevation_deg: f64,
-    /// Image scale [m/px]; `None` fits the disk's diameter into 90 % of the width
-    /// (and of the plan view's height).
+    /// Image scale [m/px] (at the disk's centre for a pinhole); `None` fits the
+    /// disk's diameter into 90 % of the width (and of the plan view's height).
     pub metres_per_px: Option<f64>,
+    /// Pinhole side camera at this depth from the near rim [m] (along its optical
+    /// axis, to the rim's mid-height at rest); `None`: orthographic (infinitely far).
+    #[serde(default)]
+    pub camera_distance_m: Option<f64>,
+    /// Grey levels, texture, reflection and light.
+    #[serde(default)]
+    pub scenery: Scenery,
     /// Width of the red strip [m].
     pub strip_width: f64,
     /// Camera artefacts.
@@ -192,6 +334,8 @@ impl RenderSpec {
             two_view,
             elevation_deg: 3.0,
             metres_per_px: None,
+            camera_distance_m: None,
+            scenery: Scenery::default(),
             strip_width: 0.005,
             effects: Effects::default(),
             dropped: Vec::new(),
@@ -248,6 +392,54 @@ pub struct FrameTruth {
     pub z_rim_m: Option<f64>,
     /// Horizontal offset of the disk's centre from its rest column (drift) [px].
     pub drift_px: f64,
+    /// Light gain of the frame (mains flicker, [`Effects::light_gain`]).
+    #[serde(default = "unit_gain")]
+    pub light_gain: f64,
+}
+
+fn unit_gain() -> f64 {
+    1.0
+}
+
+/// How the side camera projects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Projection {
+    /// Parallel rays (a camera infinitely far away).
+    Orthographic,
+    /// A pinhole at a finite distance.
+    Perspective,
+}
+
+/// The side camera and the scales it gives, at rest (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CameraTruth {
+    /// Orthographic or perspective.
+    pub projection: Projection,
+    /// Depth of the near rim's mid-height point (0, −R, H) at rest along the
+    /// optical axis [m] (perspective).
+    pub distance_to_near_rim_m: Option<f64>,
+    /// Centre of projection [m], world frame (origin on the plate under the disk's
+    /// centre at rest, y away from the camera, z up) (perspective).
+    pub position_m: Option<[f64; 3]>,
+    /// Focal length [px] (perspective).
+    pub focal_px: Option<f64>,
+    /// Perspective factor: depth of the disk's centre (0, 0, H) over depth of the
+    /// near rim (0, −R, H) at rest, (d + R cos ε)/d; 1 for orthographic.
+    pub perspective_factor: f64,
+    /// Vertical scale at the near bottom rim (0, −R, 0) at rest, 1/|∂row/∂z| [m/px],
+    /// the scale at the point where z_rim is read (s/cos ε for orthographic).
+    pub near_rim_metres_per_px: f64,
+    /// Horizontal scale at the depth of the disk's centre [m/px] (the orthographic s).
+    pub centre_metres_per_px: f64,
+    /// Left end of the top rim's silhouette at rest [px] (x_l is the bottom's;
+    /// through a pinhole the top, nearer the camera, is wider).
+    pub x_l_top: f64,
+    /// Right end of the top rim's silhouette at rest [px].
+    pub x_r_top: f64,
+    /// Top of the silhouette on the centre column at rest: the far top rim [row]
+    /// (z_t is the near top rim, below it by the top face's image height).
+    pub z_t_far: f64,
 }
 
 /// The ground truth of a rendered clip.
@@ -287,10 +479,17 @@ pub struct GroundTruth {
     pub beta0: f64,
     /// Side camera elevation ε [rad].
     pub elevation: f64,
-    /// Orthographic image scale s [m/px].
+    /// Image scale s [m/px]: orthographic, or a pinhole's at the disk's centre.
     pub metres_per_px_image: f64,
-    /// δ = 2H/(z_base − z_t) [m/px] (eq. 3.10 corrected) = s / cos ε.
+    /// δ = 2H/(z_base − z_t) [m/px] (eq. 3.10 corrected) from the true calibration
+    /// points; s / cos ε for orthographic.
     pub delta: f64,
+    /// The side camera: projection, pose, perspective factor and scales.
+    pub camera: CameraTruth,
+    /// Grey levels, texture, reflection and light.
+    pub scenery: Scenery,
+    /// φ's oscillation about stationary rolling, if any (φ in `frames` includes it).
+    pub nutation: Option<Nutation>,
     /// Rest-frame calibration points.
     pub calibration: Calibration,
     /// Camera artefacts.
@@ -318,7 +517,12 @@ pub struct Renderer {
     motion: Motion,
     scene: Scene,
     cameras: Vec<Camera>,
-    background: Vec<[f32; 3]>,
+    /// The static background: colour, then (when the look keeps it apart) the
+    /// plate's mirror image and coverage.
+    background: Vec<Channels>,
+    /// The background's mirror image and plate coverage blurred by the reflection
+    /// blur (empty without).
+    background_mirror: Vec<[f32; 4]>,
     truth: GroundTruth,
     /// Capture index of each written frame.
     written: Vec<usize>,
@@ -364,6 +568,18 @@ impl Renderer {
             }
         };
         let cx = f64::from(w / 2);
+        let (se, ce) = elevation.sin_cos();
+        // A pinhole looking along f = (0, cos ε, −sin ε) through the world origin
+        // (which the principal point (cx, cy) shows, as for the orthographic camera),
+        // with the near rim's mid-height (0, −R, H) at depth d and the disk's centre
+        // (0, 0, H) at depth d + R cos ε, where the scale is `scale`.
+        let pinhole = spec.camera_distance_m.map(|d| {
+            let depth_origin = d + r * ce + h * se;
+            Pinhole {
+                position: [0.0, -depth_origin * ce, depth_origin * se],
+                focal_px: (d + r * ce) / scale,
+            }
+        });
         let side = Camera {
             view: View::Side,
             cx,
@@ -372,6 +588,7 @@ impl Renderer {
             elevation,
             row_start: 0,
             row_end: side_rows,
+            pinhole,
         };
         let mut cameras = vec![side];
         if let Some(sp) = split {
@@ -383,6 +600,7 @@ impl Renderer {
                 elevation,
                 row_start: sp,
                 row_end: hgt,
+                pinhole: None,
             });
         }
         let scene = Scene {
@@ -392,16 +610,35 @@ impl Renderer {
                 beta0: motion.beta0,
                 strip_half_width: 0.5 * spec.strip_width,
             },
-            look: Look::for_plate(spec.plate),
+            look: Look::with_scenery(spec.plate, &spec.scenery, spec.effects.seed),
             plate_back: 0.15,
             plate_front: 1.0,
         };
-        let calibration = Calibration {
-            x_l: cx - r / scale,
-            x_r: cx + r / scale,
-            x_centre: cx,
-            z_t: side.cy - (2.0 * h * elevation.cos() - r * elevation.sin()) / scale,
-            z_base: side.cy + r * elevation.sin() / scale,
+        let (calibration, camera) = match spec.camera_distance_m {
+            None => {
+                let calibration = Calibration {
+                    x_l: cx - r / scale,
+                    x_r: cx + r / scale,
+                    x_centre: cx,
+                    z_t: side.cy - (2.0 * h * elevation.cos() - r * elevation.sin()) / scale,
+                    z_base: side.cy + r * elevation.sin() / scale,
+                };
+                let camera = CameraTruth {
+                    projection: Projection::Orthographic,
+                    distance_to_near_rim_m: None,
+                    position_m: None,
+                    focal_px: None,
+                    perspective_factor: 1.0,
+                    near_rim_metres_per_px: scale / ce,
+                    centre_metres_per_px: scale,
+                    x_l_top: calibration.x_l,
+                    x_r_top: calibration.x_r,
+                    // The far top rim (0, R, 2H): v = R sin ε + 2H cos ε.
+                    z_t_far: side.cy - (r * se + 2.0 * h * ce) / scale,
+                };
+                (calibration, camera)
+            }
+            Some(d) => pinhole_calibration(&scene, &side, &params, d)?,
         };
         let delta = 2.0 * h / (calibration.z_base - calibration.z_t);
         let written: Vec<usize> = (0..motion.states.len())
@@ -413,8 +650,9 @@ impl Renderer {
             scene,
             cameras,
             background: Vec::new(),
+            background_mirror: Vec::new(),
             truth: GroundTruth {
-                format_version: 1,
+                format_version: 2,
                 source: motion.source,
                 plate: spec.plate,
                 two_view: spec.two_view,
@@ -433,6 +671,9 @@ impl Renderer {
                 elevation,
                 metres_per_px_image: scale,
                 delta,
+                camera,
+                scenery: spec.scenery,
+                nutation: motion.nutation,
                 calibration,
                 effects: spec.effects,
                 dropped: {
@@ -446,6 +687,9 @@ impl Renderer {
             written,
         };
         renderer.background = renderer.render_background();
+        if renderer.scene.look.separate_mirror {
+            renderer.background_mirror = renderer.blurred_background_mirror();
+        }
         let frames = renderer
             .written
             .par_iter()
@@ -469,15 +713,57 @@ impl Renderer {
     /// The disk's pose at capture index `index`, with drift.
     fn pose(&self, index: usize) -> Pose {
         let s = &self.motion.states[index];
-        let drift = self.drift_px(s.t) * self.truth.metres_per_px_image;
+        self.pose_of(s.psi, s.phi, s.theta, s.centre, s.t)
+    }
+
+    fn pose_of(&self, psi: f64, phi: f64, theta: f64, centre: [f64; 2], t: f64) -> Pose {
+        let drift = self.drift_px(t) * self.truth.metres_per_px_image;
         Pose::rolling(
             &self.motion.params,
-            s.psi,
-            s.phi,
-            s.theta,
-            s.centre[0] + drift,
-            s.centre[1],
+            psi,
+            phi,
+            theta,
+            centre[0] + drift,
+            centre[1],
         )
+    }
+
+    /// The poses a frame's exposure averages: `exposure_samples` evenly spread over
+    /// `exposure_s` about the capture time (one, at the capture time, without smear).
+    /// Between frames ψ and θ follow cubic Hermite polynomials with their rates, φ and
+    /// the centre straight lines.
+    fn exposure_poses(&self, index: usize) -> Vec<Pose> {
+        let fx = &self.spec.effects;
+        let m = fx.exposure_samples.max(1);
+        if m == 1 || fx.exposure_s <= 0.0 {
+            return vec![self.pose(index)];
+        }
+        let states = &self.motion.states;
+        (0..m)
+            .map(|j| {
+                let dt = fx.exposure_s * ((j as f64 + 0.5) / m as f64 - 0.5);
+                let s = &states[index];
+                let t = s.t + dt;
+                let pair = if dt >= 0.0 {
+                    states.get(index + 1).map(|b| (s, b))
+                } else {
+                    index.checked_sub(1).map(|k| (&states[k], s))
+                };
+                let Some((a, b)) = pair else {
+                    return self.pose_of(s.psi, s.phi, s.theta, s.centre, t);
+                };
+                let u = (t - a.t) / (b.t - a.t);
+                let lerp = |x: f64, y: f64| x + u * (y - x);
+                let psi = motion::hermite(a.t, a.psi, a.psi_dot, b.t, b.psi, b.psi_dot, t);
+                let theta =
+                    motion::hermite(a.t, a.theta, a.theta_dot, b.t, b.theta, b.theta_dot, t);
+                let centre = [
+                    lerp(a.centre[0], b.centre[0]),
+                    lerp(a.centre[1], b.centre[1]),
+                ];
+                self.pose_of(psi, lerp(a.phi, b.phi).max(0.0), theta, centre, t)
+            })
+            .collect()
     }
 
     fn drift_px(&self, t: f64) -> f64 {
@@ -505,51 +791,27 @@ impl Renderer {
             z_rim_px,
             z_rim_m: z_rim_px.map(|z| z * self.truth.delta),
             drift_px: self.drift_px(s.t) + s.centre[0] / self.truth.metres_per_px_image,
+            light_gain: self
+                .spec
+                .effects
+                .light_gain(index as f64 / self.motion.timing.fps),
         }
     }
 
     /// Row of the lowest point on the centre column whose ray first meets a white
     /// surface of the disk (ray casting; see the module docs).
     fn rim_edge_row(&self, pose: &Pose) -> Option<f64> {
-        let cam = &self.cameras[0];
-        let x = self.truth.calibration.x_centre;
-        let white = |row: f64| {
-            let (o, d) = cam.ray(x, row);
-            self.scene
-                .first_disk_hit(pose, o, d)
-                .is_some_and(|hit| hit.surface.is_white_disk())
-        };
-        let corners = self.scene.disk.box_corners(pose);
-        let (mut top, mut bottom) = (f64::INFINITY, f64::NEG_INFINITY);
-        for c in corners {
-            let (_, row) = cam.project(c);
-            top = top.min(row);
-            bottom = bottom.max(row);
-        }
-        let mut below = bottom + 1.0;
-        let mut row = below;
-        while row > top - 1.0 {
-            row -= 0.25;
-            if white(row) {
-                let mut above = row;
-                for _ in 0..60 {
-                    let mid = 0.5 * (above + below);
-                    if white(mid) {
-                        above = mid;
-                    } else {
-                        below = mid;
-                    }
-                }
-                return Some(0.5 * (above + below));
-            }
-            below = row;
-        }
-        None
+        rim_edge_row(
+            &self.scene,
+            &self.cameras[0],
+            self.truth.calibration.x_centre,
+            pose,
+        )
     }
 
-    fn render_background(&self) -> Vec<[f32; 3]> {
+    fn render_background(&self) -> Vec<Channels> {
         let (w, h) = (self.spec.width as usize, self.spec.height as usize);
-        let mut buf = vec![[0.0f32; 3]; w * h];
+        let mut buf = vec![[0.0f32; 7]; w * h];
         for cam in &self.cameras {
             let rect = Rect {
                 x0: 0,
@@ -562,29 +824,79 @@ impl Renderer {
         buf
     }
 
+    /// The background's mirror image and plate coverage, blurred view by view.
+    fn blurred_background_mirror(&self) -> Vec<[f32; 4]> {
+        let w = self.spec.width as usize;
+        let sigma = self.spec.scenery.reflection_blur_px;
+        let mut mirror: Vec<[f32; 4]> = self
+            .background
+            .iter()
+            .map(|p| [p[3], p[4], p[5], p[6]])
+            .collect();
+        for cam in &self.cameras {
+            let (y0, y1) = (cam.row_start as usize, cam.row_end as usize);
+            gaussian_blur(&mut mirror[y0 * w..y1 * w], w, y1 - y0, sigma);
+        }
+        mirror
+    }
+
     /// Renders written frame `file_index` (0-based position in the output).
     ///
     /// # Panics
     /// If `file_index >= self.frame_count()`.
     pub fn render_frame(&self, file_index: usize) -> RgbImage {
         let index = self.written[file_index];
-        let pose = self.pose(index);
+        let poses = self.exposure_poses(index);
         let (w, h) = (self.spec.width as usize, self.spec.height as usize);
-        let mut buf = self.background.clone();
-        for cam in &self.cameras {
-            if let Some(rect) = self.disk_rect(cam, &pose) {
-                self.render_rect(&mut buf, cam, Some(&pose), rect);
+        // The pixels each view's disk, mirror image and shadow may touch.
+        let mut touched: Vec<Option<Rect>> = vec![None; self.cameras.len()];
+        let mut render_poses = |buf: &mut Vec<Channels>, pose: &Pose| {
+            for (c, cam) in self.cameras.iter().enumerate() {
+                if let Some(rect) = self.disk_rect(cam, pose) {
+                    self.render_rect(buf, cam, Some(pose), rect);
+                    touched[c] = Some(touched[c].map_or(rect, |t| t.union(&rect)));
+                }
             }
-        }
+        };
+        let buf = if let [pose] = poses.as_slice() {
+            let mut buf = self.background.clone();
+            render_poses(&mut buf, pose);
+            buf
+        } else {
+            // Motion smear: the mean of the exposure's poses.
+            let k = 1.0 / poses.len() as f32;
+            let mut sum = vec![[0.0f32; 7]; w * h];
+            for pose in &poses {
+                let mut one = self.background.clone();
+                render_poses(&mut one, pose);
+                sum.par_iter_mut().zip(&one).for_each(|(s, o)| {
+                    for (a, b) in s.iter_mut().zip(o) {
+                        *a += k * b;
+                    }
+                });
+            }
+            sum
+        };
+        let mut rgb: Vec<[f32; 3]> = if self.scene.look.separate_mirror {
+            let mirror = self.blurred_mirror(&buf, &touched);
+            buf.iter()
+                .zip(&mirror)
+                .map(|(p, m)| [p[0] + m[0], p[1] + m[1], p[2] + m[2]])
+                .collect()
+        } else {
+            buf.iter()
+                .map(|p| [p[0] + p[3], p[1] + p[4], p[2] + p[5]])
+                .collect()
+        };
         let fx = &self.spec.effects;
         if fx.blur_sigma > 0.0 {
-            gaussian_blur(&mut buf, w, h, fx.blur_sigma);
+            gaussian_blur(&mut rgb, w, h, fx.blur_sigma);
         }
-        let t_clip = index as f64 / self.motion.timing.fps;
-        let gain = 1.0 + fx.flicker_amplitude * (2.0 * std::f64::consts::PI * 100.0 * t_clip).sin();
+        let gain = fx.light_gain(index as f64 / self.motion.timing.fps);
+        let read_var = fx.noise_sigma * fx.noise_sigma;
         let mut out = vec![0u8; w * h * 3];
         out.par_chunks_mut(3 * w)
-            .zip(buf.par_chunks(w))
+            .zip(rgb.par_chunks(w))
             .enumerate()
             .for_each(|(row, (dst, src))| {
                 let mut rng = SplitMix64::new(
@@ -595,8 +907,13 @@ impl Renderer {
                 for (px, rgb) in dst.chunks_mut(3).zip(src) {
                     for (d, &c) in px.iter_mut().zip(rgb) {
                         let mut v = f64::from(c) * gain;
-                        if fx.noise_sigma > 0.0 {
-                            v += fx.noise_sigma * rng.gaussian();
+                        let sigma = if fx.shot_noise > 0.0 {
+                            (read_var + fx.shot_noise * fx.shot_noise * v.max(0.0)).sqrt()
+                        } else {
+                            fx.noise_sigma
+                        };
+                        if sigma > 0.0 {
+                            v += sigma * rng.gaussian();
                         }
                         *d = v.round().clamp(0.0, 255.0) as u8;
                     }
@@ -607,33 +924,125 @@ impl Renderer {
             .unwrap_or_else(|| RgbImage::new(self.spec.width, self.spec.height))
     }
 
+    /// The frame's mirror image blurred by the reflection blur, seen where the plate
+    /// is: coverage × blur(mirror)/blur(coverage) (a normalised convolution, so the
+    /// mirror image neither spills onto the disk nor fades where the disk hides the
+    /// plate). Blurring is linear: blur(frame) is the blurred background's plus the
+    /// blurred change the disk made, which is zero outside the touched rectangles and
+    /// is blurred within them widened by 3σ and within the view.
+    fn blurred_mirror(&self, buf: &[Channels], touched: &[Option<Rect>]) -> Vec<[f32; 3]> {
+        let (w, h) = (self.spec.width as usize, self.spec.height as usize);
+        let sigma = self.spec.scenery.reflection_blur_px;
+        let radius = (3.0 * sigma).ceil() as usize;
+        let mut blurred = self.background_mirror.clone();
+        for (cam, rect) in self.cameras.iter().zip(touched) {
+            let Some(rect) = rect else { continue };
+            let e = Rect {
+                x0: rect.x0.saturating_sub(radius),
+                x1: (rect.x1 + radius).min(w),
+                y0: rect.y0.saturating_sub(radius).max(cam.row_start as usize),
+                y1: (rect.y1 + radius).min(cam.row_end as usize).min(h),
+            };
+            let ew = e.x1 - e.x0;
+            let mut diff = vec![[0.0f32; 4]; ew * (e.y1 - e.y0)];
+            for (j, row) in diff.chunks_mut(ew).enumerate() {
+                for (i, d) in row.iter_mut().enumerate() {
+                    let p = (e.y0 + j) * w + e.x0 + i;
+                    for (k, dk) in d.iter_mut().enumerate() {
+                        *dk = buf[p][3 + k] - self.background[p][3 + k];
+                    }
+                }
+            }
+            gaussian_blur(&mut diff, ew, e.y1 - e.y0, sigma);
+            for (j, row) in diff.chunks(ew).enumerate() {
+                let start = (e.y0 + j) * w + e.x0;
+                for (m, d) in blurred[start..start + ew].iter_mut().zip(row) {
+                    for (a, b) in m.iter_mut().zip(d) {
+                        *a += b;
+                    }
+                }
+            }
+        }
+        buf.par_iter()
+            .zip(&blurred)
+            .map(|(p, b)| {
+                if p[6] > 0.0 && b[3] > 1e-6 {
+                    let k = p[6] / b[3];
+                    [k * b[0], k * b[1], k * b[2]]
+                } else {
+                    [0.0; 3]
+                }
+            })
+            .collect()
+    }
+
     /// Pixel rectangle of a view that the disk, its mirror image and its shadow can
-    /// touch, with a 2 px margin (exact extents of the cylinder along the image axes).
+    /// touch, with a 2 px margin (exact extents of the cylinder along the image axes
+    /// for an orthographic view; for a pinhole, the images of the corners of the
+    /// disk's bounding box, of its mirror image and of its shadow, which enclose
+    /// them). With a textured plate it starts on the background's 2 × 2 block grid,
+    /// so the plate's texture is interpolated alike inside and outside it.
     fn disk_rect(&self, cam: &Camera, pose: &Pose) -> Option<Rect> {
         let disk = &self.scene.disk;
         let key = self.scene.look.key_light;
-        let (ax, up) = cam.axes();
-        // The mirror image (z → −z) seen along `up` is the disk seen along `up` with
-        // its z component negated; the shadow is p ↦ p − (p_z / L_z) L on the plate.
-        let mirror_up = [up[0], up[1], -up[2]];
-        let shadow = |u: [f64; 3]| [u[0], u[1], -(u[0] * key[0] + u[1] * key[1]) / key[2]];
-        let xs = [disk.extent(pose, ax), disk.extent(pose, shadow(ax))];
-        let mut ups = vec![disk.extent(pose, up), disk.extent(pose, shadow(up))];
-        if self.scene.look.reflectivity > 0.0 && cam.view == View::Side {
-            ups.push(disk.extent(pose, mirror_up));
-        }
-        let x0 = xs.iter().map(|e| e.0).fold(f64::INFINITY, f64::min);
-        let x1 = xs.iter().map(|e| e.1).fold(f64::NEG_INFINITY, f64::max);
-        let u0 = ups.iter().map(|e| e.0).fold(f64::INFINITY, f64::min);
-        let u1 = ups.iter().map(|e| e.1).fold(f64::NEG_INFINITY, f64::max);
-        let (s, w) = (cam.scale, f64::from(self.spec.width));
-        let (r0, r1) = (f64::from(cam.row_start), f64::from(cam.row_end));
-        let rect = Rect {
-            x0: (cam.cx + x0 / s - 2.0).floor().clamp(0.0, w) as usize,
-            x1: (cam.cx + x1 / s + 3.0).ceil().clamp(0.0, w) as usize,
-            y0: (cam.cy - u1 / s - 2.0).floor().clamp(r0, r1) as usize,
-            y1: (cam.cy - u0 / s + 3.0).ceil().clamp(r0, r1) as usize,
+        let reflects = self.scene.look.reflectivity > 0.0 && cam.view == View::Side;
+        let (xa, xb, ua, ub) = if cam.pinhole.is_some() {
+            let mut points = Vec::with_capacity(24);
+            for c in disk.box_corners(pose) {
+                points.push(c);
+                if reflects {
+                    points.push([c[0], c[1], -c[2]]);
+                }
+                let t = c[2] / key[2];
+                points.push([c[0] - t * key[0], c[1] - t * key[1], 0.0]);
+            }
+            let (mut xa, mut xb, mut ra, mut rb) = (
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            );
+            for p in points {
+                let (x, row) = cam.project(p);
+                (xa, xb, ra, rb) = (xa.min(x), xb.max(x), ra.min(row), rb.max(row));
+            }
+            (xa, xb, ra, rb)
+        } else {
+            let (ax, up) = cam.axes();
+            // The mirror image (z → −z) seen along `up` is the disk seen along `up`
+            // with its z component negated; the shadow is p ↦ p − (p_z / L_z) L on
+            // the plate.
+            let mirror_up = [up[0], up[1], -up[2]];
+            let shadow = |u: [f64; 3]| [u[0], u[1], -(u[0] * key[0] + u[1] * key[1]) / key[2]];
+            let xs = [disk.extent(pose, ax), disk.extent(pose, shadow(ax))];
+            let mut ups = vec![disk.extent(pose, up), disk.extent(pose, shadow(up))];
+            if reflects {
+                ups.push(disk.extent(pose, mirror_up));
+            }
+            let x0 = xs.iter().map(|e| e.0).fold(f64::INFINITY, f64::min);
+            let x1 = xs.iter().map(|e| e.1).fold(f64::NEG_INFINITY, f64::max);
+            let u0 = ups.iter().map(|e| e.0).fold(f64::INFINITY, f64::min);
+            let u1 = ups.iter().map(|e| e.1).fold(f64::NEG_INFINITY, f64::max);
+            let s = cam.scale;
+            (
+                cam.cx + x0 / s,
+                cam.cx + x1 / s,
+                cam.cy - u1 / s,
+                cam.cy - u0 / s,
+            )
         };
+        let w = f64::from(self.spec.width);
+        let (r0, r1) = (f64::from(cam.row_start), f64::from(cam.row_end));
+        let mut rect = Rect {
+            x0: (xa - 2.0).floor().clamp(0.0, w) as usize,
+            x1: (xb + 3.0).ceil().clamp(0.0, w) as usize,
+            y0: (ua - 2.0).floor().clamp(r0, r1) as usize,
+            y1: (ub + 3.0).ceil().clamp(r0, r1) as usize,
+        };
+        if self.scene.look.texture.is_some() {
+            rect.x0 -= rect.x0 % 2;
+            rect.y0 -= (rect.y0 - cam.row_start as usize) % 2;
+        }
         (rect.x0 < rect.x1 && rect.y0 < rect.y1).then_some(rect)
     }
 
@@ -641,16 +1050,12 @@ impl Renderer {
     /// pixel blocks; a block whose four corner rays see the same class is filled by
     /// bilinear interpolation, otherwise its pixel corners are cast, and a pixel whose
     /// corners disagree gets 16 rays.
-    fn render_rect(&self, buf: &mut [[f32; 3]], cam: &Camera, pose: Option<&Pose>, rect: Rect) {
+    fn render_rect(&self, buf: &mut [Channels], cam: &Camera, pose: Option<&Pose>, rect: Rect) {
         let w = self.spec.width as usize;
-        let (_, dir) = cam.ray(0.0, 0.0);
-        let prepared = pose.map(|p| Prepared::new(&self.scene, p, dir));
+        let prepared = Prepared::new(&self.scene, pose, cam);
         let trace = |x: f64, y: f64| -> Sample {
             let (o, d) = cam.ray(x, y);
-            match &prepared {
-                Some(prep) => self.scene.trace_prepared(prep, o),
-                None => self.scene.trace_empty(o, d),
-            }
+            self.scene.trace(&prepared, cam, o, d)
         };
         let (pw, ph) = (rect.x1 - rect.x0, rect.y1 - rect.y0);
         let (bw, bh) = (pw.div_ceil(2), ph.div_ceil(2));
@@ -670,14 +1075,15 @@ impl Renderer {
                     let quad = [above[bi], above[bi + 1], below[bi], below[bi + 1]];
                     let cols_here = (pw - 2 * bi).min(2);
                     if quad.iter().all(|s| s.class == quad[0].class) {
+                        let q = quad.map(|s| s.channels());
                         for dy in 0..rows_here {
                             for dx in 0..cols_here {
                                 // Pixel centres at 1/4 and 3/4 of the block.
                                 let (fx, fy) = (0.25 + 0.5 * dx as f32, 0.25 + 0.5 * dy as f32);
-                                let mut c = [0.0f32; 3];
+                                let mut c = [0.0f32; 7];
                                 for (k, ck) in c.iter_mut().enumerate() {
-                                    let top = quad[0].rgb[k] * (1.0 - fx) + quad[1].rgb[k] * fx;
-                                    let bot = quad[2].rgb[k] * (1.0 - fx) + quad[3].rgb[k] * fx;
+                                    let top = q[0][k] * (1.0 - fx) + q[1][k] * fx;
+                                    let bot = q[2][k] * (1.0 - fx) + q[3][k] * fx;
                                     *ck = top * (1.0 - fy) + bot * fy;
                                 }
                                 rows[dy * w + rect.x0 + 2 * bi + dx] = c;
@@ -712,7 +1118,7 @@ impl Renderer {
                             );
                             rows[dy * w + rect.x0 + 2 * bi + dx] =
                                 if q.iter().all(|s| s.class == q[0].class) {
-                                    average(q.iter().map(|s| s.rgb), 4)
+                                    average(q.iter().map(|s| s.channels()), 4)
                                 } else {
                                     let n = if q.iter().all(|s| s.class >= PLATE_CLASSES) {
                                         SUPERSAMPLES_PLATE
@@ -722,7 +1128,7 @@ impl Renderer {
                                     average(
                                         (0..n).map(|k| {
                                             let (ox, oy) = supersample_offset(k, n);
-                                            trace(x + ox, y + oy).rgb
+                                            trace(x + ox, y + oy).channels()
                                         }),
                                         n,
                                     )
@@ -734,6 +1140,177 @@ impl Renderer {
     }
 }
 
+/// Row of the lowest point on column `x` of `cam` whose ray first meets a white
+/// surface of the disk at `pose`: marching up the column in quarter pixels from below
+/// the disk's bounding box, then bisection to 1e-9 px (see the module docs).
+fn rim_edge_row(scene: &Scene, cam: &Camera, x: f64, pose: &Pose) -> Option<f64> {
+    let white = |row: f64| {
+        let (o, d) = cam.ray(x, row);
+        scene
+            .first_disk_hit(pose, o, d)
+            .is_some_and(|hit| hit.surface.is_white_disk())
+    };
+    let corners = scene.disk.box_corners(pose);
+    let (mut top, mut bottom) = (f64::INFINITY, f64::NEG_INFINITY);
+    for c in corners {
+        let (_, row) = cam.project(c);
+        top = top.min(row);
+        bottom = bottom.max(row);
+    }
+    let mut below = bottom + 1.0;
+    let mut row = below;
+    while row > top - 1.0 {
+        row -= 0.25;
+        if white(row) {
+            return Some(bisect(&white, row, below));
+        }
+        below = row;
+    }
+    None
+}
+
+/// The boundary between `inside` (true at `above`) and not (at `below`), to 1e-9 px.
+fn bisect(inside: &dyn Fn(f64) -> bool, mut above: f64, mut below: f64) -> f64 {
+    for _ in 0..60 {
+        let mid = 0.5 * (above + below);
+        if inside(mid) {
+            above = mid;
+        } else {
+            below = mid;
+        }
+    }
+    0.5 * (above + below)
+}
+
+/// Maximum of a unimodal `f` on [lo, hi] by golden-section search (to 1e-15 of the
+/// interval): its argument.
+fn golden_max(f: &dyn Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut a, mut b) = (hi - g * (hi - lo), lo + g * (hi - lo));
+    let (mut fa, mut fb) = (f(a), f(b));
+    for _ in 0..80 {
+        if fa < fb {
+            lo = a;
+            (a, fa) = (b, fb);
+            b = lo + g * (hi - lo);
+            fb = f(b);
+        } else {
+            hi = b;
+            (b, fb) = (a, fa);
+            a = hi - g * (hi - lo);
+            fa = f(a);
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The rest frame's calibration points and the camera's scales through the pinhole
+/// `cam` at depth `d` from the near rim (module docs, "Perspective"): x_l, x_r the
+/// ends of the bottom rim's silhouette (the extremes of the image x of (R cos a,
+/// R sin a, 0)), x_centre their midpoint, z_base the rim edge on that column (ray cast,
+/// so that z_rim is 0 at rest), z_t the side face's upper edge there (ray cast).
+fn pinhole_calibration(
+    scene: &Scene,
+    cam: &Camera,
+    params: &DiskParams,
+    d: f64,
+) -> Result<(Calibration, CameraTruth), RenderError> {
+    let (r, h) = (params.radius, params.half_thickness);
+    let pinhole = cam
+        .pinhole
+        .ok_or_else(|| RenderError::invalid("the side camera is not a pinhole"))?;
+    let end = |z: f64, right: bool| {
+        let x = |a: f64| cam.project([r * a.cos(), r * a.sin(), z]).0;
+        let half = 0.5 * PI;
+        if right {
+            x(golden_max(&x, -half, half))
+        } else {
+            x(golden_max(&|a| -x(a), half, 3.0 * half))
+        }
+    };
+    let (x_l, x_r) = (end(0.0, false), end(0.0, true));
+    let x_centre = 0.5 * (x_l + x_r);
+    let rest = Pose::rolling(params, 0.0, 0.0, 0.0, 0.0, 0.0);
+    let missing = |what: &str| {
+        RenderError::invalid(format!(
+            "the camera {d} m from the near rim does not see the disk's {what} on its centre \
+             column (frame too small for the disk?)"
+        ))
+    };
+    let z_base = rim_edge_row(scene, cam, x_centre, &rest).ok_or_else(|| missing("bottom rim"))?;
+    let side = |row: f64| {
+        let (o, dir) = cam.ray(x_centre, row);
+        scene
+            .first_disk_hit(&rest, o, dir)
+            .is_some_and(|hit| hit.surface == Surface::Side)
+    };
+    let (mut below, mut row) = (z_base - 0.01, z_base - 0.01);
+    if !side(row) {
+        return Err(missing("side"));
+    }
+    // The side is 2H tall: at most 2H cos ε / (its scale) rows, which a pinhole
+    // enlarges by less than 2 at 0.1 m.
+    let limit = z_base - 4.0 * h / cam.footprint(d);
+    while side(row) {
+        below = row;
+        row -= 0.25;
+        if row < limit {
+            return Err(missing("top face"));
+        }
+    }
+    let z_t = bisect(&side, below, row);
+    // The far top rim: the silhouette's top, where the column leaves the disk.
+    let on_disk = |row: f64| {
+        let (o, dir) = cam.ray(x_centre, row);
+        scene.first_disk_hit(&rest, o, dir).is_some()
+    };
+    let (mut below, mut row) = (z_t, z_t);
+    while on_disk(row) {
+        below = row;
+        row -= 0.25;
+        if row < limit {
+            return Err(missing("top of the silhouette"));
+        }
+    }
+    let z_t_far = bisect(&on_disk, below, row);
+    let ce = cam.elevation.cos();
+    let (f, u) = cam.side_frame();
+    // ∂row/∂z at the near bottom rim N = (0, −R, 0): row = cy − F (q·u)/(q·f) with
+    // q = N − C, so ∂row/∂z = −F (u_z (q·f) − (q·u) f_z)/(q·f)².
+    let q = [
+        -pinhole.position[0],
+        -r - pinhole.position[1],
+        -pinhole.position[2],
+    ];
+    let (qf, qu) = (
+        q[1] * f[1] + q[2] * f[2] + q[0] * f[0],
+        q[1] * u[1] + q[2] * u[2] + q[0] * u[0],
+    );
+    let drow_dz = pinhole.focal_px * (u[2] * qf - qu * f[2]) / (qf * qf);
+    let camera = CameraTruth {
+        projection: Projection::Perspective,
+        distance_to_near_rim_m: Some(d),
+        position_m: Some(pinhole.position),
+        focal_px: Some(pinhole.focal_px),
+        perspective_factor: (d + r * ce) / d,
+        near_rim_metres_per_px: 1.0 / drow_dz.abs(),
+        centre_metres_per_px: cam.scale,
+        x_l_top: end(2.0 * h, false),
+        x_r_top: end(2.0 * h, true),
+        z_t_far,
+    };
+    Ok((
+        Calibration {
+            x_l,
+            x_r,
+            x_centre,
+            z_t,
+            z_base,
+        },
+        camera,
+    ))
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Rect {
     x0: usize,
@@ -742,8 +1319,19 @@ struct Rect {
     y1: usize,
 }
 
-fn average(colours: impl Iterator<Item = [f32; 3]>, n: usize) -> [f32; 3] {
-    let mut sum = [0.0f32; 3];
+impl Rect {
+    fn union(&self, other: &Rect) -> Rect {
+        Rect {
+            x0: self.x0.min(other.x0),
+            x1: self.x1.max(other.x1),
+            y0: self.y0.min(other.y0),
+            y1: self.y1.max(other.y1),
+        }
+    }
+}
+
+fn average<const N: usize>(colours: impl Iterator<Item = [f32; N]>, n: usize) -> [f32; N] {
+    let mut sum = [0.0f32; N];
     for c in colours {
         for (s, v) in sum.iter_mut().zip(c) {
             *s += v;
@@ -778,6 +1366,15 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
     {
         return fail(format!("the image scale must be positive, got {s} m/px"));
     }
+    if let Some(d) = spec.camera_distance_m {
+        let (lo, hi) = CAMERA_DISTANCE_RANGE_M;
+        if !(d.is_finite() && (lo..=hi).contains(&d)) {
+            return fail(format!(
+                "the camera distance from the near rim must lie in {lo}–{hi} m, got {d} m \
+                 (leave it out for an orthographic camera)"
+            ));
+        }
+    }
     if !(spec.strip_width.is_finite()
         && spec.strip_width > 0.0
         && spec.strip_width < motion.params.radius)
@@ -787,24 +1384,95 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
             spec.strip_width
         ));
     }
+    let sc = &spec.scenery;
+    let grey_ok = |g: f64| g.is_finite() && (0.0..=255.0).contains(&g);
+    if !(grey_ok(sc.paper_grey) && sc.paper_grey > 0.0) {
+        return fail(format!(
+            "the paper's grey level must lie in (0, 255], got {}",
+            sc.paper_grey
+        ));
+    }
+    if let Some(g) = sc.plate_grey
+        && !grey_ok(g)
+    {
+        return fail(format!(
+            "the plate's grey level must lie in [0, 255], got {g}"
+        ));
+    }
+    if !(sc.texture_contrast.is_finite() && (0.0..=1.0).contains(&sc.texture_contrast)) {
+        return fail(format!(
+            "the plate texture's contrast (RMS relative albedo variation) must lie in [0, 1], \
+             got {}",
+            sc.texture_contrast
+        ));
+    }
+    if let Some(rho) = sc.reflectivity
+        && !(rho.is_finite() && (0.0..=0.9).contains(&rho))
+    {
+        return fail(format!(
+            "the plate's reflectivity (mirror fraction) must lie in [0, 0.9], got {rho}"
+        ));
+    }
+    if !(sc.reflection_blur_px.is_finite() && (0.0..=20.0).contains(&sc.reflection_blur_px)) {
+        return fail(format!(
+            "the reflection blur σ must lie in [0, 20] px, got {} px",
+            sc.reflection_blur_px
+        ));
+    }
+    if !(sc.fill_elevation_deg.is_finite()
+        && sc.fill_elevation_deg > 0.0
+        && sc.fill_elevation_deg < 90.0)
+    {
+        return fail(format!(
+            "the fill light's elevation must lie in (0°, 90°), got {}°",
+            sc.fill_elevation_deg
+        ));
+    }
     let fx = &spec.effects;
     for (name, v) in [
-        ("noise σ", fx.noise_sigma),
-        ("blur σ", fx.blur_sigma),
-        ("flicker amplitude", fx.flicker_amplitude),
+        ("the read noise σ [grey levels]", fx.noise_sigma),
+        ("the shot noise k [grey levels^½]", fx.shot_noise),
+        ("the blur σ [px]", fx.blur_sigma),
+        (
+            "the 100 Hz flicker amplitude (fraction of the light)",
+            fx.flicker_amplitude,
+        ),
+        (
+            "the 50 Hz flicker amplitude (fraction of the light)",
+            fx.flicker_50hz_amplitude,
+        ),
+        ("the exposure time [s]", fx.exposure_s),
     ] {
         if !(v.is_finite() && v >= 0.0) {
             return fail(format!("{name} must be finite and non-negative, got {v}"));
         }
     }
-    if fx.flicker_amplitude >= 1.0 {
+    if fx.flicker_amplitude + fx.flicker_50hz_amplitude >= 1.0 {
         return fail(format!(
-            "the flicker amplitude must be below 1, got {}",
-            fx.flicker_amplitude
+            "the flicker amplitudes at 100 Hz and 50 Hz must sum to less than 1 (the light \
+             would go out), got {} + {}",
+            fx.flicker_amplitude, fx.flicker_50hz_amplitude
+        ));
+    }
+    if !(fx.flicker_phase_100.is_finite() && fx.flicker_phase_50.is_finite()) {
+        return fail("the flicker phases [rad] must be finite".into());
+    }
+    let frame_s = 1.0 / motion.timing.fps;
+    if fx.exposure_s > frame_s * (1.0 + 1e-12) {
+        return fail(format!(
+            "the exposure time must not exceed the frame interval 1/fps = {frame_s:.6} s, got \
+             {} s",
+            fx.exposure_s
+        ));
+    }
+    if !(1..=MAX_EXPOSURE_SAMPLES).contains(&fx.exposure_samples) {
+        return fail(format!(
+            "the exposure averages 1 to {MAX_EXPOSURE_SAMPLES} poses, got {}",
+            fx.exposure_samples
         ));
     }
     if !fx.drift_px_per_s.is_finite() {
-        return fail("the drift must be finite".into());
+        return fail("the drift [px/s] must be finite".into());
     }
     if let Some(&bad) = spec.dropped.iter().find(|&&k| k >= motion.states.len()) {
         return fail(format!(
@@ -818,16 +1486,23 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
     Ok(())
 }
 
+/// Distances of a pinhole side camera from the near rim that render accepts [m]
+/// (phones are held at 0.2–0.5 m; beyond 10 m a pinhole is orthographic to 0.4 %).
+pub const CAMERA_DISTANCE_RANGE_M: (f64, f64) = (0.1, 10.0);
+
+/// Most poses one frame's exposure averages.
+pub const MAX_EXPOSURE_SAMPLES: usize = 16;
+
 /// Separable Gaussian blur with clamped borders.
-fn gaussian_blur(buf: &mut [[f32; 3]], w: usize, h: usize, sigma: f64) {
+fn gaussian_blur<const N: usize>(buf: &mut [[f32; N]], w: usize, h: usize, sigma: f64) {
     let radius = (3.0 * sigma).ceil() as isize;
     let kernel: Vec<f32> = (-radius..=radius)
         .map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp() as f32)
         .collect();
     let norm: f32 = kernel.iter().sum();
     let kernel: Vec<f32> = kernel.iter().map(|k| k / norm).collect();
-    let convolve = |get: &dyn Fn(isize) -> [f32; 3]| -> [f32; 3] {
-        let mut acc = [0.0f32; 3];
+    let convolve = |get: &dyn Fn(isize) -> [f32; N]| -> [f32; N] {
+        let mut acc = [0.0f32; N];
         for (j, k) in kernel.iter().enumerate() {
             let c = get(j as isize - radius);
             for (a, v) in acc.iter_mut().zip(c) {
@@ -836,7 +1511,7 @@ fn gaussian_blur(buf: &mut [[f32; 3]], w: usize, h: usize, sigma: f64) {
         }
         acc
     };
-    let mut tmp = vec![[0.0f32; 3]; w * h];
+    let mut tmp = vec![[0.0f32; N]; w * h];
     tmp.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         let src = &buf[y * w..(y + 1) * w];
         for (x, out) in row.iter_mut().enumerate() {
@@ -1192,5 +1867,437 @@ mod tests {
             fine < default && default < coarse,
             "mean |error| at crf 8, 23, 40: {fine:.3}, {default:.3}, {coarse:.3}"
         );
+    }
+
+    fn pinhole_spec(plate: Plate, d: f64) -> RenderSpec {
+        let mut spec = small_spec(plate, false);
+        spec.camera_distance_m = Some(d);
+        spec
+    }
+
+    /// Through a pinhole the rest frame's calibration points match the rendered
+    /// edges: z_base and z_t on the centre column, the ends of the disk on a row at
+    /// mid-height between the bottom's (x_l, x_r) and the top's silhouette ends; the
+    /// last frame's z_rim is 0.
+    #[test]
+    fn pinhole_rest_calibration_matches_rendered_edges() {
+        let m = motion(480.0, 0.02, 0.1);
+        for (plate, d) in [(Plate::Dark, 0.2), (Plate::Light, 0.35), (Plate::Dark, 1.0)] {
+            let r = Renderer::new(&pinhole_spec(plate, d), &m).expect("renderer");
+            let truth = r.truth();
+            let (cal, cam) = (truth.calibration, truth.camera);
+            assert_eq!(cam.projection, Projection::Perspective);
+            let img = r.render_frame(r.frame_count() - 1);
+            let x = cal.x_centre.round() as u32;
+            // The pinhole is on the disk's symmetry plane: the centre column is cx.
+            assert!((cal.x_centre - f64::from(x)).abs() < 1e-9);
+            let col = |row: i64| intensity(&img, x, row as u32);
+            let edges = crossings(
+                &|r| col(i64::from(r)),
+                (cal.z_base + 30.0) as u32,
+                cal.z_t as u32,
+                130.0,
+            );
+            let base_row = match plate {
+                Plate::Dark => edges[0].0,
+                Plate::Light => edges[1].0,
+            };
+            let z_base = edge_1d(&col, i64::from(base_row));
+            let z_t = edge_1d(&col, steepest(&col, cal.z_t, 3));
+            let y = (0.5 * (cal.z_base + cal.z_t)).round() as u32;
+            let row = |xx: i64| intensity(&img, xx as u32, y);
+            let mid_l = 0.5 * (cal.x_l + cam.x_l_top);
+            let mid_r = 0.5 * (cal.x_r + cam.x_r_top);
+            let x_l = edge_1d(&row, steepest(&row, mid_l, 4));
+            let x_r = edge_1d(&row, steepest(&row, mid_r, 4));
+            for (name, got, want) in [
+                ("z_base", z_base, cal.z_base),
+                ("z_t", z_t, cal.z_t),
+                ("x_l", x_l, mid_l),
+                ("x_r", x_r, mid_r),
+            ] {
+                // Sub-pixel crossing of a box-filtered edge: < 0.3 px, as orthographic.
+                assert!(
+                    (got - want).abs() < 0.3,
+                    "{plate:?}, d = {d} m, {name}: {got} vs {want}"
+                );
+            }
+            // A camera above the top face sees it between z_t and the far top rim above
+            // it; one below it (0.2 m at 3°: 12.5 mm up, the top at 2H = 12.7 mm) sees
+            // the near top rim as the silhouette's top.
+            let above = cam.position_m.expect("pinhole")[2] > 2.0 * truth.disk.half_thickness;
+            if above {
+                assert!(
+                    cam.z_t_far < cal.z_t - 0.5,
+                    "{} vs {}",
+                    cam.z_t_far,
+                    cal.z_t
+                );
+            } else {
+                assert!((cam.z_t_far - cal.z_t).abs() < 1e-6);
+            }
+            // Nearer the camera, the top rim's silhouette is wider than the bottom's.
+            assert!(cam.x_l_top < cal.x_l && cam.x_r_top > cal.x_r);
+            let last = truth.frames.last().and_then(|f| f.z_rim_px).expect("z");
+            assert!(last.abs() < 1e-6, "z_rim at rest {last}");
+        }
+    }
+
+    /// Through a pinhole the ray-cast z_rim is the rendered bottom edge on the centre
+    /// column, as for the orthographic camera.
+    #[test]
+    fn pinhole_rendered_bottom_edge_matches_truth_z_rim() {
+        let m = motion(480.0, 0.4, 0.05);
+        for (plate, d) in [(Plate::Dark, 0.25), (Plate::Light, 0.5)] {
+            let r = Renderer::new(&pinhole_spec(plate, d), &m).expect("renderer");
+            let truth = r.truth();
+            let x = truth.calibration.x_centre as u32;
+            let mut checked = 0;
+            for f in truth.frames.iter().step_by(7) {
+                let img = r.render_frame(f.file_index);
+                let i = |row: u32| intensity(&img, x, row);
+                let start = (truth.calibration.z_base + 30.0) as u32;
+                let end = (truth.calibration.z_t - 20.0) as u32;
+                let edges = crossings(&i, start, end, 130.0);
+                let (row, rising) = match plate {
+                    Plate::Dark => edges[0],
+                    Plate::Light => edges[1],
+                };
+                assert!(rising, "{plate:?}, frame {}: {edges:?}", f.index);
+                let col = |k: i64| intensity(&img, x, k as u32);
+                let measured = truth.calibration.z_base - edge_1d(&col, i64::from(row));
+                let expected = f.z_rim_px.expect("disk on the column");
+                // As orthographic: < 0.1 px for the edge, 0.15 px more for the shading.
+                assert!(
+                    (measured - expected).abs() < 0.3,
+                    "{plate:?}, frame {}: measured {measured}, truth {expected}",
+                    f.index
+                );
+                checked += 1;
+            }
+            assert!(checked > 25);
+        }
+    }
+
+    /// The pinhole's scales: the perspective factor is the ratio of the horizontal
+    /// scales at the near rim's and the centre's depths (F/depth); the vertical scale
+    /// at the near bottom rim is the projection's own derivative; eq. 3.10's δ from the
+    /// exact z_t, z_base is within the rim's height (2H over the distance) of it; a
+    /// camera 10 m away is orthographic to within R/d.
+    #[test]
+    fn pinhole_scales_and_the_orthographic_limit() {
+        let params = Preset::EulerDisk.params();
+        let (r_m, h_m) = (params.radius, params.half_thickness);
+        let m = motion(480.0, 0.02, 0.05);
+        for d in [0.2, 0.3, 0.5, 1.0] {
+            let r = Renderer::new(&pinhole_spec(Plate::Dark, d), &m).expect("renderer");
+            let truth = r.truth();
+            let cam = &r.cameras[0];
+            let c = truth.camera;
+            // Horizontal scale ∝ depth: a 1 mm step across at the centre and at the
+            // near rim's mid-height.
+            let span = |y: f64| cam.project([5e-4, y, h_m]).0 - cam.project([-5e-4, y, h_m]).0;
+            let factor = span(-r_m) / span(0.0);
+            assert!(
+                (factor / c.perspective_factor - 1.0).abs() < 1e-9,
+                "d = {d}: {factor} vs {}",
+                c.perspective_factor
+            );
+            assert!((c.centre_metres_per_px - 1e-3 / span(0.0)).abs() < 1e-12);
+            // Vertical scale at the near bottom rim, by central differences.
+            let dz = 1e-7;
+            let rows = cam.project([0.0, -r_m, -dz]).1 - cam.project([0.0, -r_m, dz]).1;
+            let near = 2.0 * dz / rows;
+            assert!(
+                (near / c.near_rim_metres_per_px - 1.0).abs() < 1e-6,
+                "d = {d}: {near} vs {}",
+                c.near_rim_metres_per_px
+            );
+            let rel = (truth.delta / c.near_rim_metres_per_px - 1.0).abs();
+            assert!(
+                rel < 2.0 * h_m / d,
+                "d = {d}: δ off the near-rim scale by {rel}"
+            );
+        }
+        // 10 m: the calibration points are the orthographic ones to within R/d of
+        // their distances from the image centre.
+        let far = Renderer::new(&pinhole_spec(Plate::Dark, 10.0), &m).expect("far");
+        let ortho = Renderer::new(&small_spec(Plate::Dark, false), &m).expect("ortho");
+        let (a, b) = (far.truth().calibration, ortho.truth().calibration);
+        let tol = |v: f64| (v - ortho.cameras[0].cy).abs().max(v - 240.0) * r_m / 10.0 + 0.01;
+        for (name, x, y) in [
+            ("x_l", a.x_l, b.x_l),
+            ("x_r", a.x_r, b.x_r),
+            ("z_t", a.z_t, b.z_t),
+            ("z_base", a.z_base, b.z_base),
+        ] {
+            assert!((x - y).abs() < tol(y), "{name}: {x} vs {y}");
+        }
+    }
+
+    /// Mains flicker: every frame is the unflickered frame times the truth's light
+    /// gain, at 100 Hz and 50 Hz with their amplitudes and phases.
+    #[test]
+    fn flicker_gain_is_in_the_truth_and_in_the_frames() {
+        let m = motion(480.0, 0.05, 0.05);
+        let mut spec = small_spec(Plate::Light, false);
+        (spec.width, spec.height) = (96, 64);
+        let steady = Renderer::new(&spec, &m).expect("steady");
+        spec.effects.flicker_amplitude = 0.08;
+        spec.effects.flicker_50hz_amplitude = 0.03;
+        spec.effects.flicker_phase_100 = 1.3;
+        spec.effects.flicker_phase_50 = -0.4;
+        let flickering = Renderer::new(&spec, &m).expect("flicker");
+        for f in &flickering.truth().frames {
+            let t = f.index as f64 / 480.0;
+            let tau = 2.0 * PI;
+            let expected =
+                1.0 + 0.08 * (tau * 100.0 * t + 1.3).sin() + 0.03 * (tau * 50.0 * t - 0.4).sin();
+            assert!((f.light_gain - expected).abs() < 1e-12);
+            let (a, b) = (
+                steady.render_frame(f.file_index),
+                flickering.render_frame(f.file_index),
+            );
+            // Each is rounded to a grey level (±0.5) from its unrounded value, the
+            // flickering one from the gain times the steady one's: ±(0.5 + 0.5 g).
+            let g = f.light_gain;
+            for (p, q) in a.pixels().zip(b.pixels()) {
+                let (p, q) = (f64::from(p[1]), f64::from(q[1]));
+                assert!(
+                    (q - g * p).abs() <= 0.5 + 0.5 * g + 1e-6,
+                    "frame {}: {q} vs {g} × {p}",
+                    f.index
+                );
+            }
+        }
+    }
+
+    /// Read and shot noise: the variance of a flat patch of plate at level v is
+    /// σ_read² + k² v, on a dark plate and a light one.
+    #[test]
+    fn shot_noise_grows_with_the_level() {
+        let m = motion(480.0, 0.02, 0.0);
+        for plate in [Plate::Dark, Plate::Light] {
+            let mut spec = small_spec(plate, false);
+            (spec.width, spec.height) = (160, 120);
+            spec.scenery.reflectivity = Some(0.0);
+            let clean = Renderer::new(&spec, &m).expect("clean").render_frame(0);
+            spec.effects.noise_sigma = 1.5;
+            spec.effects.shot_noise = 0.45;
+            let noisy = Renderer::new(&spec, &m).expect("noisy").render_frame(0);
+            // The plate's bottom rows, far from the disk and its shadow.
+            let (mut sum, mut sum_sq, mut level, mut n) = (0.0, 0.0, 0.0, 0.0);
+            for row in 112..120 {
+                for x in 0..160 {
+                    let d = f64::from(noisy.get_pixel(x, row)[1])
+                        - f64::from(clean.get_pixel(x, row)[1]);
+                    sum += d;
+                    sum_sq += d * d;
+                    level += f64::from(clean.get_pixel(x, row)[1]);
+                    n += 1.0;
+                }
+            }
+            let var = sum_sq / n - (sum / n).powi(2);
+            // Rounding adds 1/12 (uniform ±0.5) to the variance.
+            let expected = 1.5f64.powi(2) + 0.45f64.powi(2) * level / n + 1.0 / 12.0;
+            // 1280 samples: the variance's relative standard error is √(2/1280) = 4 %.
+            assert!(
+                (var / expected - 1.0).abs() < 0.15,
+                "{plate:?}: variance {var} vs {expected}"
+            );
+        }
+    }
+
+    /// Nutation: φ = φ_stat (1 + a sin(r |ψ| + χ₀)) before the halt, unchanged after
+    /// it; ψ, θ and the energy keep their stationary-rolling values, and the truth's
+    /// z_rim follows the true φ (its peaks, closed form at ψ = −π/2, at the true φ).
+    #[test]
+    fn nutation_modulates_phi_and_the_truth_follows() {
+        let plain = motion(480.0, 0.3, 0.05);
+        let mut nutating = plain.clone();
+        let nutation = Nutation {
+            amplitude: 0.05,
+            ratio: 0.41,
+            phase: 0.3,
+        };
+        add_nutation(&mut nutating, nutation).expect("nutation");
+        for (a, b) in plain.states.iter().zip(&nutating.states) {
+            let expected = a.phi * (1.0 + 0.05 * (0.41 * a.psi.abs() + 0.3).sin());
+            if a.t < 0.0 {
+                assert!((b.phi - expected).abs() < 1e-15, "t = {}", a.t);
+            } else {
+                assert_eq!(b.phi, a.phi);
+            }
+            assert_eq!((a.psi, a.theta, a.energy), (b.psi, b.theta, b.energy));
+        }
+        let r = Renderer::new(&small_spec(Plate::Dark, false), &nutating).expect("renderer");
+        let truth = r.truth();
+        assert_eq!(truth.nutation, Some(nutation));
+        let params = Preset::EulerDisk.params();
+        for f in &truth.frames {
+            let pose = Pose::rolling(&params, -0.5 * PI, f.phi, f.theta, 0.0, 0.0);
+            let peak = (truth.calibration.z_base - r.rim_edge_row(&pose).expect("z")) * truth.delta;
+            let expected = peak_z_rim(&params, f.phi, truth.elevation);
+            assert!((peak - expected).abs() < 1e-9, "t = {}", f.t);
+        }
+        assert!(
+            add_nutation(
+                &mut nutating.clone(),
+                Nutation {
+                    amplitude: 0.7,
+                    ..nutation
+                }
+            )
+            .is_err()
+        );
+    }
+
+    /// The plate's grain: seeded (the same seed, the same texture; another seed,
+    /// another), of the chosen RMS contrast where the pixel filter passes it, and
+    /// smoothed away where a pixel spans many of its waves.
+    #[test]
+    fn plate_texture_is_seeded_with_its_contrast() {
+        use scene::PlateTexture;
+        let (a, b, c) = (
+            PlateTexture::grain(7, 0.2),
+            PlateTexture::grain(7, 0.2),
+            PlateTexture::grain(8, 0.2),
+        );
+        assert_eq!(a, b);
+        assert_ne!(a, c);
+        let mut rng = SplitMix64::new(3);
+        let (mut sq, mut n) = (0.0, 0.0);
+        for _ in 0..20_000 {
+            let q = [rng.range(-0.5, 0.5), rng.range(-0.5, 0.5), 0.0];
+            let f = a.factor(q, (1e-6, 1e-6));
+            sq += (f - 1.0) * (f - 1.0);
+            n += 1.0;
+        }
+        let rms = (sq / n).sqrt();
+        // 20 000 samples of a sum of 12 waves: the RMS to a few per cent.
+        assert!((rms / 0.2 - 1.0).abs() < 0.1, "RMS contrast {rms}");
+        // A 1 cm footprint: every wave (≤ 3 cm) is attenuated by ≥ exp(−2π²/9).
+        let blurred = a.factor([0.1, 0.2, 0.0], (0.01, 0.01));
+        assert!((blurred - 1.0).abs() < 0.2 * 12.0 * (-2.0 * PI * PI / 9.0).exp());
+    }
+
+    /// A textured plate is rendered alike inside and outside the rectangle redrawn
+    /// for the disk: a frame differs from the rest frame only near the disk, its
+    /// shadow and its mirror image.
+    #[test]
+    fn textured_plate_has_no_seams() {
+        let m = motion(480.0, 0.3, 0.05);
+        for (plate, d) in [(Plate::Light, Some(0.3)), (Plate::Dark, None)] {
+            let mut spec = small_spec(plate, false);
+            spec.height = 480;
+            spec.camera_distance_m = d;
+            spec.scenery.texture_contrast = 0.15;
+            let r = Renderer::new(&spec, &m).expect("renderer");
+            let moving = r.render_frame(20);
+            let rest = r.render_frame(r.frame_count() - 1);
+            // The rows below the plate line beyond the mirror image (as tall as the
+            // disk) and the shadow (5 px here), with 10 px to spare.
+            let cal = r.truth().calibration;
+            let below = (cal.z_base + 2.0 * (cal.z_base - cal.z_t) + 10.0) as u32;
+            assert!(below + 20 < spec.height);
+            for row in below..spec.height {
+                for x in 0..spec.width {
+                    assert_eq!(
+                        moving.get_pixel(x, row),
+                        rest.get_pixel(x, row),
+                        "{plate:?}: ({x}, {row})"
+                    );
+                }
+            }
+            // And the texture is there: the bottom row varies.
+            let levels: std::collections::BTreeSet<u8> = (0..spec.width)
+                .map(|x| rest.get_pixel(x, spec.height - 1)[1])
+                .collect();
+            assert!(levels.len() >= 3, "{plate:?}: {levels:?}");
+        }
+    }
+
+    /// The reflection blur spreads the mirror image only: the disk's own pixels are
+    /// unchanged, the mirror image's total light is kept, and its edge below the plate
+    /// line is wider.
+    #[test]
+    fn reflection_blur_spreads_only_the_mirror_image() {
+        let m = motion(480.0, 0.1, 0.05);
+        let mut spec = small_spec(Plate::Dark, false);
+        spec.scenery.reflectivity = Some(0.5);
+        let sharp = Renderer::new(&spec, &m).expect("sharp");
+        spec.scenery.reflection_blur_px = 3.0;
+        let blurred = Renderer::new(&spec, &m).expect("blurred");
+        let cal = sharp.truth().calibration;
+        let (a, b) = (sharp.render_frame(10), blurred.render_frame(10));
+        let x = cal.x_centre as u32;
+        for row in (cal.z_t + 2.0) as u32..(cal.z_base - 8.0) as u32 {
+            assert_eq!(a.get_pixel(x, row), b.get_pixel(x, row), "side, row {row}");
+        }
+        let total = |img: &RgbImage| {
+            let mut s = 0.0;
+            for row in (cal.z_base + 2.0) as u32..spec.height {
+                for xx in 0..spec.width {
+                    s += f64::from(img.get_pixel(xx, row)[1]);
+                }
+            }
+            s
+        };
+        let (ta, tb) = (total(&a), total(&b));
+        assert!((tb / ta - 1.0).abs() < 0.01, "{ta} vs {tb}");
+        // Width of the mirror image's lower edge on the centre column: rows between
+        // 20 % and 80 % of the step.
+        let width = |img: &RgbImage| {
+            let col: Vec<f64> = (cal.z_base as u32..spec.height)
+                .map(|row| f64::from(img.get_pixel(x, row)[1]))
+                .collect();
+            let (hi, lo) = (col[6], col[col.len() - 1]);
+            col.iter()
+                .filter(|&&v| v < lo + 0.8 * (hi - lo) && v > lo + 0.2 * (hi - lo))
+                .count()
+        };
+        assert!(width(&b) > width(&a) + 2, "{} vs {}", width(&b), width(&a));
+    }
+
+    /// Motion smear: a frame at rest is unchanged, a moving one is the mean of its
+    /// exposure's poses (so it differs from the instantaneous frame), and no exposure
+    /// gives the instantaneous frames.
+    #[test]
+    fn exposure_smear_averages_moving_frames_only() {
+        let m = motion(480.0, 0.2, 0.1);
+        let mut spec = small_spec(Plate::Dark, false);
+        (spec.width, spec.height) = (160, 96);
+        let sharp = Renderer::new(&spec, &m).expect("sharp");
+        spec.effects.exposure_samples = 4;
+        let none = Renderer::new(&spec, &m).expect("no exposure");
+        assert_eq!(none.render_frame(50), sharp.render_frame(50));
+        spec.effects.exposure_s = 1.0 / 960.0;
+        let smeared = Renderer::new(&spec, &m).expect("smeared");
+        let last = sharp.frame_count() - 1;
+        assert_eq!(smeared.render_frame(last), sharp.render_frame(last));
+        assert_ne!(smeared.render_frame(90), sharp.render_frame(90));
+        assert_eq!(smeared.truth().frames, sharp.truth().frames);
+    }
+
+    /// Bad options are refused with their units.
+    #[test]
+    fn new_options_are_validated_with_units() {
+        let m = motion(480.0, 0.05, 0.05);
+        let check = |edit: &dyn Fn(&mut RenderSpec), unit: &str| {
+            let mut spec = small_spec(Plate::Dark, false);
+            edit(&mut spec);
+            match Renderer::new(&spec, &m) {
+                Err(RenderError::Invalid(msg)) => assert!(msg.contains(unit), "{msg}"),
+                Ok(_) => panic!("accepted"),
+                Err(e) => panic!("{e}"),
+            }
+        };
+        check(&|s| s.camera_distance_m = Some(0.05), " m");
+        check(&|s| s.scenery.reflectivity = Some(0.95), "[0, 0.9]");
+        check(&|s| s.scenery.reflection_blur_px = -1.0, "px");
+        check(&|s| s.scenery.plate_grey = Some(300.0), "255");
+        check(&|s| s.effects.exposure_s = 0.01, " s");
+        check(&|s| s.effects.flicker_50hz_amplitude = 1.2, "50 Hz");
+        check(&|s| s.effects.shot_noise = f64::NAN, "grey levels");
     }
 }

@@ -200,6 +200,9 @@ pub struct Motion {
     pub timing: Timing,
     /// One state per captured frame, in capture order.
     pub states: Vec<DiskState>,
+    /// φ's oscillation about stationary rolling, if [`add_nutation`] added one.
+    #[serde(default)]
+    pub nutation: Option<Nutation>,
 }
 
 impl Motion {
@@ -370,7 +373,75 @@ pub fn power_law_motion(
         post_flat,
         timing: *timing,
         states,
+        nutation: None,
     })
+}
+
+/// An oscillation of the nutation angle about stationary rolling (a disk released
+/// off its steady motion, as real disks are; thesis §4.6.2 attributes the large β̇
+/// oscillations of fig. 3.28 to it):
+///
+/// ```text
+/// φ(t) = φ_stat(t) (1 + a sin χ(t)),   χ(t) = r |ψ(t) − ψ_halt| + χ₀,
+/// ```
+///
+/// so the oscillation's frequency is r times the precession rate |ψ̇| and follows it
+/// as it grows towards the halt, and its relative amplitude a stays fixed (φ → 0 at
+/// the halt as before). ψ, θ and the energy keep their stationary-rolling values (E
+/// is the prescribed power law; eq. 3.8 on the oscillating φ oscillates with it).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Nutation {
+    /// Relative amplitude a of φ's oscillation, in [0, 0.5].
+    pub amplitude: f64,
+    /// Frequency ratio r = ω/|ψ̇| (> 0).
+    pub ratio: f64,
+    /// Phase χ₀ at the halt [rad].
+    pub phase: f64,
+}
+
+/// Adds `nutation` to a prescribed power-law motion: φ oscillates about its
+/// stationary-rolling value before the halt (see [`Nutation`]); β and β̇ follow
+/// (eqs. 3.20, 3.21).
+pub fn add_nutation(motion: &mut Motion, nutation: Nutation) -> Result<(), RenderError> {
+    let Nutation {
+        amplitude,
+        ratio,
+        phase,
+    } = nutation;
+    if !(amplitude.is_finite() && (0.0..=0.5).contains(&amplitude)) {
+        return Err(RenderError::invalid(format!(
+            "the nutation amplitude (relative to φ) must lie in [0, 0.5], got {amplitude}"
+        )));
+    }
+    if !(ratio.is_finite() && ratio > 0.0 && ratio <= 10.0) {
+        return Err(RenderError::invalid(format!(
+            "the nutation frequency ratio ω/|ψ̇| must lie in (0, 10], got {ratio}"
+        )));
+    }
+    if !phase.is_finite() {
+        return Err(RenderError::invalid(format!(
+            "the nutation phase must be finite, got {phase} rad"
+        )));
+    }
+    if motion.source != MotionSource::PowerLaw {
+        return Err(RenderError::invalid(
+            "nutation is added to a prescribed power law only (a simulation has its own)",
+        ));
+    }
+    let psi_halt = motion
+        .states
+        .iter()
+        .find(|s| s.t >= 0.0)
+        .map_or(0.0, |s| s.psi);
+    let beta0 = motion.beta0;
+    for s in motion.states.iter_mut().filter(|s| s.t < 0.0) {
+        let chi = ratio * (s.psi - psi_halt).abs() + phase;
+        s.phi *= 1.0 + amplitude * chi.sin();
+        let theta_dot = s.theta_dot;
+        (s.beta, s.beta_dot) = strip_state(s.psi, s.phi, s.theta, s.psi_dot, theta_dot, beta0);
+    }
+    motion.nutation = Some(nutation);
+    Ok(())
 }
 
 /// β unwrapped as ψ + θ + β0 plus the (small, O(φ²)) wrapped difference to eq. (3.20),
@@ -451,7 +522,7 @@ fn centre_velocity(params: &DiskParams, s: &Sample) -> [f64; 2] {
 }
 
 /// Cubic Hermite interpolation of a value with its derivative.
-fn hermite(t0: f64, y0: f64, d0: f64, t1: f64, y1: f64, d1: f64, t: f64) -> f64 {
+pub(super) fn hermite(t0: f64, y0: f64, d0: f64, t1: f64, y1: f64, d1: f64, t: f64) -> f64 {
     let h = t1 - t0;
     if h <= 0.0 {
         return y1;
@@ -561,6 +632,7 @@ pub fn trajectory_motion(
         post_flat,
         timing,
         states,
+        nutation: None,
     })
 }
 

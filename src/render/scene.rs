@@ -1,6 +1,7 @@
-//! Scene geometry of the synthetic footage: the disk as a solid cylinder, the plate,
-//! two orthographic cameras (side view and plan view), lights, and the ray casting that
-//! both the rasteriser and the ground truth use.
+//! Scene geometry of the synthetic footage: the disk as a solid cylinder, the plate
+//! (plain or with a seeded grain texture), two cameras (side view, orthographic or a
+//! pinhole at a chosen distance; plan view, orthographic), lights, and the ray casting
+//! that both the rasteriser and the ground truth use.
 //!
 //! World frame G (thesis fig. 3.1): the plate is z = 0, x points right in both views,
 //! the side camera looks along +y (tilted down by the elevation ε), the plan camera
@@ -324,6 +325,11 @@ pub struct Look {
     pub fill_light: [f64; 3],
     /// Direction towards the key light that casts the disk's shadow (unit, world).
     pub key_light: [f64; 3],
+    /// Grain of the plate's albedo, if any.
+    pub texture: Option<PlateTexture>,
+    /// Keep the plate's mirror image apart from the rest of a sample
+    /// ([`Sample::mirror`]), so that it can be blurred on its own.
+    pub separate_mirror: bool,
 }
 
 impl Look {
@@ -350,6 +356,53 @@ impl Look {
             ambient: 0.55,
             fill_light: fill,
             key_light: key,
+            texture: None,
+            separate_mirror: false,
+        }
+    }
+
+    /// The look of a plate type with the paper's and the plate's grey levels, the
+    /// plate's reflectivity and grain, and the fill light's elevation overridden by
+    /// `scenery` (each `None`/default keeps [`Look::for_plate`]'s value). Colours keep
+    /// their tint: a grey level g scales the default colour so its red channel is g.
+    pub fn with_scenery(plate: Plate, scenery: &super::Scenery, seed: u64) -> Self {
+        let mut look = Look::for_plate(plate);
+        let tinted = |rgb: [f32; 3], grey: f64| {
+            let k = (grey / f64::from(rgb[0])) as f32;
+            rgb.map(|c| c * k)
+        };
+        if scenery.paper_grey != super::Scenery::DEFAULT_PAPER_GREY {
+            look.paper = tinted(look.paper, scenery.paper_grey);
+        }
+        if let Some(g) = scenery.plate_grey {
+            look.plate = tinted(look.plate, g);
+        }
+        if let Some(rho) = scenery.reflectivity {
+            look.reflectivity = rho as f32;
+        }
+        if scenery.fill_elevation_deg != super::Scenery::DEFAULT_FILL_ELEVATION_DEG {
+            let e = scenery.fill_elevation_deg.to_radians();
+            look.fill_light = normalise([0.0, -e.cos(), e.sin()]);
+        }
+        if scenery.texture_contrast > 0.0 {
+            look.texture = Some(PlateTexture::grain(
+                seed ^ TEXTURE_SEED,
+                scenery.texture_contrast,
+            ));
+        }
+        look.separate_mirror = scenery.reflection_blur_px > 0.0 && look.reflectivity > 0.0;
+        look
+    }
+
+    /// Albedo × 255 of the lit plate at the plate point `q`, seen with a pixel
+    /// footprint of `footprint` = (m/px along x, m/px along y) there.
+    fn plate_at(&self, q: [f64; 3], footprint: (f64, f64)) -> [f32; 3] {
+        match &self.texture {
+            None => self.plate,
+            Some(tex) => {
+                let k = tex.factor(q, footprint) as f32;
+                self.plate.map(|c| c * k)
+            }
         }
     }
 
@@ -365,6 +418,82 @@ impl Look {
     }
 }
 
+/// Seed offset of the plate texture (so it differs from the noise's stream).
+const TEXTURE_SEED: u64 = 0x7E47_17E5_0F9A_7E11;
+
+/// Waves in a [`PlateTexture`].
+const TEXTURE_WAVES: usize = 12;
+
+/// Shortest and longest wavelength of the texture's waves [m].
+const TEXTURE_WAVELENGTHS: (f64, f64) = (1.5e-3, 30e-3);
+
+/// Width σ of the pixel filter the texture is seen through [px]: waves are
+/// attenuated by exp(−σ²ω²/2) at their image frequency ω [rad/px], so that the 2 × 2
+/// blocks of the rasteriser (sampled every 2 px, Nyquist π/2 rad/px, attenuated to
+/// 0.29 there and 0.007 at π) do not alias them.
+const TEXTURE_FILTER_PX: f64 = 1.0;
+
+/// A deterministic wood-grain-like albedo texture of the plate: a sum of plane waves
+/// over the plate (8 of 12 with crests within ±9° of the image's x axis, as grain or
+/// brushing seen from the side; 4 in any direction), wavelengths log-uniform in 1.5–30
+/// mm with amplitudes ∝ √λ, scaled to unit RMS. The albedo is the plate's times
+/// 1 + contrast · (sum), at least 0, each wave seen through a Gaussian pixel filter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlateTexture {
+    /// (k_x, k_y) [rad/m], phase [rad], amplitude.
+    waves: [([f64; 2], f64, f64); TEXTURE_WAVES],
+    /// RMS relative albedo variation (before the pixel filter).
+    contrast: f64,
+}
+
+impl PlateTexture {
+    /// The texture of `seed` with RMS relative albedo variation `contrast`.
+    pub fn grain(seed: u64, contrast: f64) -> Self {
+        let mut rng = crate::rng::SplitMix64::new(seed);
+        let mut waves = [([0.0; 2], 0.0, 0.0); TEXTURE_WAVES];
+        let (lo, hi) = TEXTURE_WAVELENGTHS;
+        for (i, w) in waves.iter_mut().enumerate() {
+            let lambda = rng.range(lo.ln(), hi.ln()).exp();
+            let angle = if i < 8 {
+                0.5 * std::f64::consts::PI + rng.range(-0.15, 0.15)
+            } else {
+                rng.range(0.0, std::f64::consts::PI)
+            };
+            let k = 2.0 * std::f64::consts::PI / lambda;
+            let phase = rng.range(0.0, 2.0 * std::f64::consts::PI);
+            *w = (
+                [k * angle.cos(), k * angle.sin()],
+                phase,
+                (lambda / hi).sqrt(),
+            );
+        }
+        // Unit RMS: a wave of amplitude a has mean square a²/2.
+        let rms = (waves.iter().map(|w| w.2 * w.2).sum::<f64>() / 2.0).sqrt();
+        for w in &mut waves {
+            w.2 /= rms;
+        }
+        PlateTexture { waves, contrast }
+    }
+
+    /// Albedo factor at the plate point `q` with pixel footprint (m/px along x, along y).
+    pub fn factor(&self, q: [f64; 3], footprint: (f64, f64)) -> f64 {
+        let s2 = TEXTURE_FILTER_PX * TEXTURE_FILTER_PX;
+        let sum: f64 = self
+            .waves
+            .iter()
+            .map(|&([kx, ky], phase, amp)| {
+                let (wx, wy) = (kx * footprint.0, ky * footprint.1);
+                let atten = (-0.5 * s2 * (wx * wx + wy * wy)).exp();
+                if atten < 1e-4 {
+                    return 0.0;
+                }
+                amp * atten * (kx * q[0] + ky * q[1] + phase).sin()
+            })
+            .sum();
+        (1.0 + self.contrast * sum).max(0.0)
+    }
+}
+
 /// Which camera a region of the frame shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum View {
@@ -374,11 +503,15 @@ pub enum View {
     Plan,
 }
 
-/// An orthographic camera mapping a rectangle of image rows to the world.
+/// A camera mapping a rectangle of image rows to the world: orthographic, or (side
+/// view only) a pinhole.
 ///
 /// Image coordinates are pixel units with pixel centres at integers; rows grow
-/// downward. Side view: image x = `cx + X/s`, row = `cy − v/s` with the image-up
-/// coordinate v = y sin ε + z cos ε. Plan view: image x = `cx + X/s`, row = `cy − Y/s`.
+/// downward. Orthographic side view: image x = `cx + X/s`, row = `cy − v/s` with the
+/// image-up coordinate v = y sin ε + z cos ε. Plan view: image x = `cx + X/s`, row =
+/// `cy − Y/s`. Pinhole side view at C with focal length F [px], looking along
+/// f = (0, cos ε, −sin ε) with up u = (0, sin ε, cos ε) and right (1, 0, 0): with
+/// d = p − C, image x = `cx + F d_x/(d·f)`, row = `cy − F (d·u)/(d·f)`.
 #[derive(Clone, Copy, Debug)]
 pub struct Camera {
     /// Which view.
@@ -395,6 +528,17 @@ pub struct Camera {
     pub row_start: u32,
     /// One past the last image row of this view's region.
     pub row_end: u32,
+    /// A pinhole side camera; `None`: orthographic.
+    pub pinhole: Option<Pinhole>,
+}
+
+/// Centre of projection and focal length of a pinhole camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pinhole {
+    /// Centre of projection C [m].
+    pub position: [f64; 3],
+    /// Focal length F [px].
+    pub focal_px: f64,
 }
 
 /// Distance from which rays start [m] (far outside the scene).
@@ -403,6 +547,12 @@ const RAY_START: f64 = 2.0;
 impl Camera {
     /// The world ray (origin, unit direction) through the image point (x, row).
     pub fn ray(&self, x: f64, row: f64) -> ([f64; 3], [f64; 3]) {
+        if let Some(p) = &self.pinhole {
+            let (f, u) = self.side_frame();
+            let (a, b) = ((x - self.cx) / p.focal_px, (self.cy - row) / p.focal_px);
+            let dir = normalise([a, f[1] + b * u[1], f[2] + b * u[2]]);
+            return (p.position, dir);
+        }
         let wx = (x - self.cx) * self.scale;
         let up = (self.cy - row) * self.scale;
         match self.view {
@@ -433,8 +583,39 @@ impl Camera {
         }
     }
 
+    /// Forward and up unit vectors of the side view, f = (0, cos ε, −sin ε) and
+    /// u = (0, sin ε, cos ε).
+    pub fn side_frame(&self) -> ([f64; 3], [f64; 3]) {
+        let (se, ce) = self.elevation.sin_cos();
+        ([0.0, ce, -se], [0.0, se, ce])
+    }
+
+    /// Depth of a world point along a pinhole's optical axis, (p − C)·f [m].
+    pub fn depth(&self, p: [f64; 3]) -> Option<f64> {
+        self.pinhole
+            .map(|ph| dot(sub(p, ph.position), self.side_frame().0))
+    }
+
+    /// Metres per pixel across a ray at distance `t` from a pinhole (on the optical
+    /// axis; at the image's corners 1 % less), or the orthographic scale.
+    pub fn footprint(&self, t: f64) -> f64 {
+        match &self.pinhole {
+            Some(p) => t / p.focal_px,
+            None => self.scale,
+        }
+    }
+
     /// Image (x, row) of a world point.
     pub fn project(&self, p: [f64; 3]) -> (f64, f64) {
+        if let Some(ph) = &self.pinhole {
+            let (f, u) = self.side_frame();
+            let d = sub(p, ph.position);
+            let depth = dot(d, f);
+            return (
+                self.cx + ph.focal_px * d[0] / depth,
+                self.cy - ph.focal_px * dot(d, u) / depth,
+            );
+        }
         match self.view {
             View::Side => {
                 let (se, ce) = self.elevation.sin_cos();
@@ -467,10 +648,30 @@ pub const PLATE_CLASSES: u8 = 8;
 /// One ray's colour and class.
 #[derive(Clone, Copy, Debug)]
 pub struct Sample {
-    /// Colour, 0–255 per channel (not yet quantised).
+    /// Colour, 0–255 per channel (not yet quantised): everything but the mirror
+    /// image when the look keeps that apart, else everything.
     pub rgb: [f32; 3],
+    /// The plate's mirror image (reflectivity × what the mirrored ray sees), when
+    /// [`Look::separate_mirror`]; zero otherwise.
+    pub mirror: [f32; 3],
+    /// 1 if the ray meets the plate and the look keeps the mirror image apart (the
+    /// plate's coverage of a pixel, which bounds where its blurred mirror image is
+    /// seen), else 0.
+    pub plate: f32,
     /// Class of what the ray saw (surface and reflection/shadow), for anti-aliasing.
     pub class: u8,
+}
+
+/// A pixel's colour (0–2), the plate's mirror image kept apart (3–5) and the plate's
+/// coverage (6); see [`Sample`].
+pub type Channels = [f32; 7];
+
+impl Sample {
+    /// The sample as [`Channels`].
+    pub fn channels(&self) -> Channels {
+        let (c, m) = (self.rgb, self.mirror);
+        [c[0], c[1], c[2], m[0], m[1], m[2], self.plate]
+    }
 }
 
 impl Scene {
@@ -479,104 +680,110 @@ impl Scene {
         self.disk.intersect(pose, origin, dir)
     }
 
-    /// Colour and class of the ray (origin, dir) with the disk at `pose`
-    /// (`None`: the empty scene, used for the static background).
-    pub fn trace(&self, pose: Option<&Pose>, origin: [f64; 3], dir: [f64; 3]) -> Sample {
-        match pose {
-            Some(pose) => self.trace_prepared(&Prepared::new(self, pose, dir), origin),
-            None => self.trace_empty(origin, dir),
-        }
-    }
-
-    /// Colour and class of a ray of the empty scene.
-    pub fn trace_empty(&self, origin: [f64; 3], dir: [f64; 3]) -> Sample {
-        match self.plate_hit(origin, dir) {
-            Some(_) => {
-                let look = &self.look;
-                let rho = look.reflectivity;
-                let mut rgb = look.plate;
-                for (c, m) in rgb.iter_mut().zip(look.background) {
-                    *c = (1.0 - rho) * *c + rho * m;
-                }
-                Sample { rgb, class: 8 }
-            }
-            None => Sample {
-                rgb: self.look.background,
-                class: 0,
-            },
-        }
-    }
-
-    fn plate_hit(&self, origin: [f64; 3], dir: [f64; 3]) -> Option<[f64; 3]> {
+    fn plate_hit(&self, origin: [f64; 3], dir: [f64; 3]) -> Option<([f64; 3], f64)> {
         if dir[2] < 0.0 && origin[2] > 0.0 {
             let t = -origin[2] / dir[2];
             let q = [origin[0] + t * dir[0], origin[1] + t * dir[1], 0.0];
             let on_plate = q[0].abs() <= self.plate_front
                 && q[1] >= -self.plate_front
                 && q[1] <= self.plate_back;
-            return on_plate.then_some(q);
+            return on_plate.then_some((q, t));
         }
         None
     }
 
-    /// Colour and class of a ray of the prepared family, starting at `origin`.
-    pub fn trace_prepared(&self, prep: &Prepared, origin: [f64; 3]) -> Sample {
-        let pose = &prep.pose;
-        let dir = prep.view.world;
-        if let Some(hit) = self.disk.intersect_family(pose, &prep.view, origin) {
-            // The disk lies on the plate (z ≥ 0) and the cameras look down, so a disk
-            // hit always comes before the plate.
-            return Sample {
-                rgb: self.look.disk_colour(&hit),
-                class: hit.surface.class(),
+    /// Colour and class of the ray (origin, unit dir) of camera `cam`, with the disk
+    /// as `prep` has it (no disk: the static background).
+    pub fn trace(&self, prep: &Prepared, cam: &Camera, origin: [f64; 3], dir: [f64; 3]) -> Sample {
+        let look = &self.look;
+        if let Some(pose) = &prep.pose {
+            let hit = match &prep.view {
+                Some(family) => self.disk.intersect_family(pose, family, origin),
+                None => self.disk.intersect(pose, origin, dir),
             };
+            if let Some(hit) = hit {
+                // The disk lies on the plate (z ≥ 0) and the cameras look down, so a
+                // disk hit always comes before the plate.
+                return Sample {
+                    rgb: look.disk_colour(&hit),
+                    mirror: [0.0; 3],
+                    plate: 0.0,
+                    class: hit.surface.class(),
+                };
+            }
         }
-        let Some(q) = self.plate_hit(origin, dir) else {
+        let Some((q, t)) = self.plate_hit(origin, dir) else {
             return Sample {
-                rgb: self.look.background,
+                rgb: look.background,
+                mirror: [0.0; 3],
+                plate: 0.0,
                 class: 0,
             };
         };
-        let look = &self.look;
+        let m = cam.footprint(t);
+        let albedo = look.plate_at(q, (m, m / dir[2].abs()));
         let lifted = [q[0], q[1], 1e-12];
-        let shadowed = self.disk.blocks(pose, &prep.shadow, lifted);
+        let shadowed = match (&prep.pose, &prep.shadow) {
+            (Some(pose), Some(shadow)) => self.disk.blocks(pose, shadow, lifted),
+            _ => false,
+        };
         let light = if shadowed { look.shadow_factor } else { 1.0 };
-        let mut rgb = look.plate.map(|c| c * light);
+        let mut rgb = albedo.map(|c| c * light);
+        let mut mirror_rgb = [0.0; 3];
         let mut class = 8 + u8::from(shadowed);
         if look.reflectivity > 0.0 {
-            let (mirror, mirror_class) =
-                match self.disk.intersect_family(pose, &prep.mirror, lifted) {
-                    Some(hit) => (look.disk_colour(&hit), 2 * hit.surface.class()),
-                    None => (look.background, 0),
-                };
+            let hit = prep.pose.as_ref().and_then(|pose| match &prep.mirror {
+                Some(family) => self.disk.intersect_family(pose, family, lifted),
+                None => self.disk.intersect(pose, lifted, [dir[0], dir[1], -dir[2]]),
+            });
+            let (mirror, mirror_class) = match hit {
+                Some(hit) => (look.disk_colour(&hit), 2 * hit.surface.class()),
+                None => (look.background, 0),
+            };
             let rho = look.reflectivity;
-            for (c, m) in rgb.iter_mut().zip(mirror) {
-                *c = (1.0 - rho) * *c + rho * m;
+            if look.separate_mirror {
+                for ((c, mo), m) in rgb.iter_mut().zip(&mut mirror_rgb).zip(mirror) {
+                    *c *= 1.0 - rho;
+                    *mo = rho * m;
+                }
+            } else {
+                for (c, m) in rgb.iter_mut().zip(mirror) {
+                    *c = (1.0 - rho) * *c + rho * m;
+                }
             }
             class += 16 * mirror_class;
         }
-        Sample { rgb, class }
+        Sample {
+            rgb,
+            mirror: mirror_rgb,
+            plate: if look.separate_mirror { 1.0 } else { 0.0 },
+            class,
+        }
     }
 }
 
-/// The three ray families of one view and frame: camera rays, shadow rays towards
-/// the key light, and camera rays mirrored in the plate.
+/// The ray families of one view and frame: camera rays and camera rays mirrored in
+/// the plate (orthographic views, whose rays are parallel; a pinhole's are cast one
+/// by one), and shadow rays towards the key light. No pose: the empty scene.
 #[derive(Clone, Copy, Debug)]
 pub struct Prepared {
-    pose: Pose,
-    view: RayFamily,
-    shadow: RayFamily,
-    mirror: RayFamily,
+    pose: Option<Pose>,
+    view: Option<RayFamily>,
+    shadow: Option<RayFamily>,
+    mirror: Option<RayFamily>,
 }
 
 impl Prepared {
-    /// Families for camera rays along `dir` with the disk at `pose`.
-    pub fn new(scene: &Scene, pose: &Pose, dir: [f64; 3]) -> Self {
+    /// Families for the rays of `cam` with the disk at `pose`.
+    pub fn new(scene: &Scene, pose: Option<&Pose>, cam: &Camera) -> Self {
+        let parallel = cam.pinhole.is_none().then(|| cam.ray(0.0, 0.0).1);
         Prepared {
-            pose: *pose,
-            view: RayFamily::new(pose, dir),
-            shadow: RayFamily::new(pose, scene.look.key_light),
-            mirror: RayFamily::new(pose, [dir[0], dir[1], -dir[2]]),
+            pose: pose.copied(),
+            view: pose.zip(parallel).map(|(p, d)| RayFamily::new(p, d)),
+            shadow: pose.map(|p| RayFamily::new(p, scene.look.key_light)),
+            mirror: pose
+                .zip(parallel)
+                .map(|(p, d)| RayFamily::new(p, [d[0], d[1], -d[2]])),
         }
     }
 }

@@ -1,0 +1,508 @@
+//! Robustness of the measuring chain (issue 12 §4): 24 small scenes drawn from a fixed
+//! seed across what real footage has — dark plates with sharp or blurred reflections
+//! of any strength, light plates brighter than the disk's side, textured plates, a
+//! top face lit brighter than the side, pinhole cameras 0.2–1 m from the near rim or
+//! orthographic, 100 Hz and 50 Hz flicker, lateral drift, φ oscillating about
+//! stationary rolling, read and shot noise, blur, exposure smear, H.264 at crf 18–28,
+//! side views and two-view layouts — each rendered with its ground truth, encoded,
+//! and analysed **with no config beyond the frame rate**. Every scene must be
+//! measured, and at accuracies that follow from its resolution and the targets of
+//! issue 12 §5 (see [`Tolerances`]).
+//!
+//! The test prints one row per scene (`cargo test --release --test robustness --
+//! --nocapture`) and fails listing every scene that misses a target, with the metric
+//! and by how much. `EULERDISK_ROBUSTNESS_KEEP=DIR` keeps the clips (`sNN.mp4`) and
+//! their ground truths (`sNN.truth.json`) in DIR.
+
+use std::f64::consts::TAU;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use eulerdisk::analyse::{Experiment, analyse_clip};
+use eulerdisk::config::ExperimentConfig;
+use eulerdisk::model::params::Preset;
+use eulerdisk::render::{
+    Effects, GroundTruth, Nutation, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Scenery,
+    Timing, add_nutation, power_law_motion, write_clip,
+};
+use eulerdisk::rng::SplitMix64;
+
+/// Seed of the scene draw.
+const SEED: u64 = 0x12_0004;
+/// Scenes drawn.
+const SCENES: usize = 24;
+/// Capture rate [frames/s], the only config the analysis is given.
+const FPS: f64 = 480.0;
+/// Renderer → vision coordinates: the renderer puts pixel centres at integers, vision
+/// at c + ½ (tests/vision_render.rs).
+const HALF: f64 = 0.5;
+/// The window before the halt that §5 scores [s].
+const WINDOW_S: f64 = 0.5;
+
+/// One drawn scene: the picture, the motion's exponent and nutation, the encoder's crf.
+#[derive(Debug, Clone)]
+struct SceneSpec {
+    name: String,
+    spec: RenderSpec,
+    n: f64,
+    nutation: Option<Nutation>,
+    crf: u8,
+}
+
+impl SceneSpec {
+    /// A short description of the conditions, for the table.
+    fn conditions(&self) -> String {
+        let s = &self.spec;
+        let sc = &s.scenery;
+        let fx = &s.effects;
+        let mut c = vec![format!(
+            "{}{}",
+            match s.plate {
+                Plate::Dark => "dark",
+                Plate::Light => "light",
+            },
+            if s.two_view { " 2-view" } else { "" }
+        )];
+        if let Some(g) = sc.plate_grey {
+            c.push(format!("plate {g:.0}/paper {:.0}", sc.paper_grey));
+        }
+        if sc.texture_contrast > 0.0 {
+            c.push(format!("texture {:.2}", sc.texture_contrast));
+        }
+        if let Some(rho) = sc.reflectivity {
+            c.push(format!("refl {rho:.2} σ{:.1}", sc.reflection_blur_px));
+        }
+        if sc.fill_elevation_deg != Scenery::DEFAULT_FILL_ELEVATION_DEG {
+            c.push(format!("top lit ({:.0}°)", sc.fill_elevation_deg));
+        }
+        c.push(match s.camera_distance_m {
+            Some(d) => format!("cam {d:.2} m"),
+            None => "ortho".into(),
+        });
+        c.push(format!("ε {:.1}°", s.elevation_deg));
+        if fx.flicker_amplitude > 0.0 {
+            c.push(format!(
+                "flicker {:.2}+{:.2}",
+                fx.flicker_amplitude, fx.flicker_50hz_amplitude
+            ));
+        }
+        if let Some(nu) = &self.nutation {
+            c.push(format!("nutation {:.3}×{:.2}", nu.amplitude, nu.ratio));
+        }
+        if fx.drift_px_per_s != 0.0 {
+            c.push(format!("drift {:.1} px/s", fx.drift_px_per_s));
+        }
+        if fx.exposure_s > 0.0 {
+            c.push("smear".into());
+        }
+        c.push(format!(
+            "noise {:.1}/{:.2} blur {:.1} crf {}",
+            fx.noise_sigma, fx.shot_noise, fx.blur_sigma, self.crf
+        ));
+        c.join(", ")
+    }
+}
+
+/// Draws the scenes. Conditions are stratified by the scene's index so that each
+/// appears several times (plate looks in turn: dark with a sharp reflection, light
+/// brighter than the side, dark with a blurred reflection, textured dark or light;
+/// two-view on dark plates every fourth scene; orthographic every fifth; top face
+/// lit brighter every seventh; flicker on odd scenes; nutation, drift and smear each
+/// on a third), with their strengths drawn from the seeded generator.
+fn draw_scenes() -> Vec<SceneSpec> {
+    let mut rng = SplitMix64::new(SEED);
+    (0..SCENES)
+        .map(|i| {
+            let look = i % 4;
+            let two_view = i % 8 == 0 || i % 8 == 6;
+            let textured_light = look == 3 && (i / 4) % 2 == 0;
+            let plate = if look == 1 || textured_light {
+                Plate::Light
+            } else {
+                Plate::Dark
+            };
+            let mut spec = RenderSpec::thesis(plate, two_view);
+            (spec.width, spec.height) = if two_view { (240, 400) } else { (320, 180) };
+            spec.elevation_deg = rng.range(1.5, 5.0);
+            spec.camera_distance_m =
+                (i % 5 != 4).then(|| rng.range(0.2f64.ln(), 1.0f64.ln()).exp());
+            let sc = &mut spec.scenery;
+            match look {
+                0 => sc.reflectivity = Some(rng.range(0.1, 0.6)),
+                1 => {
+                    sc.paper_grey = rng.range(140.0, 185.0);
+                    sc.plate_grey = Some(rng.range(195.0, 230.0));
+                }
+                2 => {
+                    sc.reflectivity = Some(rng.range(0.2, 0.6));
+                    sc.reflection_blur_px = rng.range(0.5, 2.5);
+                }
+                _ => {
+                    sc.texture_contrast = if textured_light {
+                        rng.range(0.05, 0.2)
+                    } else {
+                        rng.range(0.1, 0.3)
+                    }
+                }
+            }
+            if i % 7 == 3 {
+                sc.fill_elevation_deg = 60.0;
+            }
+            let fx = &mut spec.effects;
+            *fx = Effects {
+                noise_sigma: rng.range(0.5, 2.5),
+                shot_noise: rng.range(0.0, 0.5),
+                blur_sigma: rng.range(0.0, 1.0),
+                seed: 1000 + i as u64,
+                ..Effects::default()
+            };
+            if i % 2 == 1 {
+                fx.flicker_amplitude = rng.range(0.02, 0.1);
+                fx.flicker_50hz_amplitude = rng.range(0.0, 0.05);
+                fx.flicker_phase_100 = rng.range(0.0, TAU);
+                fx.flicker_phase_50 = rng.range(0.0, TAU);
+            }
+            if i % 3 == 2 {
+                let sign = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+                fx.drift_px_per_s = sign * rng.range(2.0, 8.0);
+            }
+            if i % 3 == 0 {
+                fx.exposure_s = 0.5e-3;
+                fx.exposure_samples = 2;
+            }
+            let nutation = (i % 3 == 1).then(|| Nutation {
+                amplitude: rng.range(0.02, 0.06),
+                ratio: rng.range(0.3, 0.8),
+                phase: rng.range(0.0, TAU),
+            });
+            SceneSpec {
+                name: format!("s{i:02}"),
+                spec,
+                n: rng.range(0.4, 0.7),
+                nutation,
+                crf: [18, 23, 28][(i / 3) % 3],
+            }
+        })
+        .collect()
+}
+
+/// The scene's clip: 0.65 s of the power law before the halt (the 0.5 s window and
+/// some lead), 0.15 s of flat disk after it (the post-flat spin and the rest frames).
+fn render(scene: &SceneSpec, dir: &Path) -> (std::path::PathBuf, GroundTruth) {
+    let params = Preset::EulerDisk.params();
+    let timing = Timing {
+        fps: FPS,
+        halt_time: 0.65,
+        after_halt: 0.15,
+    };
+    let spin = PostFlatSpin {
+        beta_dot0: -2.8,
+        mu: 0.134,
+    };
+    let mut motion =
+        power_law_motion(&params, &PowerLaw::thesis(scene.n), &timing, spin).expect("motion");
+    if let Some(nu) = scene.nutation {
+        add_nutation(&mut motion, nu).expect("nutation");
+    }
+    let renderer = Renderer::new(&scene.spec, &motion).expect("renderer");
+    let path = dir.join(format!("{}.mp4", scene.name));
+    write_clip(&renderer, &path, scene.crf).expect("write");
+    (path, renderer.truth().clone())
+}
+
+/// How close each measurement must be, and why.
+///
+/// * Calibration points x_l, x_r, z_t, z_base within [`CAL_PX`] = 0.5 px: a point
+///   found only to the nearest pixel is within 0.5 px, so a sub-pixel method must
+///   beat that on every clean rest frame whatever the plate. Through a pinhole the
+///   disk's ends are a short silhouette from the bottom rim's ends (the truth's x_l,
+///   x_r) to the top rim's (wider by up to 0.5 px here), so an end counts from that
+///   interval.
+/// * The scale used, at the near rim, within 2·[`CAL_PX`]/(z_base − z_t): the two
+///   points' errors through δ = 2H/(z_base − z_t) (eq. 3.10), plus the truth's own
+///   difference between eq. 3.10's δ and the vertical scale at the near bottom rim.
+/// * z_rim within [`Z_RIM_RMS_PX`] = 0.25 px RMS over the last 0.5 s before the halt,
+///   on every frame (§5; an edge's per-frame accuracy is in pixels, whatever the frame
+///   size), and every true peak of at least 0.5 px in that window found (within a
+///   frame), none spurious (§5).
+/// * n (both fits) within ±0.02 (±0.03 when φ oscillates about stationary rolling)
+///   and φ at the peaks within a median relative error of 2 % (§5), targets that §5
+///   sets on footage whose disk spans x_r − x_l ≥ [`REFERENCE_DIAMETER_PX`] = 461 px
+///   (the open set's smallest, its two-view clips). They come from z_rim read to a
+///   fraction of a pixel at the peaks, whose relative error scales as 1/(x_r − x_l)
+///   at a given motion, so on a smaller disk they are scaled by 461/(x_r − x_l) (1.6
+///   for the side views here, 2.1 for the two-view ones); φ's also by no less than
+///   the scale's tolerance plus 2 %, since φ inherits the scale's error.
+struct Tolerances {
+    scale: f64,
+    n: f64,
+    phi: f64,
+}
+
+const CAL_PX: f64 = 0.5;
+const Z_RIM_RMS_PX: f64 = 0.25;
+/// Smallest true peak that must be found [px] (§5).
+const DETECTABLE_PX: f64 = 0.5;
+/// The smallest disk (x_r − x_l, px) on which §5 asks its n and φ targets: the open
+/// footage's two-view clips (461–485 px; its side views 871–1108 px).
+const REFERENCE_DIAMETER_PX: f64 = 461.0;
+
+/// A true peak: frame index (file order), z_rim [px], φ [rad].
+struct TruePeak {
+    index: usize,
+    z_px: f64,
+    phi: f64,
+}
+
+/// Local maxima of the truth's z_rim in the window before the halt (all heights).
+fn true_peaks(truth: &GroundTruth) -> Vec<TruePeak> {
+    let f = &truth.frames;
+    let z = |i: usize| f[i].z_rim_px.unwrap_or(f64::NAN);
+    (1..f.len() - 1)
+        .filter(|&i| f[i].t < 0.0 && f[i].t >= -WINDOW_S && z(i) > z(i - 1) && z(i) >= z(i + 1))
+        .map(|i| TruePeak {
+            index: i,
+            z_px: z(i),
+            phi: f[i].phi,
+        })
+        .collect()
+}
+
+/// One scene's scores: the table's row and the targets it misses.
+struct Score {
+    row: String,
+    failures: Vec<String>,
+}
+
+fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, String>) -> Score {
+    let mut failures = Vec::new();
+    let e = match result {
+        Ok(e) => e,
+        Err(err) => {
+            return Score {
+                row: format!(
+                    "| {} | {} | **not measured**: {} | | | | | | | |",
+                    scene.name,
+                    scene.conditions(),
+                    err.lines().next().unwrap_or("").replace('|', "/")
+                ),
+                failures: vec![format!("not measured: {err}")],
+            };
+        }
+    };
+    let tc = &truth.calibration;
+    let cam = &truth.camera;
+    let cal = &e.plan.calibration.calibration;
+    // Calibration points, in vision's coordinates.
+    let interval = |got: f64, a: f64, b: f64| {
+        let (lo, hi) = (a.min(b) + HALF, a.max(b) + HALF);
+        if got < lo {
+            got - lo
+        } else if got > hi {
+            got - hi
+        } else {
+            0.0
+        }
+    };
+    let cal_err = [
+        ("x_l", interval(cal.x_l, tc.x_l, cam.x_l_top)),
+        ("x_r", interval(cal.x_r, tc.x_r, cam.x_r_top)),
+        ("z_t", cal.z_t - tc.z_t - HALF),
+        ("z_base", cal.z_base - tc.z_base - HALF),
+    ];
+    for (name, err) in cal_err {
+        if err.abs() > CAL_PX {
+            // z_t: how far the measured point lies below the silhouette's top (the
+            // far top rim), for a measurement that took one for the other.
+            let far = if name == "z_t" {
+                format!(
+                    "; {:+.2} px from the far top rim",
+                    cal.z_t - cam.z_t_far - HALF
+                )
+            } else {
+                String::new()
+            };
+            failures.push(format!("{name} off by {err:+.2} px (≤ {CAL_PX}{far})"));
+        }
+    }
+    let worst_cal = cal_err
+        .iter()
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+        .expect("four points");
+    // Scale at the near rim.
+    let thickness_px = tc.z_base - tc.z_t;
+    let near = cam.near_rim_metres_per_px;
+    let resolution = (REFERENCE_DIAMETER_PX / (tc.x_r - tc.x_l)).max(1.0);
+    let nutating = scene.nutation.is_some_and(|nu| nu.amplitude > 0.0);
+    let tol = {
+        let scale = 2.0 * CAL_PX / thickness_px + (truth.delta / near - 1.0).abs();
+        Tolerances {
+            scale,
+            n: if nutating { 0.03 } else { 0.02 } * resolution,
+            phi: (0.02 * resolution).max(0.02 + scale),
+        }
+    };
+    let scale_err = e.plan.metres_per_px / near - 1.0;
+    if scale_err.abs() > tol.scale {
+        failures.push(format!(
+            "scale off by {:+.2} % (≤ {:.2} %)",
+            100.0 * scale_err,
+            100.0 * tol.scale
+        ));
+    }
+    // z_rim over the last 0.5 s before the halt.
+    let (mut sum_sq, mut count, mut missing) = (0.0, 0usize, 0usize);
+    for (m, t) in e.frames.iter().zip(&truth.frames) {
+        if t.t >= 0.0 || t.t < -WINDOW_S {
+            continue;
+        }
+        let Some(want) = t.z_rim_px else { continue };
+        match m.z_rim_px {
+            Some(got) => {
+                sum_sq += (got - want).powi(2);
+                count += 1;
+            }
+            None => missing += 1,
+        }
+    }
+    let rms = (sum_sq / count.max(1) as f64).sqrt();
+    if rms > Z_RIM_RMS_PX || missing > 0 || e.frames.len() != truth.frames.len() {
+        failures.push(format!(
+            "z_rim RMS {rms:.3} px (≤ {Z_RIM_RMS_PX}), {missing} frames without an edge"
+        ));
+    }
+    // Peaks: matched by frame (±1) to the truth's local maxima.
+    let peaks = true_peaks(truth);
+    let measured = &e.series.peaks.peaks;
+    let near_true = |index: usize| {
+        peaks
+            .iter()
+            .filter(|p| p.index.abs_diff(index) <= 1)
+            .min_by_key(|p| p.index.abs_diff(index))
+    };
+    let detectable: Vec<&TruePeak> = peaks.iter().filter(|p| p.z_px >= DETECTABLE_PX).collect();
+    let found = detectable
+        .iter()
+        .filter(|p| measured.iter().any(|m| m.index.abs_diff(p.index) <= 1))
+        .count();
+    let window_start = truth.halt_time - WINDOW_S;
+    let spurious = measured
+        .iter()
+        .filter(|m| e.frames[m.index].t_capture >= window_start && near_true(m.index).is_none())
+        .count();
+    if found < detectable.len() || spurious > 0 {
+        failures.push(format!(
+            "peaks: {found} of {} found, {spurious} spurious",
+            detectable.len()
+        ));
+    }
+    // φ at the matched peaks: the median |error| and, for the table, the median
+    // signed error.
+    let mut signed: Vec<f64> = measured
+        .iter()
+        .filter_map(|m| near_true(m.index).map(|p| m.phi / p.phi - 1.0))
+        .collect();
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    let phi_med = median(&mut signed.iter().map(|x| x.abs()).collect());
+    let phi_signed = median(&mut signed);
+    // NaN (no peak matched) fails too.
+    if phi_med.is_nan() || phi_med > tol.phi {
+        failures.push(format!(
+            "φ at the peaks: median error {:.2} % (≤ {:.2} %; median signed {:+.2} %)",
+            100.0 * phi_med,
+            100.0 * tol.phi,
+            100.0 * phi_signed
+        ));
+    }
+    // n, both fits.
+    let n_peaks = e.peaks_fit.fit.n - scene.n;
+    let n_frames = e.frames_fit.as_ref().map(|f| f.fit.n - scene.n);
+    let ci = e.peaks_fit.fit.ci95_n;
+    if n_peaks.is_nan() || n_peaks.abs() > tol.n {
+        failures.push(format!("n (peaks) off by {n_peaks:+.3} (≤ {:.3})", tol.n));
+    }
+    match n_frames {
+        Some(d) if d.abs() <= tol.n => {}
+        Some(d) => failures.push(format!("n (per frame) off by {d:+.3} (≤ {:.3})", tol.n)),
+        None => failures.push("no per-frame fit".into()),
+    }
+    // For information: the halts (§5: t_φ within 2 frames, fitted t0 within 2 ms).
+    let t_phi = e.series.halt.t_phi;
+    let halt_frames = (t_phi - truth.halt_time) * FPS;
+    let t0_ms = 1e3 * (t_phi + e.peaks_fit.fit.t0 - truth.halt_time);
+    let row = format!(
+        "| {} | {} | {} {:+.2} | {:+.2} / {:.2} | {:.3} | {found}/{}, {spurious} | {:.1} ({:+.1}) / {:.1} | {:+.3}{} / {} / {:.3} | {:+.1} | {:+.1} | {} |",
+        scene.name,
+        scene.conditions(),
+        worst_cal.0,
+        worst_cal.1,
+        100.0 * scale_err,
+        100.0 * tol.scale,
+        rms,
+        detectable.len(),
+        100.0 * phi_med,
+        100.0 * phi_signed,
+        100.0 * tol.phi,
+        n_peaks,
+        if (ci.0..=ci.1).contains(&scene.n) {
+            " (CI ✓)"
+        } else {
+            " (CI ✗)"
+        },
+        n_frames.map_or("–".into(), |d| format!("{d:+.3}")),
+        tol.n,
+        halt_frames,
+        t0_ms,
+        if failures.is_empty() {
+            "pass"
+        } else {
+            "**FAIL**"
+        },
+    );
+    Score { row, failures }
+}
+
+const HEADER: &str = "| scene | conditions | worst cal. point, err px | scale err % / tol | z_rim RMS px | peaks found/true ≥0.5 px, spurious | φ med abs (signed) err % / tol | Δn peaks (95 % CI covers?) / per frame / tol | t_φ err frames | fitted t0 err ms | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|";
+
+#[test]
+#[ignore = "15 of 24 scenes miss a target (BENCHMARKS.md, \"Robustness scenes\"): z_t on close \
+            or low cameras, φ low at the peaks on light plates, no rest tail under flicker; \
+            run with --ignored"]
+fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
+    let scenes = draw_scenes();
+    assert!(scenes.len() >= 24);
+    // EULERDISK_ROBUSTNESS_KEEP=DIR keeps the clips and their truths there.
+    let keep = std::env::var_os("EULERDISK_ROBUSTNESS_KEEP").map(std::path::PathBuf::from);
+    let temp = tempfile::tempdir().expect("tempdir");
+    let dir = keep.clone().unwrap_or_else(|| temp.path().to_path_buf());
+    std::fs::create_dir_all(&dir).expect("clip folder");
+    let config =
+        ExperimentConfig::parse("fps = 480\n", Path::new("robustness.toml")).expect("config");
+    let mut table = String::from(HEADER);
+    let mut failed = Vec::new();
+    for scene in &scenes {
+        let (clip, truth) = render(scene, &dir);
+        let result = analyse_clip(&clip, &config, &|_, _| {})
+            .map_err(|e| format!("{e:#}").replace(&format!("{}: ", clip.display()), ""));
+        let s = score(scene, &truth, result);
+        eprintln!("{}", s.row);
+        write!(table, "\n{}", s.row).expect("string");
+        if !s.failures.is_empty() {
+            failed.push(format!("{}: {}", scene.name, s.failures.join("; ")));
+        }
+        if keep.is_none() {
+            std::fs::remove_file(&clip).ok();
+        }
+    }
+    eprintln!("{table}");
+    assert!(
+        failed.is_empty(),
+        "{} of {} scenes miss a target:\n{}\n\n{table}",
+        failed.len(),
+        scenes.len(),
+        failed.join("\n")
+    );
+}
