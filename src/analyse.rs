@@ -586,10 +586,10 @@ pub fn analyse_clip(
         None => None,
     };
     let (width, height) = (last.width, last.height);
-    let last_rest = OwnedFrame::copy(
-        rest[rest.len() - 1].index,
+    let calibration_png = png(&diagnostics::calibration_image(
         &rest_sides[rest_sides.len() - 1],
-    );
+        &calibration.calibration,
+    ));
     drop(rest_sides);
     drop(rest);
 
@@ -714,8 +714,8 @@ pub fn analyse_clip(
         }
         None => "edge (vision::rim): the second edge from the bottom on a light plate".into(),
     };
-    // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport),
-    // from the plate line as finally placed.
+    // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
+    // z_rim in metres once, after every correction of z_rim in px.
     let scale = ScaleReport::new(&calibration.calibration, &params);
     let metres_per_px = scale.metres_per_px();
     if !scale.at_near_rim() {
@@ -724,10 +724,6 @@ pub fn analyse_clip(
     for record in &mut frames {
         record.z_rim_m = record.z_rim_px.map(|z| z * metres_per_px);
     }
-    let calibration_png = png(&diagnostics::calibration_image(
-        &last_rest.view(),
-        &calibration.calibration,
-    ));
     if no_edge == frames.len() {
         return Err(AnalyseError::Clip {
             path: clip.to_path_buf(),

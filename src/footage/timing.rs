@@ -17,6 +17,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::{CaptureFps, FpsSource};
+use crate::signal::{mad_sigma, median};
 
 /// A slow-down factor within this of 1 is a clip stored at its capture rate: its
 /// timestamps are capture times as they stand (a phone's real-time clip jitters
@@ -162,32 +163,16 @@ fn from_timestamps(stamps: &[f64], fps: &mut CaptureFps) -> (Vec<f64>, FrameTimi
     let times: Vec<f64> = stamps.iter().map(|t| (t - stamps[0]) / slowdown).collect();
     let capture: Vec<f64> = intervals.iter().map(|d| d / slowdown).collect();
     let median_interval_s = median(&capture);
-    let deviations: Vec<f64> = capture
-        .iter()
-        .map(|d| (d - median_interval_s).abs())
-        .collect();
     let timing = FrameTiming {
         source: TimeSource::ContainerPts,
         detail,
         slowdown,
         median_interval_s,
-        interval_spread_s: 1.4826 * median(&deviations),
+        interval_spread_s: mad_sigma(&capture, median_interval_s),
         min_interval_s: capture.iter().copied().fold(f64::INFINITY, f64::min),
         max_interval_s: capture.iter().copied().fold(0.0, f64::max),
     };
     (times, timing)
-}
-
-/// Median of a non-empty slice.
-fn median(values: &[f64]) -> f64 {
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 #[cfg(test)]

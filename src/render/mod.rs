@@ -1633,43 +1633,47 @@ mod tests {
         }
     }
 
-    /// The rendered bottom edge on the centre column, found by a sub-pixel threshold
-    /// crossing, matches the truth z_rim: dark plate (first rising edge from the
-    /// bottom) and light plate (second edge, fig. 3.9).
+    /// Every 7th frame's rendered bottom edge on the centre column, found by a
+    /// sub-pixel threshold crossing (dark plate: the first rising edge from the
+    /// bottom; light plate: the second, after the shadow, fig. 3.9), against the
+    /// truth z_rim: a box-filtered edge read by linear interpolation is within 0.1 px,
+    /// and the shading on either side of the edge moves it by up to 0.15 px more.
+    fn check_bottom_edge_against_truth(r: &Renderer, plate: Plate) {
+        let truth = r.truth();
+        let x = truth.calibration.x_centre as u32;
+        let mut checked = 0;
+        for f in truth.frames.iter().step_by(7) {
+            let img = r.render_frame(f.file_index);
+            let i = |row: u32| intensity(&img, x, row);
+            let start = (truth.calibration.z_base + 30.0) as u32;
+            let end = (truth.calibration.z_t - 20.0) as u32;
+            let edges = crossings(&i, start, end, 130.0);
+            let (row, rising) = match plate {
+                Plate::Dark => edges[0],
+                Plate::Light => edges[1],
+            };
+            assert!(rising, "{plate:?}, frame {}: {edges:?}", f.index);
+            let col = |k: i64| intensity(&img, x, k as u32);
+            let measured = truth.calibration.z_base - edge_1d(&col, i64::from(row));
+            let expected = f.z_rim_px.expect("disk on the column");
+            assert!(
+                (measured - expected).abs() < 0.3,
+                "{plate:?}, frame {}: measured {measured}, truth {expected}",
+                f.index
+            );
+            checked += 1;
+        }
+        assert!(checked > 25);
+    }
+
+    /// The rendered bottom edge on the centre column matches the truth z_rim on
+    /// both plates (orthographic camera).
     #[test]
     fn rendered_bottom_edge_matches_truth_z_rim() {
         let m = motion(480.0, 0.4, 0.05);
         for plate in [Plate::Dark, Plate::Light] {
             let r = Renderer::new(&small_spec(plate, false), &m).expect("renderer");
-            let truth = r.truth();
-            let x = truth.calibration.x_centre as u32;
-            let mut checked = 0;
-            for f in truth.frames.iter().step_by(7) {
-                let img = r.render_frame(f.file_index);
-                let i = |row: u32| intensity(&img, x, row);
-                let start = (truth.calibration.z_base + 30.0) as u32;
-                let end = (truth.calibration.z_t - 20.0) as u32;
-                // Dark plate: the first edge from the bottom; light plate: the second,
-                // after the shadow (§3.2.4).
-                let edges = crossings(&i, start, end, 130.0);
-                let (row, rising) = match plate {
-                    Plate::Dark => edges[0],
-                    Plate::Light => edges[1],
-                };
-                assert!(rising, "{plate:?}, frame {}: {edges:?}", f.index);
-                let col = |k: i64| intensity(&img, x, k as u32);
-                let measured = truth.calibration.z_base - edge_1d(&col, i64::from(row));
-                let expected = f.z_rim_px.expect("disk on the column");
-                // Box-filtered edge read by linear interpolation: < 0.1 px; the
-                // shading on either side of the edge varies by up to 0.15 px more.
-                assert!(
-                    (measured - expected).abs() < 0.3,
-                    "{plate:?}, frame {}: measured {measured}, truth {expected}",
-                    f.index
-                );
-                checked += 1;
-            }
-            assert!(checked > 25);
+            check_bottom_edge_against_truth(&r, plate);
         }
     }
 
@@ -1950,32 +1954,7 @@ mod tests {
         let m = motion(480.0, 0.4, 0.05);
         for (plate, d) in [(Plate::Dark, 0.25), (Plate::Light, 0.5)] {
             let r = Renderer::new(&pinhole_spec(plate, d), &m).expect("renderer");
-            let truth = r.truth();
-            let x = truth.calibration.x_centre as u32;
-            let mut checked = 0;
-            for f in truth.frames.iter().step_by(7) {
-                let img = r.render_frame(f.file_index);
-                let i = |row: u32| intensity(&img, x, row);
-                let start = (truth.calibration.z_base + 30.0) as u32;
-                let end = (truth.calibration.z_t - 20.0) as u32;
-                let edges = crossings(&i, start, end, 130.0);
-                let (row, rising) = match plate {
-                    Plate::Dark => edges[0],
-                    Plate::Light => edges[1],
-                };
-                assert!(rising, "{plate:?}, frame {}: {edges:?}", f.index);
-                let col = |k: i64| intensity(&img, x, k as u32);
-                let measured = truth.calibration.z_base - edge_1d(&col, i64::from(row));
-                let expected = f.z_rim_px.expect("disk on the column");
-                // As orthographic: < 0.1 px for the edge, 0.15 px more for the shading.
-                assert!(
-                    (measured - expected).abs() < 0.3,
-                    "{plate:?}, frame {}: measured {measured}, truth {expected}",
-                    f.index
-                );
-                checked += 1;
-            }
-            assert!(checked > 25);
+            check_bottom_edge_against_truth(&r, plate);
         }
     }
 

@@ -597,7 +597,7 @@ fn finite_samples(t: &[f64], values: &[f64]) -> Vec<usize> {
 }
 
 /// Median of a non-empty slice (NaN for an empty one).
-fn median(values: &[f64]) -> f64 {
+pub(crate) fn median(values: &[f64]) -> f64 {
     if values.is_empty() {
         return f64::NAN;
     }
@@ -612,7 +612,7 @@ fn median(values: &[f64]) -> f64 {
 }
 
 /// 1.4826 × the median absolute deviation from `level`: σ for Gaussian noise.
-fn mad_sigma(values: &[f64], level: f64) -> f64 {
+pub(crate) fn mad_sigma(values: &[f64], level: f64) -> f64 {
     let deviations: Vec<f64> = values.iter().map(|x| (x - level).abs()).collect();
     1.4826 * median(&deviations)
 }

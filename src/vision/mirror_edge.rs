@@ -54,6 +54,7 @@ use std::ops::Range;
 
 use super::profile::row_band_mean;
 use crate::footage::FrameView;
+use crate::signal::median;
 
 /// Rows recorded per frame above the first-pass edge (the disk's level is read on
 /// the top [`LEVEL_ROWS`] of them).
@@ -140,12 +141,11 @@ impl BandWindow {
 
     /// The disk's level: the median of the top [`LEVEL_ROWS`] rows.
     fn level(&self) -> f64 {
-        let mut top: Vec<f64> = self.values[..LEVEL_ROWS]
+        let top: Vec<f64> = self.values[..LEVEL_ROWS]
             .iter()
             .map(|&v| f64::from(v))
             .collect();
-        top.sort_by(f64::total_cmp);
-        0.5 * (top[LEVEL_ROWS / 2 - 1] + top[LEVEL_ROWS / 2])
+        median(&top)
     }
 
     /// (row centre, value) pairs.
