@@ -556,25 +556,28 @@ pub fn analyse_clip(
     )
     .map_err(vision_err)?;
     // Dark plate: rim heights below 2 px from the darkness of the gap (vision::gap),
-    // then every height from the mirror-edge model (vision::mirror_edge), whose
-    // zero is the rest frames' band rows about their edge.
-    let (gap_gauge, rest_window) = match side_config.plate {
-        Plate::Dark => {
-            let gap = GapGauge::new(&calibration.calibration, &side_config, &rest_sides)
-                .map_err(vision_err)?;
-            let edge0 = match gauge.measure(&rest_sides[0], rest[0].index) {
-                Ok(RimHeight::Edge { edge_row, .. }) => edge_row,
-                _ => cal.z_base,
-            };
-            let columns = gauge.band_columns();
-            let windows: Option<Vec<BandWindow>> = rest_sides
-                .iter()
-                .map(|f| BandWindow::read(f, &columns, edge0))
-                .collect();
-            let rest_window = windows.and_then(|w| BandWindow::mean(&w));
-            (gap, rest_window.map(|w| (w, edge0)))
-        }
-        Plate::Light => (None, None),
+    // then, on either plate, every height re-measured with a model of the rim's
+    // edge learned from the clip (vision::mirror_edge on a dark plate,
+    // vision::shadow_edge on a light one), whose zero is the rest frames' band
+    // rows about their edge.
+    let gap_gauge = match side_config.plate {
+        Plate::Dark => GapGauge::new(&calibration.calibration, &side_config, &rest_sides)
+            .map_err(vision_err)?,
+        Plate::Light => None,
+    };
+    let rest_window = {
+        let edge0 = match gauge.measure(&rest_sides[0], rest[0].index) {
+            Ok(RimHeight::Edge { edge_row, .. }) => edge_row,
+            _ => cal.z_base,
+        };
+        let columns = gauge.band_columns();
+        let windows: Option<Vec<BandWindow>> = rest_sides
+            .iter()
+            .map(|f| BandWindow::read(f, &columns, edge0))
+            .collect();
+        windows
+            .and_then(|w| BandWindow::mean(&w))
+            .map(|w| (w, edge0))
     };
     let colour_thresholds = match split {
         Some(row) => {
@@ -682,20 +685,22 @@ pub fn analyse_clip(
             record.z_rim_px = z;
         }
     }
+    let first_pass = match side_config.plate {
+        Plate::Dark => "edge and gap darkness (vision::rim, vision::gap)",
+        Plate::Light => "edge (vision::rim): the second edge from the bottom on a light plate",
+    };
     let rim = match &rest_window {
         Some((rest_window, edge0)) => {
             let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
-            match vision::remeasure_dark_rim(
-                &mut heights,
-                &windows,
-                cal.z_base,
-                rest_window,
-                *edge0,
-            ) {
-                Ok(model) => {
-                    for (record, z) in frames.iter_mut().zip(heights) {
-                        record.z_rim_px = z;
-                    }
+            let refit = match side_config.plate {
+                Plate::Dark => vision::remeasure_dark_rim(
+                    &mut heights,
+                    &windows,
+                    cal.z_base,
+                    rest_window,
+                    *edge0,
+                )
+                .map(|model| {
                     format!(
                         "mirror-edge model (vision::mirror_edge): the rim's profile learned from \
                          the frames with an open gap; edge at rest {:.2} px, the zero of z_rim; \
@@ -706,13 +711,34 @@ pub fn analyse_clip(
                         model.reflectivity,
                         100.0 * model.rest_rms
                     )
+                }),
+                Plate::Light => {
+                    vision::remeasure_light_rim(&mut heights, &windows, cal.z_base, rest_window)
+                        .map(|model| {
+                            format!(
+                                "shadow-edge contour (vision::shadow_edge): the edge where the \
+                                 band falls to {:.3} of the disk's side, halfway to the shadow \
+                                 under the lifted rim ({:.3}); edge at rest {:.2} px, the zero \
+                                 of z_rim; {} frame(s) kept the first pass",
+                                model.edge_level(),
+                                model.shadow_ratio,
+                                model.rest_edge,
+                                model.kept_first_pass
+                            )
+                        })
                 }
-                Err(reason) => {
-                    format!("edge and gap darkness (vision::rim, vision::gap): {reason}")
+            };
+            match refit {
+                Ok(description) => {
+                    for (record, z) in frames.iter_mut().zip(heights) {
+                        record.z_rim_px = z;
+                    }
+                    description
                 }
+                Err(reason) => format!("{first_pass}: {reason}"),
             }
         }
-        None => "edge (vision::rim): the second edge from the bottom on a light plate".into(),
+        None => first_pass.into(),
     };
     // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
     // z_rim in metres once, after every correction of z_rim in px.

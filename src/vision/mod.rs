@@ -35,6 +35,7 @@
 //! heights such as z_rim are positive upward. Intensities are the mean of the
 //! three channels, 0–255; the thesis's γ is that mean divided by 256.
 
+mod band_window;
 mod calibration;
 mod components;
 mod error;
@@ -43,6 +44,7 @@ mod light_plate;
 mod mirror_edge;
 mod profile;
 mod rim;
+mod shadow_edge;
 mod threshold;
 mod two_view;
 
@@ -55,7 +57,9 @@ pub use calibration::{
 };
 pub use error::VisionError;
 pub use gap::{GapGauge, GapSample};
-pub use mirror_edge::{BandWindow, EdgeTemplate, MirrorEdgeModel, remeasure as remeasure_dark_rim};
+pub use band_window::BandWindow;
+pub use mirror_edge::{EdgeTemplate, MirrorEdgeModel, remeasure as remeasure_dark_rim};
+pub use shadow_edge::{ShadowEdgeModel, remeasure as remeasure_light_rim};
 pub use rim::{RimGauge, RimHeight};
 pub use threshold::{GammaSource, INTENSITY_SCALE, Threshold};
 pub use two_view::{
