@@ -175,6 +175,30 @@ fn lone_excursions_after_the_halt_are_not_motion() {
     assert!(lone[last + 50] - halt_of(&lone).rest_level > 5.0 * NOISE);
 }
 
+/// The rim's final descent after its last rise, two frames that fall towards the
+/// plate but stay below the motion threshold, is motion: t_φ moves to its end; a
+/// frame that rises again ends the descent.
+#[test]
+fn the_final_descent_belongs_to_the_motion() {
+    let (t, z, _) = clip(NOISE, 1);
+    let config = SignalConfig::default();
+    let before = halt_time(&t, &z, &config).expect("halt");
+    let last = before.index;
+    let mut descent = z.clone();
+    let level = before.rest_level;
+    descent[last + 1] = level + 0.6 * before.threshold;
+    descent[last + 2] = level + 0.35 * before.threshold;
+    descent[last + 3] = level - before.noise;
+    assert!(0.35 * before.threshold > 1.5 * before.noise, "a descent above the noise");
+    let halt = halt_time(&t, &descent, &config).expect("halt");
+    assert_eq!(halt.index, last + 2);
+    // A frame that rises again (still below the threshold) ends the descent.
+    let mut rise = descent.clone();
+    rise[last + 2] = level + 0.8 * before.threshold;
+    let halt = halt_time(&t, &rise, &config).expect("halt");
+    assert_eq!(halt.index, last + 1);
+}
+
 /// How far a peak time may be from the truth: a tenth of a frame by the local fit
 /// (observed < 0.05) while ψ̇ changes slowly; half a frame by the parabola (the last,
 /// tiny peak, 5 frames a turn), or in the last 0.03 s, where ψ̇ ∝ τ^{−1/4} changes by
