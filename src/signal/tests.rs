@@ -189,7 +189,10 @@ fn the_final_descent_belongs_to_the_motion() {
     descent[last + 1] = level + 0.6 * before.threshold;
     descent[last + 2] = level + 0.35 * before.threshold;
     descent[last + 3] = level - before.noise;
-    assert!(0.35 * before.threshold > 1.5 * before.noise, "a descent above the noise");
+    assert!(
+        0.35 * before.threshold > 1.5 * before.noise,
+        "a descent above the noise"
+    );
     let halt = halt_time(&t, &descent, &config).expect("halt");
     assert_eq!(halt.index, last + 2);
     // A frame that rises again (still below the threshold) ends the descent.

@@ -51,16 +51,16 @@ mod two_view;
 #[cfg(test)]
 mod synthetic;
 
+pub use band_window::BandWindow;
 pub use calibration::{
     Calibration, CalibrationOverride, CalibrationReport, PointSource, SideViewConfig,
     calibrate_at_rest, calibrate_frame,
 };
 pub use error::VisionError;
 pub use gap::{GapGauge, GapSample};
-pub use band_window::BandWindow;
 pub use mirror_edge::{EdgeTemplate, MirrorEdgeModel, remeasure as remeasure_dark_rim};
-pub use shadow_edge::{ShadowEdgeModel, remeasure as remeasure_light_rim};
 pub use rim::{RimGauge, RimHeight};
+pub use shadow_edge::{ShadowEdgeModel, remeasure as remeasure_light_rim};
 pub use threshold::{GammaSource, INTENSITY_SCALE, Threshold};
 pub use two_view::{
     ColourThresholds, LayoutDetection, Strip, StripFinder, ThresholdSource, auto_colour_thresholds,

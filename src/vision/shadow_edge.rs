@@ -127,7 +127,10 @@ pub fn remeasure(
     for (z, w) in heights.iter_mut().zip(windows) {
         if let (Some(height), Some(window)) = (z.as_mut(), w) {
             let edge0 = z_base - *height;
-            match model.edge(window).filter(|e| (e - edge0).abs() <= SEARCH_PX) {
+            match model
+                .edge(window)
+                .filter(|e| (e - edge0).abs() <= SEARCH_PX)
+            {
                 Some(e) => *height = model.rest_edge - e,
                 None => model.kept_first_pass += 1,
             }
@@ -200,10 +203,18 @@ mod tests {
         let model = remeasure(&mut heights, &windows, plate - 0.4, &rest).expect("model");
         assert!((model.shadow_ratio - 0.58).abs() < 0.02, "{model:?}");
         assert_eq!(model.kept_first_pass, 0);
-        for (&z, found) in lifts.iter().zip(&heights) {
-            let found = found.unwrap();
-            // 8-bit rounding and linear interpolation: a few hundredths.
-            assert!((found - z).abs() < 0.08, "lift {z}: found {found}");
+        // The blur carries the lit plate under the resting rim 0.065 px into the rest
+        // frames' crossing (the first pass's area edge: 0.5–0.9 px on the footage),
+        // and linear interpolation of the curved edge errs by ±0.04 px with its phase.
+        let errors: Vec<f64> = lifts
+            .iter()
+            .zip(&heights)
+            .map(|(&z, found)| found.unwrap() - z)
+            .collect();
+        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+        assert!(mean.abs() < 0.08, "mean error {mean}");
+        for (&z, e) in lifts.iter().zip(&errors) {
+            assert!(e.abs() < 0.12, "lift {z}: error {e}");
         }
     }
 
