@@ -456,13 +456,14 @@ pub fn frame_states(
 }
 
 /// Frame skips of every kind, sorted by frame: timestamp gaps over the whole clip;
-/// strip-angle steps over the whole clip (if `beta_unwrapped` is given); rim phase
+/// strip-angle steps while the strip turns (if `strip` is given: β unwrapped and the
+/// strip's stop t_β on the clip's time); rim phase
 /// steps before the halt, where the peaks (found over the whole motion, not only the
 /// window) give a phase track. A frame can carry several flags, one per reason.
 pub fn frame_skips(
     t: &[f64],
     z_rim: &[f64],
-    beta_unwrapped: Option<&[f64]>,
+    strip: Option<(&[f64], f64)>,
     halt: &Halt,
     model: &dyn RimModel,
     config: &SignalConfig,
@@ -470,11 +471,12 @@ pub fn frame_skips(
     check_series(t, z_rim, "z_rim")?;
     config.validate()?;
     let mut flags = timestamp_gaps(t, config.gap_factor);
-    if let Some(beta) = beta_unwrapped {
+    if let Some((beta, t_beta)) = strip {
         check_series(t, beta, "beta")?;
         flags.extend(strip_angle_steps(
             t,
             beta,
+            t_beta,
             config.strip_step_sigmas,
             config.strip_step_floor,
         ));
@@ -545,7 +547,9 @@ pub fn analyse(
     let mut flags = frame_skips(
         t,
         z_rim,
-        strip.as_ref().map(|s| s.series.beta.as_slice()),
+        strip
+            .as_ref()
+            .map(|s| (s.series.beta.as_slice(), s.stop.t_beta)),
         &halt,
         model,
         config,

@@ -113,13 +113,23 @@ const STEP_NEIGHBOURS: usize = 12;
 /// follow, raises the residual and the error with it, and hides a skip within 12
 /// frames of it). A skip is thus seen only where the strip turns by more than
 /// `sigmas` spreads in a frame. Of flags within 6 frames, the largest step is kept.
+///
+/// Only boundaries whose two windows end before `t_beta`, the strip's stop, are
+/// tested: a stopped strip shows no skip, and a strip that stops at once (o07 of the
+/// open footage, its rotation after the fall lasting 15 ms) puts a kink between the
+/// windows that straddle it, which a quadratic does not follow and which read as a
+/// step of 1.4 frames' turn.
 pub fn strip_angle_steps(
     t: &[f64],
     beta_unwrapped: &[f64],
+    t_beta: f64,
     sigmas: f64,
     floor: f64,
 ) -> Vec<FrameFlag> {
-    let idx = finite_samples(t, beta_unwrapped);
+    let idx: Vec<usize> = finite_samples(t, beta_unwrapped)
+        .into_iter()
+        .filter(|&i| t[i] < t_beta)
+        .collect();
     let frame = nominal_period(t);
     if frame.is_nan() || frame <= 0.0 {
         return Vec::new();

@@ -656,7 +656,52 @@ fn all_flags(t: &[f64], z: &[f64], beta: &[f64]) -> Vec<FrameFlag> {
     let config = SignalConfig::default();
     let halt = halt_time(t, z, &config).expect("halt");
     let unwrapped = unwrap_half_turns(beta);
-    frame_skips(t, z, Some(&unwrapped), &halt, &model, &config).expect("flags")
+    // The strip's stop as `analyse` measures it.
+    let series = strip_series(t, beta, config.smoothing_points).expect("strip");
+    let settled_after = t[t.len() - 1] - config.strip_settled_tail_s;
+    let stop = strip_stop_time(t, &series, halt.t_phi, settled_after).expect("stop");
+    frame_skips(
+        t,
+        z,
+        Some((&unwrapped, stop.t_beta)),
+        &halt,
+        &model,
+        &config,
+    )
+    .expect("flags")
+}
+
+/// A strip that stops at once (β̇ from 2 rad/s to 0 between two frames, as on o07 of
+/// the open footage) is not a skipped frame: the kink between the windows either
+/// side of it read as a step of more than the strip's turn per frame, and only
+/// boundaries before the stop are tested now.
+#[test]
+fn an_abrupt_strip_stop_is_not_a_skip() {
+    let t: Vec<f64> = (0..400).map(|i| i as f64 * FRAME).collect();
+    let t_stop = t[300] - 0.3 * FRAME;
+    let mut rng = SplitMix64::new(5);
+    let beta: Vec<f64> = t
+        .iter()
+        .map(|&x| 0.2 + 2.0 * x.min(t_stop) + BETA_NOISE * rng.gaussian())
+        .collect();
+    let config = SignalConfig::default();
+    let steps = |until: f64| {
+        strip_angle_steps(
+            &t,
+            &beta,
+            until,
+            config.strip_step_sigmas,
+            config.strip_step_floor,
+        )
+    };
+    // Tested across the stop, the kink is taken for a skip.
+    assert!(
+        steps(f64::INFINITY)
+            .iter()
+            .any(|f| f.index.abs_diff(300) <= 2),
+        "the kink is a step to the two-window test"
+    );
+    assert_eq!(steps(t_stop), Vec::new());
 }
 
 #[test]
