@@ -154,6 +154,7 @@ fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String
     let settings = H264Settings {
         crf,
         preset: "medium",
+        chroma: ChromaFilter::Bicubic,
     };
     let mut writer = H264Writer::create(path, truth.width, truth.height, truth.fps, settings)?;
     let n = renderer.frame_count();
@@ -177,6 +178,18 @@ pub struct H264Settings {
     pub crf: u8,
     /// libx264 preset (`ultrafast` … `veryslow`): speed against size at equal quality.
     pub preset: &'static str,
+    /// How colour is subsampled to 4:2:0 (libswscale's filter).
+    pub chroma: ChromaFilter,
+}
+
+/// libswscale's filter for the RGB → YUV 4:2:0 conversion.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ChromaFilter {
+    /// Bicubic: what OpenCV's writer used, kept so rendered clips keep their bytes.
+    Bicubic,
+    /// Fast bilinear: about half the conversion time, for pictures that are
+    /// looked at rather than measured.
+    FastBilinear,
 }
 
 /// An H.264 MP4 being written frame by frame: libx264 through libavcodec, yuv420p,
@@ -233,7 +246,8 @@ impl H264Writer {
         ff::init().map_err(av("init"))?;
         ff::util::log::set_level(ff::util::log::Level::Quiet);
         let codec = ff::encoder::find_by_name("libx264").ok_or_else(|| {
-            "this FFmpeg (libavcodec) has no libx264 encoder; render a PNG folder instead".to_owned()
+            "this FFmpeg (libavcodec) has no libx264 encoder; render a PNG folder instead"
+                .to_owned()
         })?;
         let mut output = ff::format::output_as(path, "mp4").map_err(av("open the MP4"))?;
         let global_header = output
@@ -279,7 +293,10 @@ impl H264Writer {
             Pixel::YUV420P,
             w,
             h,
-            scaling::Flags::BICUBIC,
+            match settings.chroma {
+                ChromaFilter::Bicubic => scaling::Flags::BICUBIC,
+                ChromaFilter::FastBilinear => scaling::Flags::FAST_BILINEAR,
+            },
         )
         .map_err(av("libswscale"))?;
         Ok(Self {
@@ -351,9 +368,7 @@ impl H264Writer {
     /// # Errors
     /// FFmpeg failing to flush or to write the trailer.
     pub fn finish(mut self) -> Result<usize, String> {
-        self.encoder
-            .send_eof()
-            .map_err(av("flush the encoder"))?;
+        self.encoder.send_eof().map_err(av("flush the encoder"))?;
         self.drain()?;
         self.output
             .write_trailer()

@@ -49,6 +49,7 @@ mod two_view;
 #[cfg(test)]
 mod synthetic;
 
+pub(crate) use calibration::band;
 pub use calibration::{
     Calibration, CalibrationOverride, CalibrationReport, PointSource, SideViewConfig,
     calibrate_at_rest, calibrate_frame,
