@@ -489,7 +489,9 @@ fn experiment_page(
     Ok(page(&title, body))
 }
 
-/// Seeks the overlay video to its frame `k` and pauses there.
+/// Seeks the overlay video to its frame `k` and pauses there; records the
+/// video's duration (`data-duration`) once it is known, or shows why it cannot
+/// play (`data-error`, the MediaError code, and a note to open the file itself).
 const SHOW_FRAME_JS: &str = "
 function showFrame(k, fps) {
   const v = document.getElementById('overlay');
@@ -497,6 +499,16 @@ function showFrame(k, fps) {
   v.currentTime = (k + 0.5) / fps;
   v.scrollIntoView({block: 'center'});
 }
+(function () {
+  const v = document.getElementById('overlay');
+  const known = () => { v.dataset.duration = v.duration; };
+  const failed = () => {
+    v.dataset.error = v.error ? v.error.code : 'unknown';
+    document.getElementById('overlay-error').hidden = false;
+  };
+  if (v.readyState >= 1) { known(); } else { v.addEventListener('loadedmetadata', known); }
+  if (v.error) { failed(); } else { v.addEventListener('error', failed); }
+})();
 ";
 
 /// "On the footage": the overlay video, the contact sheet, and the peaks with a
@@ -531,11 +543,16 @@ fn footage_section(e: &Experiment, overlay: &OverlayIndex, dir: &Path) -> maud::
              frame (reason in the header){}. overlay.json maps each video frame to its clip frame.",
             overlay.span_s.0, overlay.span_s.1, overlay.slow_down, overlay.frames.len(), fps,
             if e.series.strip.is_some() { "; below: the plan view with the strip's mask (cyan) and its principal axis (yellow)" } else { "" })))
+        p id="overlay-error" class="note" hidden {
+            "This browser cannot play the video (H.264 in MP4): open "
+            a href=(overlay.video) { (overlay.video) }
+            " in a video player."
+        }
         @if let Some(png) = &sheet {
             (png_figure(png, "The last oscillations before the halt: the frame nearest each peak, with t − t_φ and z_rim in its header."))
         }
         h3 { "Peaks and their frames" }
-        p class="note" { "Each peak of the rim-height series (plots below) comes from the frames around it; “show” stops the video at the frame nearest the peak." }
+        p class="note" { "Each peak of the rim-height series (plots above) comes from the frames around it; “show” stops the video at the frame nearest the peak." }
         table {
             tr { th { "peak" } th { "t − t_φ [s]" } th { "z_rim [px]" } th { "φ [°]" } th { "frame" } }
             @for (n, t, z, phi, k) in &peak_rows {
