@@ -14,7 +14,7 @@ use eulerdisk::model::simulate::{
     InitialState, MAX_SAMPLES, RunSummary, SimulationSpec, simulate, simulate_streaming,
 };
 use eulerdisk::model::tuning::tune_eta;
-use eulerdisk::overlay::OverlaySpec;
+use eulerdisk::overlay::{OverlaySpec, write_model_overlay};
 use eulerdisk::render::{
     DEFAULT_CRF, Effects, Nutation, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Scenery,
     Timing, add_nutation, power_law_motion, trajectory_motion, write_clip,
@@ -232,6 +232,9 @@ struct CompareArgs {
     /// Gap at which the air film of eq. 4.104 gives way to contact [m].
     #[arg(long, default_value_t = eulerdisk::compare::DEFAULT_CONTACT_GAP_M)]
     contact_gap: f64,
+    /// Draw no model over the footage (model-overlay.mp4, model-last-turns.png).
+    #[arg(long)]
+    no_overlay: bool,
 }
 
 #[derive(Args)]
@@ -934,7 +937,7 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
                 Ok(c) => {
                     print!("{:>2}. ", i + 1);
                     print(c);
-                    write_comparison(&comparison_dir(&args.experiment, r.model), c)?;
+                    write_comparison(&comparison_dir(&args.experiment, r.model), c, None)?;
                 }
                 Err(e) => println!("{:>2}. {:?}: failed: {e}", i + 1, r.model),
             }
@@ -947,7 +950,17 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
     let comparison = compare::compare(&experiment, &args.experiment, &options)?;
     print(&comparison);
     let dir = comparison_dir(&args.experiment, options.model);
-    write_comparison(&dir, &comparison)?;
+    eulerdisk::report::create_folder(&dir)?;
+    let overlay = (!args.no_overlay)
+        .then(|| write_model_overlay(&dir, &experiment, &comparison, &OverlaySpec::default()))
+        .transpose()?;
+    if let Some(err) = overlay.as_ref().and_then(|o| o.edge_error) {
+        println!(
+            "model over the footage: rim edge model − footage {:+.2} px mean, {:.2} px RMS ({} frames)",
+            err.mean_px, err.rms_px, err.frames
+        );
+    }
+    write_comparison(&dir, &comparison, overlay.as_ref())?;
     println!("report: {}", dir.join("index.html").display());
     Ok(())
 }
@@ -1006,7 +1019,10 @@ fn run_demo(out: &Path) -> Result<()> {
     let compare_link = match compared {
         Ok(c) => {
             let dir = comparison_dir(&experiment_dir, model);
-            write_comparison(&dir, &c)?;
+            eulerdisk::report::create_folder(&dir)?;
+            let experiment = eulerdisk::compare::load_experiment(&experiment_dir)?;
+            let overlay = write_model_overlay(&dir, &experiment, &c, &OverlaySpec::default())?;
+            write_comparison(&dir, &c, Some(&overlay))?;
             Some(dir.strip_prefix(out).unwrap_or(&dir).join("index.html"))
         }
         Err(e) => {

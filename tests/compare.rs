@@ -197,6 +197,7 @@ fn closed_loop(setup: &Setup) {
     write_comparison(
         &comparison_dir(&experiment_dir, ModelKind::Contour),
         comparison,
+        None,
     )
     .expect("write comparison");
     write_ranking(

@@ -261,3 +261,60 @@ fn drawn_rim_edge_lies_on_the_measured_and_true_rim() {
     );
     assert!(checked > 250, "checked {checked} frames");
 }
+
+/// `compare` draws the model over the two-view fixture: the camera pose found from
+/// the calibration has the rendered camera's elevation (the truth's, 3°), the video
+/// has a frame per analysed frame of the span that the model covers, and the
+/// report summarises the rim-edge distance between model and footage.
+#[test]
+fn compare_draws_the_model_with_the_calibrated_pose() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("c.toml"), "fps = 480\ntwo_view = true\n").unwrap();
+    let clip = fixture("two-view-n045.mp4");
+    run(
+        dir.path(),
+        &[
+            "analyse",
+            clip.to_str().unwrap(),
+            "-c",
+            "c.toml",
+            "-o",
+            "out",
+            "--no-overlay",
+        ],
+    );
+    run(
+        dir.path(),
+        &[
+            "compare",
+            "out",
+            "--model",
+            "augmented-contour",
+            "--lead",
+            "0.45",
+        ],
+    );
+    let cmp = dir.path().join("out/compare-augmented-contour");
+    let truth = json(&fixture("two-view-n045.truth.json"));
+    let overlay = json(&cmp.join("model-overlay.json"));
+    let elevation = f(&overlay["pose"]["elevation"]);
+    // The top face's image height is read to about 0.3 px of the 2R sin ε ≈ 15 px.
+    assert!(
+        (elevation - f(&truth["elevation"])).abs() < 0.3f64.to_radians(),
+        "elevation {:.3}°",
+        elevation.to_degrees()
+    );
+    // The model starts 0.45 s before the halt: the span's frames from there on.
+    let span = frame_rows(&dir.path().join("out"))
+        .into_iter()
+        .filter(|&(_, t, _)| (-0.45 - 1e-9..=0.1).contains(&t))
+        .count();
+    let (fps, frames) = decode(&cmp.join("model-overlay.mp4"));
+    assert_eq!(frames.len(), span);
+    assert!((fps - 30.0).abs() < 1e-6);
+    let err = &overlay["edge_error"];
+    assert!(err["frames"].as_u64().unwrap() as usize > span / 2);
+    assert!(f(&err["rms_px"]).is_finite() && f(&err["rms_m"]) > 0.0);
+    let page = std::fs::read_to_string(cmp.join("index.html")).unwrap();
+    assert!(page.contains("model-overlay.mp4") && page.contains("model − footage"));
+}

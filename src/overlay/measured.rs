@@ -371,32 +371,7 @@ fn draw_span(
     let slow_down = plan.fps.fps / spec.playback_fps;
     let mut tiles = Vec::new();
     let mut shown = Vec::new();
-    let mut source = FrameSource::open(clip)?;
-    // Only the windows' columns are converted from the codec's colours.
-    let columns = layout
-        .windows()
-        .iter()
-        .map(|w| w.src_x..w.src_x + w.width)
-        .reduce(|a, b| a.start.min(b.start)..a.end.max(b.end));
-    source.convert_only_columns(columns)?;
-    let matcher = FrameMatcher::new(e, start, last);
-    // A seek lands by time on a nearby frame: start a few frames early, and from
-    // the beginning if it still landed late.
-    source.seek(e.frames[start].index.saturating_sub(8))?;
-    let mut landed = false;
-    while let Some(frame) = source.next_frame()? {
-        let position = match matcher.locate(e, frame.index, frame.container_time_s)? {
-            Match::Before => continue,
-            Match::After => break,
-            Match::At(position) if !landed && position > start => {
-                // Landed past the span's start: read the clip from its first frame.
-                landed = true;
-                source.seek(0)?;
-                continue;
-            }
-            Match::At(position) => position,
-        };
-        landed = true;
+    decode_positions(e, (start, last), layout, |position, view| {
         let marks = FrameMarks {
             position,
             peaks: peak_frames
@@ -413,19 +388,13 @@ fn draw_span(
                 .filter(|f| f.index == position)
                 .collect(),
         };
-        let image = draw_frame(
-            e,
-            &layout,
-            &frame.view,
-            &marks,
-            strip_finder.as_mut(),
-            slow_down,
-        )
-        .map_err(|reason| OverlayError::Draw {
-            clip: clip.clone(),
-            frame: e.frames[position].index,
-            reason,
-        })?;
+        let image = draw_frame(e, layout, view, &marks, strip_finder.as_mut(), slow_down).map_err(
+            |reason| OverlayError::Draw {
+                clip: clip.clone(),
+                frame: e.frames[position].index,
+                reason,
+            },
+        )?;
         let record = OverlayFrame {
             index: e.frames[position].index,
             t: e.frames[position].t,
@@ -436,19 +405,63 @@ fn draw_span(
         if position >= first {
             if video.send(image).is_err() {
                 // The encoder stopped; its error is the one to report.
-                break;
+                return Ok(false);
             }
             shown.push(record);
         }
-        if position == last {
-            break;
-        }
-    }
+        Ok(true)
+    })?;
     Ok((shown, tiles))
 }
 
+/// Decodes the clip's frames at positions `first..=last` of `e.frames` again,
+/// converting only the columns `layout`'s windows show, and calls `each(position,
+/// frame)` on each in order until it returns `false`.
+///
+/// # Errors
+/// The clip cannot be decoded, or it changed since it was analysed; whatever
+/// `each` returns.
+pub(super) fn decode_positions(
+    e: &Experiment,
+    (first, last): (usize, usize),
+    layout: &Layout,
+    mut each: impl FnMut(usize, &FrameView) -> Result<bool, OverlayError>,
+) -> Result<(), OverlayError> {
+    let mut source = FrameSource::open(&e.plan.clip)?;
+    // Only the windows' columns are converted from the codec's colours.
+    let columns = layout
+        .windows()
+        .iter()
+        .map(|w| w.src_x..w.src_x + w.width)
+        .reduce(|a, b| a.start.min(b.start)..a.end.max(b.end));
+    source.convert_only_columns(columns)?;
+    let matcher = FrameMatcher::new(e, first, last);
+    // A seek lands by time on a nearby frame: start a few frames early, and from
+    // the beginning if it still landed late.
+    source.seek(e.frames[first].index.saturating_sub(8))?;
+    let mut landed = false;
+    while let Some(frame) = source.next_frame()? {
+        let position = match matcher.locate(e, frame.index, frame.container_time_s)? {
+            Match::Before => continue,
+            Match::After => break,
+            Match::At(position) if !landed && position > first => {
+                // Landed past the first frame: read the clip from its start.
+                landed = true;
+                source.seek(0)?;
+                continue;
+            }
+            Match::At(position) => position,
+        };
+        landed = true;
+        if !each(position, &frame.view)? || position == last {
+            break;
+        }
+    }
+    Ok(())
+}
+
 /// The position in [`Experiment::frames`] of the frame nearest each peak.
-fn peak_positions(e: &Experiment) -> Vec<usize> {
+pub(super) fn peak_positions(e: &Experiment) -> Vec<usize> {
     let nearest = |t: f64| {
         let k = e
             .frames
@@ -464,7 +477,7 @@ fn peak_positions(e: &Experiment) -> Vec<usize> {
 }
 
 /// The positions of the last `n` peaks' frames up to the halt, oldest first.
-fn last_turns(e: &Experiment, peak_frames: &[usize], n: usize) -> Vec<usize> {
+pub(super) fn last_turns(e: &Experiment, peak_frames: &[usize], n: usize) -> Vec<usize> {
     let before: Vec<usize> = peak_frames
         .iter()
         .copied()

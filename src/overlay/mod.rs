@@ -8,6 +8,9 @@
 //!         the frame enlarged, marks at their sub-pixel rows, a header of text
 //!   ├─► render::H264Writer → overlay.mp4 (slowed down), overlay.json (frame map)
 //!   └─► the frames at the last peaks → last-turns.png
+//! compare's Comparison (trajectory) + pose from the calibration (pose.rs)
+//!   └─► the model's outline on the same frames → model-overlay.mp4,
+//!       model-last-turns.png, model-overlay.csv (rim-edge distance per frame)
 //! ```
 //!
 //! The overlays read the clip a third time, after the analysis, and hold one
@@ -16,6 +19,8 @@
 mod canvas;
 mod last_turns;
 mod measured;
+mod model;
+mod pose;
 
 use std::path::PathBuf;
 
@@ -24,6 +29,11 @@ pub use measured::{
     LAST_TURNS_IMAGE, OVERLAY_H264, OVERLAY_INDEX, OVERLAY_VIDEO, OverlayFrame, OverlayIndex,
     OverlaySpec, write_measurement_overlays,
 };
+pub use model::{
+    EdgeError, MODEL_LAST_TURNS_IMAGE, MODEL_OVERLAY_ERRORS, MODEL_OVERLAY_VIDEO, ModelOverlay,
+    write_model_overlay,
+};
+pub use pose::CameraPose;
 
 use crate::footage::FootageError;
 use crate::report::ReportError;
