@@ -97,9 +97,33 @@ pub struct ExperimentPlan {
     /// and reflectivity, or the edge alone and why.
     #[serde(default)]
     pub rim: String,
+    /// The side view's row where z_rim = 0 [px]: the rim edge at rest (the
+    /// mirror-edge model's fitted e_rest on a dark plate, the shadow-edge
+    /// contour's on a light one, else the plate line z_base). A frame's
+    /// measured rim edge lies at this row − z_rim_px; `None` in results written
+    /// before it was recorded (then z_base).
+    #[serde(default)]
+    pub rim_zero_row_px: Option<f64>,
     pub colour_thresholds: Option<(ColourThresholds, ThresholdSource)>,
     pub window_s: f64,
     pub halt: HaltChoice,
+}
+
+impl ExperimentPlan {
+    /// The side view's row of the rim edge for a rim height `z_rim_px` [px]: the
+    /// row where z_rim = 0 ([`Self::rim_zero_row_px`]) less the height.
+    pub fn rim_edge_row(&self, z_rim_px: f64) -> f64 {
+        self.rim_zero_row_px
+            .unwrap_or(self.calibration.calibration.z_base)
+            - z_rim_px
+    }
+
+    /// Where the side view's pixel (0, 0) lies in the frame: the corner of the
+    /// region of interest, else the frame's.
+    pub fn side_view_origin(&self) -> (usize, usize) {
+        let roi = self.config.vision.as_ref().and_then(|v| v.roi);
+        roi.map_or((0, 0), |[x, y, _, _]| (x as usize, y as usize))
+    }
 }
 
 /// The side view's two scales and what they say about the camera.
@@ -689,6 +713,7 @@ pub fn analyse_clip(
         Plate::Dark => "edge and gap darkness (vision::rim, vision::gap)",
         Plate::Light => "edge (vision::rim): the second edge from the bottom on a light plate",
     };
+    let mut rim_zero_row_px = cal.z_base;
     let rim = match &rest_window {
         Some((rest_window, edge0)) => {
             let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
@@ -701,7 +726,7 @@ pub fn analyse_clip(
                     *edge0,
                 )
                 .map(|model| {
-                    format!(
+                    let description = format!(
                         "mirror-edge model (vision::mirror_edge): the rim's profile learned from \
                          the frames with an open gap; edge at rest {:.2} px, the zero of z_rim; \
                          fitted plate line {:.2} px (reported, not used), reflectivity {:.2}; \
@@ -710,12 +735,13 @@ pub fn analyse_clip(
                         model.plate_row,
                         model.reflectivity,
                         100.0 * model.rest_rms
-                    )
+                    );
+                    (description, model.rest_edge)
                 }),
                 Plate::Light => {
                     vision::remeasure_light_rim(&mut heights, &windows, cal.z_base, rest_window)
                         .map(|model| {
-                            format!(
+                            let description = format!(
                                 "shadow-edge contour (vision::shadow_edge): the edge where the \
                                  band falls to {:.3} of the disk's side, halfway to the shadow \
                                  under the lifted rim ({:.3}); edge at rest {:.2} px, the zero \
@@ -724,15 +750,17 @@ pub fn analyse_clip(
                                 model.shadow_ratio,
                                 model.rest_edge,
                                 model.kept_first_pass
-                            )
+                            );
+                            (description, model.rest_edge)
                         })
                 }
             };
             match refit {
-                Ok(description) => {
+                Ok((description, rest_edge)) => {
                     for (record, z) in frames.iter_mut().zip(heights) {
                         record.z_rim_px = z;
                     }
+                    rim_zero_row_px = rest_edge;
                     description
                 }
                 Err(reason) => format!("{first_pass}: {reason}"),
@@ -886,6 +914,7 @@ pub fn analyse_clip(
         scale,
         band_half_width_px: side_config.half_width_px,
         rim,
+        rim_zero_row_px: Some(rim_zero_row_px),
         colour_thresholds,
         window_s,
         halt: config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default(),
@@ -1091,6 +1120,8 @@ pub fn resume_key(clip: &Path, config: &ExperimentConfig) -> Result<String, Foot
 /// per clip.
 pub struct StudyAnalyser {
     pub root: PathBuf,
+    /// The overlays each clip gets (`None`: none).
+    pub overlay: Option<crate::overlay::OverlaySpec>,
 }
 
 impl crate::study::ClipAnalyser for StudyAnalyser {
@@ -1108,7 +1139,8 @@ impl crate::study::ClipAnalyser for StudyAnalyser {
         let config = config_for(&self.root, &clip.path, None).map_err(|e| e.to_string())?;
         let experiment =
             analyse_clip(&clip.path, &config, &|_, _| {}).map_err(|e| e.to_string())?;
-        crate::report::experiment::write_experiment(dir, &experiment).map_err(|e| e.to_string())?;
+        crate::report::experiment::write_experiment(dir, &experiment, self.overlay.as_ref())
+            .map_err(|e| e.to_string())?;
         let mut meta = clip.meta.clone();
         meta.material = meta.material.or(config.material.clone());
         meta.disk = meta.disk.or(config.disk_name.clone());

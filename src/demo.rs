@@ -22,7 +22,7 @@ use crate::render::{
     DEFAULT_CRF, Plate, PostFlatSpin, PowerLaw, RenderError, RenderSpec, Renderer, Timing,
     power_law_motion, write_clip,
 };
-use crate::report::html::{page, table};
+use crate::report::html::{page, table, video_figure};
 use crate::report::{ReportError, write_atomic};
 use crate::study::StudyResults;
 
@@ -111,6 +111,14 @@ pub fn render_demo_footage(root: &Path, clips: &[DemoClip]) -> Result<Vec<PathBu
 ///
 /// # Errors
 /// The page cannot be written.
+/// The two-view clip's measurement overlay, relative to the demo's folder.
+fn two_view_overlay(study_dir: &str) -> String {
+    format!(
+        "{study_dir}/experiments/two-view/stainless steel/run1.mp4/{}",
+        crate::overlay::OVERLAY_VIDEO
+    )
+}
+
 pub fn write_demo_index(
     out: &Path,
     clips: &[DemoClip],
@@ -164,6 +172,11 @@ pub fn write_demo_index(
         }
         h2 { "Recovered exponents" }
         (table(&["clip", "true n", "recovered n", "95 % CI", "error", "CI covers truth"], &rows, |_, _| false))
+        @if let Some(link) = comparison {
+            h2 { "On the footage: the two-view clip" }
+            (video_figure(&two_view_overlay(study_dir), "overlay", "What was measured, on the frames of the two-view clip: the band, the plate line, the rim edge, the peaks, the halt, the strip's mask and axis (from the clip's own page)."))
+            (video_figure(&link.with_file_name(crate::overlay::MODEL_OVERLAY_VIDEO).display().to_string(), "model-overlay", "The simulated disk (augmented contour friction) drawn over the same frames, with its rim edge against the measured one (from the comparison's page)."))
+        }
         h2 { "Reports" }
         ul {
             li { a href=(format!("{study_dir}/index.html")) { "Study report" } ": per-material tables, box plot, t-tests, trends" }

@@ -6,6 +6,7 @@ pub mod demo;
 pub mod energy;
 pub mod footage;
 pub mod model;
+pub mod overlay;
 pub mod render;
 pub mod report;
 pub mod reproduce;

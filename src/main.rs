@@ -14,6 +14,7 @@ use eulerdisk::model::simulate::{
     InitialState, MAX_SAMPLES, RunSummary, SimulationSpec, simulate, simulate_streaming,
 };
 use eulerdisk::model::tuning::tune_eta;
+use eulerdisk::overlay::{OverlaySpec, write_model_overlay};
 use eulerdisk::render::{
     DEFAULT_CRF, Effects, Nutation, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Scenery,
     Timing, add_nutation, power_law_motion, trajectory_motion, write_clip,
@@ -75,6 +76,8 @@ enum Command {
         /// Replace an output folder that holds another clip's analysis.
         #[arg(long)]
         force: bool,
+        #[command(flatten)]
+        overlay: OverlayArgs,
     },
     /// Analyse every clip below a folder, in parallel, and write the study report:
     /// per-material tables, box plots, t-tests (Tables 3.2, 3.3), trends.
@@ -111,6 +114,47 @@ enum Command {
         #[arg(short, long, default_value = "out/demo")]
         out: PathBuf,
     },
+}
+
+/// The overlays `analyse` and `study` draw on the footage (overlay.mp4,
+/// last-turns.png).
+#[derive(Args)]
+struct OverlayArgs {
+    /// Write no overlay video or contact sheet.
+    #[arg(long)]
+    no_overlay: bool,
+    /// The overlay video's span, t − t_φ from,to [s].
+    #[arg(long, value_name = "FROM,TO", default_value = "-0.5,0.1", allow_hyphen_values = true, value_parser = parse_span)]
+    overlay_span: (f64, f64),
+    /// Frames per second the overlay video plays at (a 480 fps clip at 30 plays
+    /// 16 × slower than filmed).
+    #[arg(long, value_name = "FPS", default_value_t = 30.0)]
+    overlay_fps: f64,
+}
+
+impl OverlayArgs {
+    /// The overlays asked for, `None` with `--no-overlay`.
+    fn spec(&self) -> Option<OverlaySpec> {
+        (!self.no_overlay).then(|| OverlaySpec {
+            span_s: self.overlay_span,
+            playback_fps: self.overlay_fps,
+            ..OverlaySpec::default()
+        })
+    }
+}
+
+/// `FROM,TO` in seconds, FROM < TO.
+fn parse_span(text: &str) -> Result<(f64, f64), String> {
+    let (from, to) = text
+        .split_once(',')
+        .ok_or_else(|| format!("`{text}`: give FROM,TO in seconds, e.g. -0.5,0.1"))?;
+    let number = |s: &str| s.trim().parse::<f64>().map_err(|e| format!("`{s}`: {e}"));
+    let (from, to) = (number(from)?, number(to)?);
+    if from.is_finite() && to.is_finite() && from < to {
+        Ok((from, to))
+    } else {
+        Err(format!("`{text}`: FROM must be before TO"))
+    }
 }
 
 #[derive(Args)]
@@ -188,6 +232,9 @@ struct CompareArgs {
     /// Gap at which the air film of eq. 4.104 gives way to contact [m].
     #[arg(long, default_value_t = eulerdisk::compare::DEFAULT_CONTACT_GAP_M)]
     contact_gap: f64,
+    /// Draw no model over the footage (model-overlay.mp4, model-last-turns.png).
+    #[arg(long)]
+    no_overlay: bool,
 }
 
 #[derive(Args)]
@@ -215,6 +262,9 @@ struct StudyArgs {
     /// (Appendix B) instead of analysing footage.
     #[arg(long, conflicts_with = "root")]
     published: bool,
+    /// Write no overlay video or contact sheet for the clips.
+    #[arg(long)]
+    no_overlay: bool,
 }
 
 #[derive(Args)]
@@ -414,7 +464,14 @@ fn run(cli: Cli) -> Result<Status> {
             config,
             out,
             force,
-        } => done(run_analyse(&clip, config.as_deref(), out, force)),
+            overlay,
+        } => done(run_analyse(
+            &clip,
+            config.as_deref(),
+            out,
+            force,
+            overlay.spec(),
+        )),
         Command::Study(args) => run_study(&args),
         Command::Merge { shards, out, welch } => run_merge(&shards, &out, welch),
         Command::Compare(args) => done(run_compare(&args)),
@@ -445,6 +502,7 @@ fn run_analyse(
     config: Option<&Path>,
     out: Option<PathBuf>,
     force: bool,
+    overlay: Option<OverlaySpec>,
 ) -> Result<()> {
     let root = clip.parent().unwrap_or(Path::new("."));
     let config = analyse::config_for(root, clip, config)?;
@@ -472,7 +530,9 @@ fn run_analyse(
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    eulerdisk::report::write_folder(&out, |dir| write_experiment(dir, &experiment))?;
+    eulerdisk::report::write_folder(&out, |dir| {
+        write_experiment(dir, &experiment, overlay.as_ref())
+    })?;
     let fit = &experiment.peaks_fit.fit;
     for warning in &experiment.warnings {
         eprintln!("warning: {warning}");
@@ -526,7 +586,10 @@ fn run_study(args: &StudyArgs) -> Result<Status> {
     eulerdisk::report::check_folder(&args.out)?;
     let clips = study::discover(root, &args.out)?;
     let out = OutputLock::acquire(&args.out)?;
-    let analyser = analyse::StudyAnalyser { root: root.clone() };
+    let analyser = analyse::StudyAnalyser {
+        root: root.clone(),
+        overlay: (!args.no_overlay).then(OverlaySpec::default),
+    };
     let bar = progress_bar(0, "clips");
     let done = std::sync::atomic::AtomicUsize::new(0);
     let events = |event: StudyEvent| match event {
@@ -874,7 +937,7 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
                 Ok(c) => {
                     print!("{:>2}. ", i + 1);
                     print(c);
-                    write_comparison(&comparison_dir(&args.experiment, r.model), c)?;
+                    write_comparison(&comparison_dir(&args.experiment, r.model), c, None)?;
                 }
                 Err(e) => println!("{:>2}. {:?}: failed: {e}", i + 1, r.model),
             }
@@ -887,7 +950,17 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
     let comparison = compare::compare(&experiment, &args.experiment, &options)?;
     print(&comparison);
     let dir = comparison_dir(&args.experiment, options.model);
-    write_comparison(&dir, &comparison)?;
+    eulerdisk::report::create_folder(&dir)?;
+    let overlay = (!args.no_overlay)
+        .then(|| write_model_overlay(&dir, &experiment, &comparison, &OverlaySpec::default()))
+        .transpose()?;
+    if let Some(err) = overlay.as_ref().and_then(|o| o.edge_error) {
+        println!(
+            "model over the footage: rim edge model − footage {:+.2} px mean, {:.2} px RMS ({} frames)",
+            err.mean_px, err.rms_px, err.frames
+        );
+    }
+    write_comparison(&dir, &comparison, overlay.as_ref())?;
     println!("report: {}", dir.join("index.html").display());
     Ok(())
 }
@@ -926,6 +999,7 @@ fn run_demo(out: &Path) -> Result<()> {
         force: true,
         welch: false,
         published: false,
+        no_overlay: false,
     })?;
     let bytes = std::fs::read(study_out.join(study::STUDY_FILE))?;
     let results: study::StudyResults = serde_json::from_slice(&bytes)?;
@@ -945,7 +1019,10 @@ fn run_demo(out: &Path) -> Result<()> {
     let compare_link = match compared {
         Ok(c) => {
             let dir = comparison_dir(&experiment_dir, model);
-            write_comparison(&dir, &c)?;
+            eulerdisk::report::create_folder(&dir)?;
+            let experiment = eulerdisk::compare::load_experiment(&experiment_dir)?;
+            let overlay = write_model_overlay(&dir, &experiment, &c, &OverlaySpec::default())?;
+            write_comparison(&dir, &c, Some(&overlay))?;
             Some(dir.strip_prefix(out).unwrap_or(&dir).join("index.html"))
         }
         Err(e) => {

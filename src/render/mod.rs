@@ -154,7 +154,9 @@ use scene::{
     Surface, View,
 };
 use std::f64::consts::PI;
-pub use write::{ClipFormat, DEFAULT_CRF, truth_path, write_clip};
+pub use write::{
+    ChromaFilter, ClipFormat, DEFAULT_CRF, H264Settings, H264Writer, truth_path, write_clip,
+};
 
 /// Errors of the render stage; file errors name the file.
 #[derive(Debug, thiserror::Error)]

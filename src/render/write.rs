@@ -147,9 +147,54 @@ fn write_pngs(renderer: &Renderer, dir: &Path) -> Result<(), (PathBuf, String)> 
         })
 }
 
-/// Encodes the frames as H.264 (libx264 through libavcodec, yuv420p, preset
-/// `medium`, constant quality `crf`) in an MP4 container, with two settings that
-/// make the bytes a function of the frames and `crf` alone:
+/// Encodes the frames as H.264 through [`H264Writer`] (preset `medium`, constant
+/// quality `crf`), rendering [`BATCH`] frames at a time in parallel.
+fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String> {
+    let truth = renderer.truth();
+    let settings = H264Settings {
+        crf,
+        preset: "medium",
+        chroma: ChromaFilter::Bicubic,
+    };
+    let mut writer = H264Writer::create(path, truth.width, truth.height, truth.fps, settings)?;
+    let n = renderer.frame_count();
+    for start in (0..n).step_by(BATCH) {
+        let images: Vec<_> = (start..(start + BATCH).min(n))
+            .into_par_iter()
+            .map(|i| renderer.render_frame(i))
+            .collect();
+        for image in &images {
+            writer.push(image)?;
+        }
+    }
+    writer.finish()?;
+    Ok("avc1".to_owned())
+}
+
+/// How [`H264Writer`] encodes: libx264's constant-rate factor and preset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct H264Settings {
+    /// Constant-rate factor (0 lossless in luma, 23 libx264's default, 51 the worst).
+    pub crf: u8,
+    /// libx264 preset (`ultrafast` … `veryslow`): speed against size at equal quality.
+    pub preset: &'static str,
+    /// How colour is subsampled to 4:2:0 (libswscale's filter).
+    pub chroma: ChromaFilter,
+}
+
+/// libswscale's filter for the RGB → YUV 4:2:0 conversion.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ChromaFilter {
+    /// Bicubic: what OpenCV's writer used, kept so rendered clips keep their bytes.
+    Bicubic,
+    /// Fast bilinear: about half the conversion time, for pictures that are
+    /// looked at rather than measured.
+    FastBilinear,
+}
+
+/// An H.264 MP4 being written frame by frame: libx264 through libavcodec, yuv420p,
+/// constant quality, with two settings that make the bytes a function of the
+/// frames and the settings alone:
 ///
 /// - `mbtree=0`: x264's macroblock-tree rate control (on by default, and in
 ///   OpenCV's writer) reads heap memory it has not initialised. Identical YUV
@@ -159,114 +204,175 @@ fn write_pngs(renderer: &Renderer, dir: &Path) -> Result<(), (PathBuf, String)> 
 ///   process) wrote different MP4s, while separate `render` processes agreed.
 /// - one encoder thread ([`X264_THREADS`]): x264's output depends on its thread
 ///   count, which by default follows the machine's cores.
-fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String> {
-    let truth = renderer.truth();
-    let (w, h) = (truth.width, truth.height);
-    if w % 2 == 1 || h % 2 == 1 {
-        return Err(format!(
-            "H.264 (4:2:0) needs an even frame size, got {w} × {h}: render a PNG folder or an even size"
-        ));
+///
+/// Used by `render` (clips) and by the overlays of `analyse` and `compare`.
+pub struct H264Writer {
+    output: ff::format::context::Output,
+    encoder: ff::encoder::Video,
+    scaler: scaling::Context,
+    rgb: ff::frame::Video,
+    yuv: ff::frame::Video,
+    packet: ff::Packet,
+    time_base: ff::Rational,
+    stream_time_base: ff::Rational,
+    width: u32,
+    height: u32,
+    frames: i64,
+}
+
+fn av(what: &'static str) -> impl Fn(ff::Error) -> String {
+    move |e| format!("FFmpeg: {what}: {e}")
+}
+
+impl H264Writer {
+    /// Opens `path` for a `width` × `height` clip played at `fps` frames/s.
+    ///
+    /// # Errors
+    /// An odd frame size (4:2:0 needs even sizes), no libx264 in this FFmpeg, or
+    /// FFmpeg failing to open the file or the encoder (the reason, without the path).
+    pub fn create(
+        path: &Path,
+        width: u32,
+        height: u32,
+        fps: f64,
+        settings: H264Settings,
+    ) -> Result<Self, String> {
+        let (w, h) = (width, height);
+        if w % 2 == 1 || h % 2 == 1 {
+            return Err(format!(
+                "H.264 (4:2:0) needs an even frame size, got {w} × {h}: render a PNG folder or an even size"
+            ));
+        }
+        ff::init().map_err(av("init"))?;
+        ff::util::log::set_level(ff::util::log::Level::Quiet);
+        let codec = ff::encoder::find_by_name("libx264").ok_or_else(|| {
+            "this FFmpeg (libavcodec) has no libx264 encoder; render a PNG folder instead"
+                .to_owned()
+        })?;
+        let mut output = ff::format::output_as(path, "mp4").map_err(av("open the MP4"))?;
+        let global_header = output
+            .format()
+            .flags()
+            .contains(ff::format::Flags::GLOBAL_HEADER);
+        let rate = ff::Rational::from(fps);
+        let time_base = rate.invert();
+        let mut encoder = ff::codec::context::Context::new_with_codec(codec)
+            .encoder()
+            .video()
+            .map_err(av("encoder"))?;
+        encoder.set_width(w);
+        encoder.set_height(h);
+        encoder.set_format(Pixel::YUV420P);
+        encoder.set_time_base(time_base);
+        encoder.set_frame_rate(Some(rate));
+        if global_header {
+            encoder.set_flags(ff::codec::Flags::GLOBAL_HEADER);
+        }
+        let mut options = ff::Dictionary::new();
+        options.set("preset", settings.preset);
+        options.set("crf", &settings.crf.to_string());
+        options.set("threads", &X264_THREADS.to_string());
+        options.set("x264-params", "mbtree=0");
+        let encoder = encoder.open_with(options).map_err(av("open libx264"))?;
+        let mut stream = output
+            .add_stream(codec)
+            .map_err(av("add the video stream"))?;
+        stream.set_parameters(&encoder);
+        // The muxer keeps a multiple of the frame rate (480 fps: 1/15360 s) rather
+        // than its default 1/90000 s, so frame times are exact.
+        stream.set_time_base(time_base);
+        output.write_header().map_err(av("write the MP4 header"))?;
+        let stream_time_base = output
+            .stream(0)
+            .map(|s| s.time_base())
+            .ok_or_else(|| "FFmpeg: the MP4 lost its video stream".to_owned())?;
+        let scaler = scaling::Context::get(
+            Pixel::RGB24,
+            w,
+            h,
+            Pixel::YUV420P,
+            w,
+            h,
+            match settings.chroma {
+                ChromaFilter::Bicubic => scaling::Flags::BICUBIC,
+                ChromaFilter::FastBilinear => scaling::Flags::FAST_BILINEAR,
+            },
+        )
+        .map_err(av("libswscale"))?;
+        Ok(Self {
+            output,
+            encoder,
+            scaler,
+            rgb: ff::frame::Video::new(Pixel::RGB24, w, h),
+            yuv: ff::frame::Video::new(Pixel::YUV420P, w, h),
+            packet: ff::Packet::empty(),
+            time_base,
+            stream_time_base,
+            width: w,
+            height: h,
+            frames: 0,
+        })
     }
-    fn av(what: &'static str) -> impl Fn(ff::Error) -> String {
-        move |e| format!("FFmpeg: {what}: {e}")
+
+    /// Encodes the next frame.
+    ///
+    /// # Errors
+    /// A frame of another size than the clip's, or FFmpeg failing to encode or write.
+    pub fn push(&mut self, image: &image::RgbImage) -> Result<(), String> {
+        if image.dimensions() != (self.width, self.height) {
+            let (w, h) = image.dimensions();
+            return Err(format!(
+                "frame {} is {w} × {h} px, the clip {} × {} px",
+                self.frames, self.width, self.height
+            ));
+        }
+        let row = 3 * self.width as usize;
+        let stride = self.rgb.stride(0);
+        for (dst, src) in self
+            .rgb
+            .data_mut(0)
+            .chunks_mut(stride)
+            .zip(image.as_raw().chunks_exact(row))
+        {
+            dst[..row].copy_from_slice(src);
+        }
+        self.scaler
+            .run(&self.rgb, &mut self.yuv)
+            .map_err(av("libswscale"))?;
+        self.yuv.set_pts(Some(self.frames));
+        self.frames += 1;
+        self.encoder
+            .send_frame(&self.yuv)
+            .map_err(av("encode a frame"))?;
+        self.drain()
     }
-    ff::init().map_err(av("init"))?;
-    ff::util::log::set_level(ff::util::log::Level::Quiet);
-    let codec = ff::encoder::find_by_name("libx264").ok_or_else(|| {
-        "this FFmpeg (libavcodec) has no libx264 encoder; render a PNG folder instead".to_owned()
-    })?;
-    let mut output = ff::format::output_as(path, "mp4").map_err(av("open the MP4"))?;
-    let global_header = output
-        .format()
-        .flags()
-        .contains(ff::format::Flags::GLOBAL_HEADER);
-    let rate = ff::Rational::from(truth.fps);
-    let time_base = rate.invert();
-    let mut encoder = ff::codec::context::Context::new_with_codec(codec)
-        .encoder()
-        .video()
-        .map_err(av("encoder"))?;
-    encoder.set_width(w);
-    encoder.set_height(h);
-    encoder.set_format(Pixel::YUV420P);
-    encoder.set_time_base(time_base);
-    encoder.set_frame_rate(Some(rate));
-    if global_header {
-        encoder.set_flags(ff::codec::Flags::GLOBAL_HEADER);
-    }
-    let mut options = ff::Dictionary::new();
-    options.set("preset", "medium");
-    options.set("crf", &crf.to_string());
-    options.set("threads", &X264_THREADS.to_string());
-    options.set("x264-params", "mbtree=0");
-    let mut encoder = encoder.open_with(options).map_err(av("open libx264"))?;
-    let mut stream = output
-        .add_stream(codec)
-        .map_err(av("add the video stream"))?;
-    stream.set_parameters(&encoder);
-    // The muxer keeps a multiple of the frame rate (480 fps: 1/15360 s) rather
-    // than its default 1/90000 s, so frame times are exact.
-    stream.set_time_base(time_base);
-    output.write_header().map_err(av("write the MP4 header"))?;
-    let stream_time_base = output
-        .stream(0)
-        .map(|s| s.time_base())
-        .ok_or_else(|| "FFmpeg: the MP4 lost its video stream".to_owned())?;
-    let mut scaler = scaling::Context::get(
-        Pixel::RGB24,
-        w,
-        h,
-        Pixel::YUV420P,
-        w,
-        h,
-        scaling::Flags::BICUBIC,
-    )
-    .map_err(av("libswscale"))?;
-    let mut rgb = ff::frame::Video::new(Pixel::RGB24, w, h);
-    let mut yuv = ff::frame::Video::new(Pixel::YUV420P, w, h);
-    let mut packet = ff::Packet::empty();
-    let mut drain = |encoder: &mut ff::encoder::Video,
-                     output: &mut ff::format::context::Output|
-     -> Result<(), String> {
-        while encoder.receive_packet(&mut packet).is_ok() {
-            packet.set_stream(0);
+
+    /// Writes the packets the encoder has ready.
+    fn drain(&mut self) -> Result<(), String> {
+        while self.encoder.receive_packet(&mut self.packet).is_ok() {
+            self.packet.set_stream(0);
             // One frame each: without a duration the MP4's edit list ends at the
             // last frame's start and decoders drop that frame.
-            packet.set_duration(1);
-            packet.rescale_ts(time_base, stream_time_base);
-            packet
-                .write_interleaved(output)
+            self.packet.set_duration(1);
+            self.packet
+                .rescale_ts(self.time_base, self.stream_time_base);
+            self.packet
+                .write_interleaved(&mut self.output)
                 .map_err(av("write a packet"))?;
         }
         Ok(())
-    };
-    let n = renderer.frame_count();
-    let row = 3 * w as usize;
-    for start in (0..n).step_by(BATCH) {
-        let images: Vec<_> = (start..(start + BATCH).min(n))
-            .into_par_iter()
-            .map(|i| renderer.render_frame(i))
-            .collect();
-        for (i, image) in (start..).zip(images) {
-            let stride = rgb.stride(0);
-            for (dst, src) in rgb
-                .data_mut(0)
-                .chunks_mut(stride)
-                .zip(image.as_raw().chunks_exact(row))
-            {
-                dst[..row].copy_from_slice(src);
-            }
-            scaler.run(&rgb, &mut yuv).map_err(av("libswscale"))?;
-            yuv.set_pts(Some(i as i64));
-
-            encoder.send_frame(&yuv).map_err(av("encode a frame"))?;
-            drain(&mut encoder, &mut output)?;
-        }
     }
-    encoder.send_eof().map_err(av("flush the encoder"))?;
-    drain(&mut encoder, &mut output)?;
-    output
-        .write_trailer()
-        .map_err(av("write the MP4 trailer"))?;
-    Ok("avc1".to_owned())
+
+    /// Flushes the encoder and writes the MP4's trailer; returns the frames written.
+    ///
+    /// # Errors
+    /// FFmpeg failing to flush or to write the trailer.
+    pub fn finish(mut self) -> Result<usize, String> {
+        self.encoder.send_eof().map_err(av("flush the encoder"))?;
+        self.drain()?;
+        self.output
+            .write_trailer()
+            .map_err(av("write the MP4 trailer"))?;
+        Ok(self.frames as usize)
+    }
 }

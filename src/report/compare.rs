@@ -7,6 +7,7 @@
 //! | `model.csv` | the model's trajectory (every millisecond and the end) |
 //! | `overlay.svg`, `overlay.png` | measured points, the model's curve, the model at the measured instants |
 //! | `index.html` | self-contained page: options, initial state, errors, residual spin, post-flat |
+//! | `model-overlay.mp4`, `model-last-turns.png`, `model-overlay.csv`, `model-overlay.json` | the model drawn over the footage ([`crate::overlay::write_model_overlay`]), when made |
 //!
 //! and for `--all-models` in `EXPERIMENT_OUT/compare-all/`: `ranking.json`,
 //! `ranking.csv` and `index.html`.
@@ -19,11 +20,12 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Serialize;
 
-use super::html::{page, svg_figure, table};
+use super::html::{page, png_figure, svg_figure, table, video_figure};
 use super::{ReportError, write_atomic, write_csv, write_json};
 use crate::compare::{Comparison, EtaMethod, Ranked};
 use crate::model::dissipation::ModelKind;
 use crate::model::simulate::Sample;
+use crate::overlay::ModelOverlay;
 
 /// Colour of the measured series (green, as the thesis's figures).
 const MEASURED: RGBColor = RGBColor(0, 140, 60);
@@ -286,7 +288,44 @@ fn opt(v: Option<f64>, f: fn(f64) -> String) -> String {
     v.map_or_else(|| "—".into(), f)
 }
 
-fn comparison_body(c: &Comparison, svg: &str) -> Markup {
+/// "On the footage": the model's outline over the frames, the last turns side by
+/// side, and the distance between the model's rim edge and the footage's.
+fn model_overlay_section(o: &ModelOverlay, dir: &Path) -> Markup {
+    let sheet = o
+        .last_turns
+        .as_ref()
+        .and_then(|name| std::fs::read(dir.join(name)).ok());
+    let pose = &o.pose;
+    html! {
+        h2 { "On the footage" }
+        (video_figure(&o.video, "model-overlay", "The model's outline (orange) over the footage, with its rim edge on the centre band (orange) against the measured one (green); left the side view, right the centre band enlarged."))
+        @if let Some(png) = &sheet {
+            (png_figure(png, "The last turns: the footage with the model's outline, and the model alone at the same place and scale."))
+        }
+        @if let Some(err) = &o.edge_error {
+            p { (format!(
+                "Rim edge on the centre band, model − footage, over {} frames: mean {:+.2} px ({:+.3} mm),                  RMS {:.2} px ({:.3} mm), largest {:.2} px ({:.3} mm). Per frame: {}.",
+                err.frames, err.mean_px, 1e3 * err.mean_m, err.rms_px, 1e3 * err.rms_m,
+                err.max_abs_px, 1e3 * err.max_abs_m, o.errors_csv)) }
+        }
+        p class="note" { (format!(
+            "Camera pose from the calibration (overlay::pose): elevation {:.2}° (from the top face's \
+             image height, silhouette top at row {:.2}), {}, scale {:.4e} m/px at the disk's centre. \
+             The model's precession phase is set to the measured peaks (offset {:.3} rad){}.",
+            pose.elevation.to_degrees(), pose.z_top,
+            pose.distance_m.map_or_else(|| "orthographic (no perspective measured)".to_string(),
+                |d| format!("pinhole {d:.3} m from the near rim")),
+            pose.centre_metres_per_px, o.psi_offset_rad,
+            if o.mirrored { "; mirrored to the plan view's sense of precession" } else { "" })) }
+    }
+}
+
+fn comparison_body(
+    c: &Comparison,
+    svg: &str,
+    overlay: Option<&ModelOverlay>,
+    dir: &Path,
+) -> Markup {
     let s = &c.initial.state;
     let errors: Vec<Vec<String>> = c
         .errors
@@ -316,6 +355,7 @@ fn comparison_body(c: &Comparison, svg: &str) -> Markup {
         }
         h2 { "Overlay (figs. 4.15–4.16)" }
         (svg_figure(svg, "Measured (green dots), the model (orange line) and the model at the measured instants (orange crosses; ψ̇ as the mean over the same turn, eq. 3.11). Time: t − t_φ of the experiment."))
+        @if let Some(o) = overlay { (model_overlay_section(o, dir)) }
         h2 { "Parameters" }
         (table(&["quantity", "value", "note"], &[
             vec!["η".into(), sci(c.eta), method_name(c.options.method).into()],
@@ -369,9 +409,16 @@ fn comparison_body(c: &Comparison, svg: &str) -> Markup {
 ///
 /// # Errors
 /// A file cannot be written or the figure cannot be drawn.
-pub fn write_comparison(dir: &Path, c: &Comparison) -> Result<Vec<PathBuf>, ReportError> {
+pub fn write_comparison(
+    dir: &Path,
+    c: &Comparison,
+    model_overlay: Option<&ModelOverlay>,
+) -> Result<Vec<PathBuf>, ReportError> {
     let summary = dir.join("summary.json");
     write_json(&summary, c)?;
+    if let Some(o) = model_overlay {
+        write_json(&dir.join("model-overlay.json"), o)?;
+    }
     let csv = dir.join("model.csv");
     let s = &c.trajectory.samples;
     let step = ((1e-3 / crate::compare::OUTPUT_INTERVAL_S).round() as usize).max(1);
@@ -385,7 +432,7 @@ pub fn write_comparison(dir: &Path, c: &Comparison) -> Result<Vec<PathBuf>, Repo
     let title = format!("{} vs {}", model_name(c.options.model), c.clip.display());
     write_atomic(
         &html_path,
-        page(&title, comparison_body(c, &svg)).as_bytes(),
+        page(&title, comparison_body(c, &svg, model_overlay, dir)).as_bytes(),
     )?;
     Ok(vec![summary, csv, svg_path, png_path, html_path])
 }

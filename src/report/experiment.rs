@@ -11,6 +11,8 @@
 //! | `flags.csv` | flagged frames (skips, jumps) with reasons |
 //! | `series.svg/.png`, `states.svg/.png`, `energy.svg` | plots |
 //! | `calibration.png`, `threshold.png` | diagnostic images (figs. 3.3, 3.7) |
+//! | `overlay.mp4`, `overlay.json` | the measurements drawn on the frames around the halt ([`crate::overlay`]) |
+//! | `last-turns.png` | the frames at the last peaks, in a grid |
 
 use std::path::{Path, PathBuf};
 
@@ -18,11 +20,12 @@ use maud::html;
 use plotters::prelude::*;
 use serde::Serialize;
 
-use super::html::{page, png_figure, svg_figure, table};
+use super::html::{page, png_figure, svg_figure, table, video_figure};
 use super::plot::{Panel, time_panels};
 use super::{ReportError, write_atomic, write_csv, write_json};
 use crate::analyse::{EnergyFit, Experiment};
 use crate::energy;
+use crate::overlay::{OverlayIndex, OverlaySpec, write_measurement_overlays};
 
 #[derive(Serialize)]
 struct FrameRow {
@@ -96,8 +99,17 @@ pub fn other_clip_in(dir: &Path, clip: &Path) -> Option<PathBuf> {
     (!same_bytes).then_some(previous)
 }
 
-/// A file cannot be written or a plot cannot be drawn.
-pub fn write_experiment(dir: &Path, experiment: &Experiment) -> Result<(), ReportError> {
+/// Writes every output of an experiment into `dir`, with the overlays of `overlay`
+/// (`None`: none).
+///
+/// # Errors
+/// A file cannot be written, a plot cannot be drawn, or the overlays cannot be
+/// made (the clip cannot be decoded again).
+pub fn write_experiment(
+    dir: &Path,
+    experiment: &Experiment,
+    overlay: Option<&OverlaySpec>,
+) -> Result<(), ReportError> {
     let e = experiment;
     let strip = e.series.strip.as_ref().map(|s| &s.series);
     let at = |v: Option<&Vec<f64>>, i: usize| {
@@ -255,10 +267,13 @@ pub fn write_experiment(dir: &Path, experiment: &Experiment) -> Result<(), Repor
     }
     let energy_svg = energy_plot_svg(&e.peaks_fit, e.plan.window_s).map_err(plot_error)?;
     write_atomic(&dir.join("energy.svg"), energy_svg.as_bytes())?;
+    let overlay = overlay
+        .map(|spec| write_measurement_overlays(dir, e, spec))
+        .transpose()?;
 
     write_atomic(
         &dir.join("index.html"),
-        experiment_page(e, &energy_svg, dir)?.as_bytes(),
+        experiment_page(e, &energy_svg, dir, overlay.as_ref())?.as_bytes(),
     )
 }
 
@@ -288,7 +303,12 @@ fn carried_spin_energy(e: &Experiment) -> Option<(f64, f64)> {
     beta_dot.is_finite().then_some((beta_dot, energy))
 }
 
-fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<String, ReportError> {
+fn experiment_page(
+    e: &Experiment,
+    energy_svg: &str,
+    dir: &Path,
+    overlay: Option<&OverlayIndex>,
+) -> Result<String, ReportError> {
     let read_svg = |name: &str| std::fs::read_to_string(dir.join(name)).ok();
     let series_svg = read_svg("series.svg");
     let states_svg = read_svg("states.svg");
@@ -446,6 +466,9 @@ fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<Strin
         h2 { "Series" }
         @if let Some(svg) = &series_svg { (svg_figure(svg, "Rim height and, for two-view clips, the strip angle and its rate.")) }
         @if let Some(svg) = &states_svg { (svg_figure(svg, "Per-frame φ, ψ, ψ̇ from local fits of the rim-height model.")) }
+        @if let Some(overlay) = overlay {
+            (footage_section(e, overlay, dir))
+        }
         h2 { "Diagnostics" }
         (png_figure(&e.diagnostics.calibration_png, "Rest frame: x_l, x_r (green), z_t (yellow), z_base (red), centre line (blue)."))
         (png_figure(&e.diagnostics.threshold_png, "Highest-rim frame thresholded at γ: measuring band (blue) and the rim edge found (red)."))
@@ -464,6 +487,86 @@ fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<Strin
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
     );
     Ok(page(&title, body))
+}
+
+/// Seeks the overlay video to its frame `k` and pauses there; records the
+/// video's duration (`data-duration`) once it is known, or shows why it cannot
+/// play (`data-error`, the MediaError code, and a note to open the file itself).
+const SHOW_FRAME_JS: &str = "
+function showFrame(k, fps) {
+  const v = document.getElementById('overlay');
+  v.pause();
+  v.currentTime = (k + 0.5) / fps;
+  v.scrollIntoView({block: 'center'});
+}
+(function () {
+  const v = document.getElementById('overlay');
+  const known = () => { v.dataset.duration = v.duration; };
+  const failed = () => {
+    v.dataset.error = v.error ? v.error.code : 'unknown';
+    document.getElementById('overlay-error').hidden = false;
+  };
+  if (v.readyState >= 1) { known(); } else { v.addEventListener('loadedmetadata', known); }
+  if (v.error) { failed(); } else { v.addEventListener('error', failed); }
+})();
+";
+
+/// "On the footage": the overlay video, the contact sheet, and the peaks with a
+/// button that shows each one's frame in the video.
+fn footage_section(e: &Experiment, overlay: &OverlayIndex, dir: &Path) -> maud::Markup {
+    let sheet = overlay
+        .last_turns
+        .as_ref()
+        .and_then(|(name, _)| std::fs::read(dir.join(name)).ok());
+    let fps = overlay.playback_fps;
+    let metres_per_px = e.plan.metres_per_px;
+    let rest = e.series.halt.rest_level;
+    let peak_rows: Vec<(usize, f64, f64, f64, Option<usize>)> = e
+        .series
+        .peaks
+        .peaks
+        .iter()
+        .enumerate()
+        .map(|(n, p)| {
+            let index = e.frames.get(p.index).map(|f| f.index);
+            let k = overlay.frames.iter().position(|f| Some(f.index) == index);
+            (n + 1, p.t, (p.z + rest) / metres_per_px, p.phi, k)
+        })
+        .collect();
+    maud::html! {
+        h2 { "On the footage" }
+        (video_figure(&overlay.video, "overlay", &format!(
+            "The measurements on the frames from t − t_φ = {} s to {} s, {:.0}× slower than filmed \
+             ({} frames at {} frames/s). Left: the side view; right: the centre band enlarged. \
+             Blue: the measuring band; red: the plate line z_base; green: the measured rim edge; \
+             magenta: a detected peak; orange border: the halt frame t_φ; red border: a flagged \
+             frame (reason in the header){}. overlay.json maps each video frame to its clip frame.",
+            overlay.span_s.0, overlay.span_s.1, overlay.slow_down, overlay.frames.len(), fps,
+            if e.series.strip.is_some() { "; below: the plan view with the strip's mask (cyan) and its principal axis (yellow)" } else { "" })))
+        p id="overlay-error" class="note" hidden {
+            "This browser cannot play the video (H.264 in MP4): open "
+            a href=(overlay.video) { (overlay.video) }
+            " in a video player."
+        }
+        @if let Some(png) = &sheet {
+            (png_figure(png, "The last oscillations before the halt: the frame nearest each peak, with t − t_φ and z_rim in its header."))
+        }
+        h3 { "Peaks and their frames" }
+        p class="note" { "Each peak of the rim-height series (plots above) comes from the frames around it; “show” stops the video at the frame nearest the peak." }
+        table {
+            tr { th { "peak" } th { "t − t_φ [s]" } th { "z_rim [px]" } th { "φ [°]" } th { "frame" } }
+            @for (n, t, z, phi, k) in &peak_rows {
+                tr {
+                    td { (n) } td { (format!("{t:.5}")) } td { (format!("{z:.2}")) }
+                    td { (format!("{:.3}", phi.to_degrees())) }
+                    td { @if let Some(k) = k {
+                        button class="frame" onclick=(format!("showFrame({k}, {fps})")) { "show" }
+                    } @else { "outside the video" } }
+                }
+            }
+        }
+        script { (maud::PreEscaped(SHOW_FRAME_JS)) }
+    }
 }
 
 /// Energy samples with the fitted power law and a band of the curves whose n

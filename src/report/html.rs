@@ -18,7 +18,8 @@ th, td { border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }
 th { background: #f2f2f2; } td.text, th.text { text-align: left; }
 td.significant { background: #ffe1a8; font-weight: bold; }
 td.bad, li.bad { color: #a40000; }
-figure { margin: 1em 0; } figure svg, figure img { max-width: 100%; height: auto; }
+figure { margin: 1em 0; } figure svg, figure img, figure video { max-width: 100%; height: auto; }
+button.frame { font-size: 0.85em; }
 figcaption { color: #555; font-size: 0.9em; }
 .note { color: #555; font-size: 0.9em; }
 code { background: #f4f4f4; padding: 0 0.2em; }
@@ -62,6 +63,18 @@ pub fn png_figure(png: &[u8], caption: &str) -> Markup {
     html! {
         figure {
             img src=(format!("data:image/png;base64,{data}")) alt=(caption);
+            figcaption { (caption) }
+        }
+    }
+}
+
+/// A video in the page's folder (`src` relative to the page) as a figure, with
+/// the element's `id` for scripts that seek it. Muted, so browsers allow it to
+/// play without a click.
+pub fn video_figure(src: &str, id: &str, caption: &str) -> Markup {
+    html! {
+        figure {
+            video id=(id) src=(src) controls muted loop playsinline preload="auto" {}
             figcaption { (caption) }
         }
     }

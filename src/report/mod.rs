@@ -46,6 +46,9 @@ pub enum ReportError {
     /// A figure or table that could not be made from its inputs.
     #[error("cannot draw a figure: {0}")]
     Plot(String),
+    /// An overlay (video or contact sheet) that could not be written.
+    #[error(transparent)]
+    Overlay(Box<crate::overlay::OverlayError>),
     /// An output folder whose path is taken by a file.
     #[error("cannot write into {path}: it is a file, not a folder (give another output path)")]
     NotAFolder {
@@ -63,6 +66,12 @@ pub enum ReportError {
         /// The lock file.
         lock: PathBuf,
     },
+}
+
+impl From<crate::overlay::OverlayError> for ReportError {
+    fn from(error: crate::overlay::OverlayError) -> Self {
+        ReportError::Overlay(Box::new(error))
+    }
 }
 
 fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {

@@ -45,6 +45,32 @@ pub enum SkipReason {
     },
 }
 
+impl SkipReason {
+    /// A short description for a person looking at the frame.
+    pub fn label(&self) -> String {
+        match self {
+            SkipReason::TimestampGap {
+                gap_s,
+                missing_frames,
+                ..
+            } => format!(
+                "timestamp gap of {:.2} ms, {missing_frames} frame(s) missing before this one",
+                1e3 * gap_s
+            ),
+            SkipReason::StripAngleStep { step, .. } => {
+                format!(
+                    "the strip angle steps by {:.2}° (dropped frame?)",
+                    step.to_degrees()
+                )
+            }
+            SkipReason::RimPhaseStep { phase_step, .. } => format!(
+                "the rim's phase jumps by {:.2}° (dropped frame?)",
+                phase_step.to_degrees()
+            ),
+        }
+    }
+}
+
 /// A frame flagged as following a skip: something is missing between frame
 /// `index − 1` and frame `index`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -13,6 +13,9 @@ pub(crate) struct Component {
     pub row_max: usize,
     /// Whether any pixel lies on the outermost row or column of the mask.
     pub touches_border: bool,
+    /// The component's first pixel in row-major order (column, row): where
+    /// [`Labeller::pixels_of`] starts to list it again.
+    pub seed: (usize, usize),
     sum_x: f64,
     sum_y: f64,
     sum_xx: f64,
@@ -54,6 +57,7 @@ impl Component {
     fn add(&mut self, c: usize, r: usize, w: usize, h: usize) {
         if self.pixels == 0 {
             (self.col_min, self.col_max, self.row_min, self.row_max) = (c, c, r, r);
+            self.seed = (c, r);
         }
         self.pixels += 1;
         self.col_min = self.col_min.min(c);
@@ -119,6 +123,38 @@ impl Labeller {
         }
         found.sort_by_key(|c| std::cmp::Reverse(c.pixels));
         found
+    }
+
+    /// The pixels of `mask`'s component that holds `seed` (column, row), as a
+    /// row-major mask of the same size (all unset when `seed` is not set).
+    pub fn pixels_of(
+        &mut self,
+        mask: &[bool],
+        w: usize,
+        h: usize,
+        seed: (usize, usize),
+    ) -> Vec<bool> {
+        let mut member = vec![false; w * h];
+        let start = seed.1 * w + seed.0;
+        if seed.0 >= w || seed.1 >= h || !mask[start] {
+            return member;
+        }
+        member[start] = true;
+        self.stack.push(seed);
+        while let Some((c, r)) = self.stack.pop() {
+            for (dc, dr) in NEIGHBOURS {
+                let (nc, nr) = (c as isize + dc, r as isize + dr);
+                if nc < 0 || nr < 0 || nc >= w as isize || nr >= h as isize {
+                    continue;
+                }
+                let k = nr as usize * w + nc as usize;
+                if mask[k] && !member[k] {
+                    member[k] = true;
+                    self.stack.push((nc as usize, nr as usize));
+                }
+            }
+        }
+        member
     }
 }
 

@@ -52,6 +52,7 @@ mod two_view;
 mod synthetic;
 
 pub use band_window::BandWindow;
+pub(crate) use calibration::band;
 pub use calibration::{
     Calibration, CalibrationOverride, CalibrationReport, PointSource, SideViewConfig,
     calibrate_at_rest, calibrate_frame,

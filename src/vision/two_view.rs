@@ -237,6 +237,8 @@ pub struct StripFinder {
     min_pixels: usize,
     mask: Vec<bool>,
     labeller: Labeller,
+    /// The last strip's first pixel and the plan view's size, for [`Self::strip_mask`].
+    last: Option<((usize, usize), usize, usize)>,
 }
 
 impl StripFinder {
@@ -250,6 +252,7 @@ impl StripFinder {
             min_pixels: Self::MIN_PIXELS,
             mask: Vec::new(),
             labeller: Labeller::default(),
+            last: None,
         }
     }
 
@@ -263,10 +266,19 @@ impl StripFinder {
         (self.thresholds, self.source)
     }
 
+    /// The strip's pixels in the last frame [`Self::measure`] found one in: its
+    /// connected component of the colour mask (eq. 3.23), row-major over the plan
+    /// view, with the view's width; `None` when the last frame had no strip.
+    pub fn strip_mask(&mut self) -> Option<(Vec<bool>, usize)> {
+        let (seed, w, h) = self.last?;
+        Some((self.labeller.pixels_of(&self.mask, w, h, seed), w))
+    }
+
     /// β and the strip's statistics in one plan-view frame.
     pub fn measure(&mut self, plan: &FrameView, index: usize) -> Result<Strip, VisionError> {
         check_frame(plan, index)?;
         let (w, h) = (plan.width, plan.height);
+        self.last = None;
         let mean = mean_intensity(plan);
         let [rt, gt, bt] =
             [self.thresholds.r, self.thresholds.g, self.thresholds.b].map(|t| (t * mean) as f32);
@@ -297,6 +309,7 @@ impl StripFinder {
         if strip.pixels < self.min_pixels {
             return Err(no_strip(strip.pixels));
         }
+        self.last = Some((strip.seed, w, h));
         let (cx, cy) = strip.centroid();
         let (sxx, syy, sxy_image) = strip.covariance();
         let (beta, l1, l2) = principal_axis(sxx, syy, -sxy_image);

@@ -1,0 +1,303 @@
+//! The picture an overlay frame is drawn on: parts of a footage frame copied into
+//! windows, each enlarged by a whole factor, under a header band for text; and the
+//! marks drawn on it, placed in the footage's own pixel coordinates.
+//!
+//! Coordinates follow `vision`: pixel `y` of a frame covers rows [y, y + 1), so an
+//! edge at 10.0 lies between pixels 9 and 10. A window shows the frame rectangle
+//! from (`src_x`, `src_y`) enlarged `zoom` times at canvas (`dst_x`, `dst_y`): the
+//! frame point (x, y) lands at (dst_x + zoom (x − src_x), dst_y + zoom (y − src_y)).
+//! Lines along the rows and columns are anti-aliased by their area, so a line at a
+//! fractional row is drawn there, not at the nearest pixel.
+
+use image::{Rgb, RgbImage};
+use plotters::prelude::*;
+use serde::Serialize;
+
+use crate::footage::{ChannelOrder, FrameView};
+
+/// A rectangle of the footage frame shown enlarged on the canvas.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Window {
+    /// What the window shows ("side view", "centre band ×8", "plan view").
+    pub name: &'static str,
+    /// The frame rectangle's first column and row [px].
+    pub src_x: usize,
+    pub src_y: usize,
+    /// Its size [px].
+    pub width: usize,
+    pub height: usize,
+    /// Where it starts on the canvas [canvas px].
+    pub dst_x: u32,
+    pub dst_y: u32,
+    /// Canvas pixels per frame pixel.
+    pub zoom: u32,
+}
+
+impl Window {
+    /// Canvas point of the frame point (x, y) [frame px, `vision` convention].
+    pub fn to_canvas(&self, x: f64, y: f64) -> (f64, f64) {
+        let z = f64::from(self.zoom);
+        (
+            f64::from(self.dst_x) + z * (x - self.src_x as f64),
+            f64::from(self.dst_y) + z * (y - self.src_y as f64),
+        )
+    }
+
+    /// Frame point of the canvas point (x, y): the inverse of [`Self::to_canvas`].
+    pub fn to_frame(&self, x: f64, y: f64) -> (f64, f64) {
+        let z = f64::from(self.zoom);
+        (
+            self.src_x as f64 + (x - f64::from(self.dst_x)) / z,
+            self.src_y as f64 + (y - f64::from(self.dst_y)) / z,
+        )
+    }
+
+    /// The window's extent on the canvas: x0, y0, x1, y1 (exclusive).
+    fn extent(&self) -> (f64, f64, f64, f64) {
+        let z = self.zoom as usize;
+        (
+            f64::from(self.dst_x),
+            f64::from(self.dst_y),
+            f64::from(self.dst_x) + (z * self.width) as f64,
+            f64::from(self.dst_y) + (z * self.height) as f64,
+        )
+    }
+
+    /// Copies the window's rectangle of `frame` onto the canvas, each pixel
+    /// repeated `zoom` × `zoom` times.
+    pub fn paint(&self, frame: &FrameView, image: &mut RgbImage) {
+        let z = self.zoom as usize;
+        let width = self.width.min(frame.width.saturating_sub(self.src_x));
+        let height = self.height.min(frame.height.saturating_sub(self.src_y));
+        let canvas_width = image.width() as usize;
+        let (dst_x, dst_y) = (self.dst_x as usize, self.dst_y as usize);
+        let bgr = matches!(frame.order, ChannelOrder::Bgr);
+        let buffer: &mut [u8] = image;
+        let mut line = vec![0u8; 3 * z * width];
+        for y in 0..height {
+            let src = &frame.row(self.src_y + y)[3 * self.src_x..3 * (self.src_x + width)];
+            for (x, p) in src.chunks_exact(3).enumerate() {
+                let rgb = if bgr {
+                    [p[2], p[1], p[0]]
+                } else {
+                    [p[0], p[1], p[2]]
+                };
+                for k in 0..z {
+                    line[3 * (z * x + k)..3 * (z * x + k + 1)].copy_from_slice(&rgb);
+                }
+            }
+            for k in 0..z {
+                let row = dst_y + z * y + k;
+                let start = 3 * (row * canvas_width + dst_x);
+                buffer[start..start + line.len()].copy_from_slice(&line);
+            }
+        }
+    }
+
+    /// A line along a row at frame row `y` from frame column `x0` to `x1`, `width`
+    /// canvas px thick and centred on the row, clipped to the window.
+    pub fn row_line(
+        &self,
+        image: &mut RgbImage,
+        y: f64,
+        (x0, x1): (f64, f64),
+        width: f64,
+        colour: Rgb<u8>,
+    ) {
+        let (cx0, cy) = self.to_canvas(x0, y);
+        let (cx1, _) = self.to_canvas(x1, y);
+        let (ex0, ey0, ex1, ey1) = self.extent();
+        fill_box(
+            image,
+            (cx0.max(ex0), cx1.min(ex1)),
+            ((cy - 0.5 * width).max(ey0), (cy + 0.5 * width).min(ey1)),
+            colour,
+        );
+    }
+
+    /// A line along a column at frame column `x` from frame row `y0` to `y1`,
+    /// `width` canvas px thick and centred on the column, clipped to the window.
+    pub fn column_line(
+        &self,
+        image: &mut RgbImage,
+        x: f64,
+        (y0, y1): (f64, f64),
+        width: f64,
+        colour: Rgb<u8>,
+    ) {
+        let (cx, cy0) = self.to_canvas(x, y0);
+        let (_, cy1) = self.to_canvas(x, y1);
+        let (ex0, ey0, ex1, ey1) = self.extent();
+        fill_box(
+            image,
+            ((cx - 0.5 * width).max(ex0), (cx + 0.5 * width).min(ex1)),
+            (cy0.max(ey0), cy1.min(ey1)),
+            colour,
+        );
+    }
+
+    /// An upright cross of half-size `arm` canvas px centred on the frame point
+    /// (x, y), if it lies in the window.
+    pub fn cross(&self, image: &mut RgbImage, (x, y): (f64, f64), arm: f64, colour: Rgb<u8>) {
+        let (cx, cy) = self.to_canvas(x, y);
+        let (ex0, ey0, ex1, ey1) = self.extent();
+        if cx < ex0 || cx >= ex1 || cy < ey0 || cy >= ey1 {
+            return;
+        }
+        fill_box(
+            image,
+            ((cx - arm).max(ex0), (cx + arm).min(ex1)),
+            ((cy - 1.0).max(ey0), (cy + 1.0).min(ey1)),
+            colour,
+        );
+        fill_box(
+            image,
+            ((cx - 1.0).max(ex0), (cx + 1.0).min(ex1)),
+            ((cy - arm).max(ey0), (cy + arm).min(ey1)),
+            colour,
+        );
+    }
+
+    /// A straight segment between two frame points, one canvas px wide (not
+    /// anti-aliased: for marks whose place is not a measurement, such as the
+    /// strip's principal axis), clipped to the window.
+    pub fn segment(&self, image: &mut RgbImage, from: (f64, f64), to: (f64, f64), colour: Rgb<u8>) {
+        let (ax, ay) = self.to_canvas(from.0, from.1);
+        let (bx, by) = self.to_canvas(to.0, to.1);
+        let (ex0, ey0, ex1, ey1) = self.extent();
+        let steps = (bx - ax).abs().max((by - ay).abs()).ceil().max(1.0) as usize;
+        for k in 0..=steps {
+            let s = k as f64 / steps as f64;
+            let (x, y) = (ax + s * (bx - ax), ay + s * (by - ay));
+            if x >= ex0 && x < ex1 && y >= ey0 && y < ey1 {
+                image.put_pixel(x as u32, y as u32, colour);
+            }
+        }
+    }
+
+    /// Paints the frame pixels (x, y) of a mask that have an unset 4-neighbour
+    /// (the mask's outline), `mask` row-major with `mask_width` columns, its
+    /// pixel (0, 0) at frame point `origin`.
+    pub fn outline(
+        &self,
+        image: &mut RgbImage,
+        (mask, mask_width): (&[bool], usize),
+        origin: (usize, usize),
+        colour: Rgb<u8>,
+    ) {
+        let height = mask.len() / mask_width.max(1);
+        let set = |x: isize, y: isize| {
+            x >= 0
+                && y >= 0
+                && (x as usize) < mask_width
+                && (y as usize) < height
+                && mask[y as usize * mask_width + x as usize]
+        };
+        for y in 0..height as isize {
+            for x in 0..mask_width as isize {
+                if !set(x, y) || (set(x - 1, y) && set(x + 1, y) && set(x, y - 1) && set(x, y + 1))
+                {
+                    continue;
+                }
+                let (fx, fy) = (origin.0 as f64 + x as f64, origin.1 as f64 + y as f64);
+                let (cx, cy) = self.to_canvas(fx, fy);
+                let z = f64::from(self.zoom);
+                let (ex0, ey0, ex1, ey1) = self.extent();
+                fill_box(
+                    image,
+                    (cx.max(ex0), (cx + z).min(ex1)),
+                    (cy.max(ey0), (cy + z).min(ey1)),
+                    colour,
+                );
+            }
+        }
+    }
+}
+
+/// Blends `colour` over the canvas box [x0, x1) × [y0, y1) (canvas px), each
+/// pixel by the fraction of its area the box covers.
+fn fill_box(image: &mut RgbImage, (x0, x1): (f64, f64), (y0, y1): (f64, f64), colour: Rgb<u8>) {
+    if x1 <= x0 || y1 <= y0 {
+        return;
+    }
+    let (w, h) = (f64::from(image.width()), f64::from(image.height()));
+    let (x0, x1, y0, y1) = (x0.max(0.0), x1.min(w), y0.max(0.0), y1.min(h));
+    let cover = |a: f64, b: f64, p: f64| (b.min(p + 1.0) - a.max(p)).clamp(0.0, 1.0);
+    for py in y0.floor() as u32..y1.ceil() as u32 {
+        let cy = cover(y0, y1, f64::from(py));
+        for px in x0.floor() as u32..x1.ceil() as u32 {
+            let c = cy * cover(x0, x1, f64::from(px));
+            if c <= 0.0 {
+                continue;
+            }
+            let pixel = image.get_pixel_mut(px, py);
+            for (p, q) in pixel.0.iter_mut().zip(colour.0) {
+                *p = (f64::from(*p) * (1.0 - c) + f64::from(q) * c).round() as u8;
+            }
+        }
+    }
+}
+
+/// Writes lines of text, each in its colour, from canvas point (x, y) down, in
+/// the report's embedded font at `size` px.
+///
+/// # Errors
+/// The font cannot be loaded or plotters fails to draw.
+pub fn text_lines(
+    image: &mut RgbImage,
+    (x, y): (i32, i32),
+    size: u32,
+    lines: &[(String, Rgb<u8>)],
+) -> Result<(), String> {
+    crate::report::plot::ensure_font()?;
+    let (w, h) = image.dimensions();
+    let root = BitMapBackend::with_buffer(image.as_mut(), (w, h)).into_drawing_area();
+    let step = (f64::from(size) * 1.3).round() as i32;
+    for (k, (line, colour)) in lines.iter().enumerate() {
+        let style = ("sans-serif", f64::from(size))
+            .into_font()
+            .color(&RGBColor(colour[0], colour[1], colour[2]));
+        root.draw(&Text::new(line.as_str(), (x, y + step * k as i32), style))
+            .map_err(|e| e.to_string())?;
+    }
+    root.present().map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row line at a fractional row is drawn there: the coverage-weighted centre
+    /// of its rows is the line's row, whatever its sub-pixel phase.
+    #[test]
+    fn a_row_line_lies_on_its_fractional_row() {
+        let window = Window {
+            name: "test",
+            src_x: 10,
+            src_y: 20,
+            width: 20,
+            height: 20,
+            dst_x: 0,
+            dst_y: 4,
+            zoom: 4,
+        };
+        for y in [25.0, 25.13, 25.5, 31.87] {
+            let mut image = RgbImage::new(80, 90);
+            window.row_line(&mut image, y, (12.0, 18.0), 2.0, Rgb([0, 255, 0]));
+            let column: Vec<f64> = (0..90)
+                .map(|r| f64::from(image.get_pixel(20, r)[1]) / 255.0)
+                .collect();
+            let mass: f64 = column.iter().sum();
+            let centre: f64 = column
+                .iter()
+                .enumerate()
+                .map(|(r, w)| (r as f64 + 0.5) * w)
+                .sum::<f64>()
+                / mass;
+            // 8-bit levels: 1/255 of a canvas px per row touched.
+            assert!((mass - 2.0).abs() < 0.02, "mass {mass}");
+            let (_, drawn) = window.to_frame(0.0, centre);
+            assert!((drawn - y).abs() < 0.01, "row {y}: drawn at {drawn}");
+        }
+    }
+}

@@ -1,0 +1,63 @@
+//! Overlays: the measurements, and the model, drawn on the footage itself
+//! (issue 15), so that a person can see on the frames what was measured and
+//! what the simulator predicts, as in Tracker.
+//!
+//! ```text
+//! Experiment (plan, per-frame z_rim, peaks, halt, flags) ─┐
+//! clip ── footage::FrameSource, only the span, seeked ────┴► canvas: windows of
+//!         the frame enlarged, marks at their sub-pixel rows, a header of text
+//!   ├─► render::H264Writer → overlay.mp4 (slowed down), overlay.json (frame map)
+//!   └─► the frames at the last peaks → last-turns.png
+//! compare's Comparison (trajectory) + pose from the calibration (pose.rs)
+//!   └─► the model's outline on the same frames → model-overlay.mp4,
+//!       model-last-turns.png, model-overlay.csv (rim-edge distance per frame)
+//! ```
+//!
+//! The overlays read the clip a third time, after the analysis, and hold one
+//! decoded frame at a time (plus the few contact-sheet tiles).
+
+mod canvas;
+mod last_turns;
+mod measured;
+mod model;
+mod pose;
+
+use std::path::PathBuf;
+
+pub use canvas::Window;
+pub use measured::{
+    LAST_TURNS_IMAGE, OVERLAY_H264, OVERLAY_INDEX, OVERLAY_VIDEO, OverlayFrame, OverlayIndex,
+    OverlaySpec, write_measurement_overlays,
+};
+pub use model::{
+    EdgeError, MODEL_LAST_TURNS_IMAGE, MODEL_OVERLAY_ERRORS, MODEL_OVERLAY_VIDEO, ModelOverlay,
+    write_model_overlay,
+};
+pub use pose::CameraPose;
+
+use crate::footage::FootageError;
+use crate::report::ReportError;
+
+/// Why an overlay could not be written; each names the clip or the file.
+#[derive(Debug, thiserror::Error)]
+pub enum OverlayError {
+    #[error(transparent)]
+    Footage(#[from] FootageError),
+    #[error(transparent)]
+    Report(#[from] ReportError),
+    #[error(
+        "{}: no frame lies between t − t_φ = {from} s and {to} s, the overlay's span",
+        clip.display()
+    )]
+    EmptySpan { clip: PathBuf, from: f64, to: f64 },
+    #[error("{}: the clip changed since it was analysed: {reason}", clip.display())]
+    Changed { clip: PathBuf, reason: String },
+    #[error("{}: frame {frame}: cannot draw the overlay: {reason}", clip.display())]
+    Draw {
+        clip: PathBuf,
+        frame: usize,
+        reason: String,
+    },
+    #[error("cannot write {}: {reason} (--no-overlay skips the overlays)", path.display())]
+    Encode { path: PathBuf, reason: String },
+}

@@ -1,0 +1,505 @@
+//! The simulated disk over the footage (`compare`): `model-overlay.mp4`, the
+//! model's outline drawn on every frame of the span, `model-last-turns.png`, the
+//! last turns side by side (footage | model), and the overlay's own error, the
+//! image-space distance between the model's and the footage's rim edge on the
+//! centre band, per frame (`model-overlay.csv`) and summarised.
+//!
+//! The model's state at a measured instant t (halt at 0) is its trajectory at
+//! model time t + lead ([`crate::compare`]'s convention), through
+//! [`trajectory_motion`] (the renderer's: angles by Hermite interpolation, the
+//! centre of mass integrated and placed to rest at the origin, flat after its
+//! end). A side view does not see the precession's phase or sense: the phase is
+//! set so that the model's contact point is straight behind its centre (ψ ≡ −π/2,
+//! where z_rim peaks) at the measured peaks, by their circular mean; and when the
+//! plan view showed the mirror sense (`beta_sign` = −1) the model is mirrored.
+//! Its outline is the convex hull of both rims projected by the camera of
+//! [`CameraPose`] (the silhouette of a cylinder); its rim edge on the centre band
+//! is the hull's lowest point on the centre line x_centre (the side face's or the
+//! bottom rim's, which is what the footage's white edge is while the rim is off
+//! the plate).
+
+use std::path::Path;
+
+use image::{Rgb, RgbImage};
+use serde::Serialize;
+
+use super::OverlayError;
+use super::canvas::text_lines;
+use super::measured::{
+    Layout, OVERLAY_H264, OverlaySpec, decode_positions, last_turns, peak_positions,
+};
+use super::pose::CameraPose;
+use crate::analyse::Experiment;
+use crate::compare::Comparison;
+use crate::footage::{FrameSource, FrameView};
+use crate::render::H264Writer;
+use crate::render::motion::{DiskState, trajectory_motion};
+use crate::render::scene::{Camera, Pose};
+use crate::report::{write_atomic, write_csv};
+
+/// The video's name in the comparison folder.
+pub const MODEL_OVERLAY_VIDEO: &str = "model-overlay.mp4";
+/// The side-by-side sheet's name.
+pub const MODEL_LAST_TURNS_IMAGE: &str = "model-last-turns.png";
+/// The per-frame error table's name.
+pub const MODEL_OVERLAY_ERRORS: &str = "model-overlay.csv";
+
+const MODEL: Rgb<u8> = Rgb([255, 140, 0]);
+const RIM: Rgb<u8> = Rgb([0, 255, 0]);
+const TEXT: Rgb<u8> = Rgb([235, 235, 235]);
+/// Points per rim of the model's outline.
+const RIM_POINTS: usize = 96;
+
+/// Summary statistics of the per-frame rim-edge distance.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct EdgeError {
+    /// Frames with both edges.
+    pub frames: usize,
+    /// Mean model − footage [px] (positive: the model's edge lower in the image,
+    /// its rim nearer the plate).
+    pub mean_px: f64,
+    /// RMS [px].
+    pub rms_px: f64,
+    /// Largest |model − footage| [px].
+    pub max_abs_px: f64,
+    /// The same in metres, at the near rim's scale δ [m].
+    pub mean_m: f64,
+    pub rms_m: f64,
+    pub max_abs_m: f64,
+}
+
+/// What [`write_model_overlay`] wrote and found.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModelOverlay {
+    pub video: String,
+    pub last_turns: Option<String>,
+    pub errors_csv: String,
+    /// The camera pose the model was drawn with.
+    pub pose: CameraPose,
+    /// Added to the model's ψ so that its rim peaks at the measured peaks [rad].
+    pub psi_offset_rad: f64,
+    /// Whether the model was mirrored to the footage's sense of precession.
+    pub mirrored: bool,
+    /// The model's rim edge against the footage's, on the centre band.
+    pub edge_error: Option<EdgeError>,
+}
+
+#[derive(Serialize)]
+struct ErrorRow {
+    index: usize,
+    t_s: f64,
+    footage_edge_row_px: f64,
+    model_edge_row_px: f64,
+    error_px: f64,
+    error_m: f64,
+}
+
+/// The model's image at one instant: its outline (side-view px, `vision`'s
+/// convention) and its rim edge's row on the centre line.
+struct ModelImage {
+    hull: Vec<(f64, f64)>,
+    edge_row: Option<f64>,
+}
+
+/// Writes the model overlay of comparison `c` of experiment `e` into `dir`.
+///
+/// # Errors
+/// The trajectory cannot be sampled at the footage's frames, the clip cannot be
+/// decoded again, the encoder fails or a file cannot be written.
+pub fn write_model_overlay(
+    dir: &Path,
+    e: &Experiment,
+    c: &Comparison,
+    spec: &OverlaySpec,
+) -> Result<ModelOverlay, OverlayError> {
+    let plan = &e.plan;
+    let clip = &plan.clip;
+    let draw_err = |frame: usize| {
+        move |reason: String| OverlayError::Draw {
+            clip: clip.clone(),
+            frame,
+            reason,
+        }
+    };
+    let fps = plan.fps.fps;
+    let lead = c.options.lead_s;
+    let end = c.trajectory.end_time();
+    let after = (lead + spec.span_s.1 - end).max(0.0) + 2.0 / fps;
+    let motion = trajectory_motion(&plan.disk, &c.trajectory, 0.0, c.mu, fps, after, None)
+        .map_err(|err| draw_err(0)(err.to_string()))?;
+    // Model state at the experiment's time t (model time t + lead, a frame of
+    // the motion's grid, which starts at model time 0).
+    let state_at = |t: f64| -> Option<&DiskState> {
+        let k = ((t + lead) * fps).round();
+        (k >= 0.0).then(|| &motion.states[(k as usize).min(motion.states.len() - 1)])
+    };
+    let peaks: Vec<f64> = e
+        .series
+        .peaks
+        .peaks
+        .iter()
+        .filter(|p| p.t + lead <= end)
+        .filter_map(|p| Some(-std::f64::consts::FRAC_PI_2 - state_at(p.t)?.psi))
+        .collect();
+    let psi_offset = peaks
+        .iter()
+        .map(|d| d.sin())
+        .sum::<f64>()
+        .atan2(peaks.iter().map(|d| d.cos()).sum::<f64>());
+    let mirrored = c.measured.beta_sign < 0.0;
+
+    let in_span: Vec<usize> = (0..e.frames.len())
+        .filter(|&k| (spec.span_s.0..=spec.span_s.1).contains(&e.frames[k].t))
+        .filter(|&k| state_at(e.frames[k].t).is_some())
+        .collect();
+    let (Some(&first), Some(&last)) = (in_span.first(), in_span.last()) else {
+        return Err(OverlayError::EmptySpan {
+            clip: clip.clone(),
+            from: spec.span_s.0.max(-lead),
+            to: spec.span_s.1,
+        });
+    };
+    let z_max = in_span
+        .iter()
+        .filter_map(|&k| e.frames[k].z_rim_px)
+        .fold(0.0, f64::max);
+    let layout = Layout::new(plan, z_max);
+    let pose = CameraPose::from_calibration(plan, silhouette_top(e, &layout)?);
+    let camera = pose.camera(plan);
+    let (ox, oy) = plan.side_view_origin();
+    let (ox, oy) = (ox as f64, oy as f64);
+    let x_centre = plan.calibration.calibration.x_centre();
+    let model_image = |t: f64| -> Option<ModelImage> {
+        let s = state_at(t)?;
+        let pose = Pose::rolling(
+            &plan.disk,
+            s.psi + psi_offset,
+            s.phi,
+            s.theta,
+            s.centre[0],
+            s.centre[1],
+        );
+        let points: Vec<(f64, f64)> = (0..2 * RIM_POINTS)
+            .map(|k| {
+                let a = std::f64::consts::TAU * (k % RIM_POINTS) as f64 / RIM_POINTS as f64;
+                let z = if k < RIM_POINTS { -1.0 } else { 1.0 } * plan.disk.half_thickness;
+                let (x, row) = project(
+                    &camera,
+                    pose.world_from_body([
+                        plan.disk.radius * a.cos(),
+                        plan.disk.radius * a.sin(),
+                        z,
+                    ]),
+                );
+                let x = if mirrored { 2.0 * x_centre - x } else { x };
+                (x, row)
+            })
+            .collect();
+        let hull = convex_hull(points);
+        let edge_row = lowest_on_column(&hull, x_centre);
+        Some(ModelImage { hull, edge_row })
+    };
+
+    let video = dir.join(MODEL_OVERLAY_VIDEO);
+    let partial = dir.join(format!(
+        ".{MODEL_OVERLAY_VIDEO}.partial-{}.mp4",
+        std::process::id()
+    ));
+    let encode_err = |reason: String| OverlayError::Encode {
+        path: video.clone(),
+        reason,
+    };
+    let mut writer = H264Writer::create(
+        &partial,
+        layout.width,
+        layout.height,
+        spec.playback_fps,
+        OVERLAY_H264,
+    )
+    .map_err(encode_err)?;
+    let turns = last_turns(e, &peak_positions(e), spec.last_turns);
+    let mut tiles = Vec::new();
+    let mut rows = Vec::new();
+    let name = format!("{:?} (η = {:.3e})", c.options.model, c.eta);
+    decode_positions(e, (first, last), &layout, |position, view| {
+        let record = &e.frames[position];
+        let mut image = layout.paint(view);
+        let footage_row = record.z_rim_px.map(|z| plan.rim_edge_row(z));
+        let model = model_image(record.t);
+        for (window, width) in [(&layout.side, 1.0), (&layout.band, 2.0)] {
+            if let Some(row) = footage_row {
+                window.row_line(
+                    &mut image,
+                    row + oy,
+                    (x_centre + ox - 4.0, x_centre + ox + 4.0),
+                    width,
+                    RIM,
+                );
+            }
+            if let Some(m) = &model {
+                for (a, b) in m.hull.iter().zip(m.hull.iter().cycle().skip(1)) {
+                    window.segment(
+                        &mut image,
+                        (a.0 + ox, a.1 + oy),
+                        (b.0 + ox, b.1 + oy),
+                        MODEL,
+                    );
+                }
+                if let Some(row) = m.edge_row {
+                    window.row_line(
+                        &mut image,
+                        row + oy,
+                        (x_centre + ox - 4.0, x_centre + ox + 4.0),
+                        width,
+                        MODEL,
+                    );
+                }
+            }
+        }
+        let error = footage_row.zip(model.as_ref().and_then(|m| m.edge_row));
+        if let Some((f, m)) = error {
+            rows.push(ErrorRow {
+                index: record.index,
+                t_s: record.t,
+                footage_edge_row_px: f,
+                model_edge_row_px: m,
+                error_px: m - f,
+                error_m: (m - f) * plan.metres_per_px,
+            });
+        }
+        let lines = [
+            (
+                format!(
+                    "frame {}  t − t_φ = {:+.1} ms   model: {name}",
+                    record.index,
+                    1e3 * record.t
+                ),
+                TEXT,
+            ),
+            (
+                match error {
+                    Some((f, m)) => format!(
+                        "rim edge: model − footage = {:+.2} px ({:+.3} mm)",
+                        m - f,
+                        1e3 * (m - f) * plan.metres_per_px
+                    ),
+                    None => "rim edge: not on both".into(),
+                },
+                TEXT,
+            ),
+            (
+                "orange: the model's outline and rim edge · green: the footage's rim edge".into(),
+                Rgb([150, 150, 150]),
+            ),
+        ];
+        text_lines(&mut image, (8, 4), 14, &lines).map_err(draw_err(record.index))?;
+        if turns.contains(&position) {
+            tiles.push((image.clone(), model));
+        }
+        writer.push(&image).map_err(encode_err)?;
+        Ok(true)
+    })?;
+    writer.finish().map_err(encode_err)?;
+    std::fs::rename(&partial, &video).map_err(|err| encode_err(err.to_string()))?;
+    write_csv(&dir.join(MODEL_OVERLAY_ERRORS), &rows)?;
+
+    let last_turns = if tiles.is_empty() {
+        None
+    } else {
+        let sheet = side_by_side(&tiles, &layout, (ox, oy)).map_err(draw_err(0))?;
+        let bytes = crate::report::diagnostics::png_bytes(&sheet)
+            .map_err(|err| encode_err(err.to_string()))?;
+        write_atomic(&dir.join(MODEL_LAST_TURNS_IMAGE), &bytes)?;
+        Some(MODEL_LAST_TURNS_IMAGE.to_string())
+    };
+    Ok(ModelOverlay {
+        video: MODEL_OVERLAY_VIDEO.into(),
+        last_turns,
+        errors_csv: MODEL_OVERLAY_ERRORS.into(),
+        pose,
+        psi_offset_rad: psi_offset,
+        mirrored,
+        edge_error: edge_error(&rows),
+    })
+}
+
+/// Image point of a world point in `vision`'s convention (the camera's + 0.5).
+fn project(camera: &Camera, p: [f64; 3]) -> (f64, f64) {
+    let (x, row) = camera.project(p);
+    (x + 0.5, row + 0.5)
+}
+
+/// The silhouette's top on the centre band of the last (rest) frame: going down
+/// the band from the top of the side window, where the mean intensity crosses
+/// halfway from the background's level to the top face's (just above z_t).
+fn silhouette_top(e: &Experiment, layout: &Layout) -> Result<f64, OverlayError> {
+    let plan = &e.plan;
+    let c = &plan.calibration.calibration;
+    let (ox, oy) = plan.side_view_origin();
+    let mut source = FrameSource::open(&plan.clip)?;
+    source.seek(e.frames.len().saturating_sub(1))?;
+    let mut top = c.z_t;
+    if let Some(frame) = source.next_frame()? {
+        let band = |y: usize, view: &FrameView| -> f64 {
+            let x = ox + c.x_centre().floor() as usize;
+            (x - 2..=x + 2)
+                .map(|x| f64::from(view.intensity(x, oy + y)))
+                .sum::<f64>()
+                / 5.0
+        };
+        let start = layout.side.src_y - oy;
+        let face_row = (c.z_t - 1.5).floor().max(start as f64) as usize;
+        let (background, face) = (band(start, &frame.view), band(face_row, &frame.view));
+        let half = 0.5 * (background + face);
+        let above = |v: f64| (v - half) * (face - half) < 0.0;
+        for y in start..face_row {
+            let (a, b) = (band(y, &frame.view), band(y + 1, &frame.view));
+            if above(a) && !above(b) {
+                // Rows' centres at y + ½: the crossing between them.
+                top = y as f64 + 0.5 + (half - a) / (b - a);
+                break;
+            }
+        }
+    }
+    Ok(top)
+}
+
+/// The convex hull (Andrew's monotone chain), counter-clockwise in image axes.
+fn convex_hull(mut points: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+    points.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    let mut hull: Vec<(f64, f64)> = Vec::with_capacity(points.len() + 1);
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &(f64, f64)>> = if pass == 0 {
+            Box::new(points.iter())
+        } else {
+            Box::new(points.iter().rev())
+        };
+        for &p in iter {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(p);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+/// The largest row at which the polygon's edges cross column `x` (its lowest
+/// point there; rows grow downward).
+fn lowest_on_column(hull: &[(f64, f64)], x: f64) -> Option<f64> {
+    hull.iter()
+        .zip(hull.iter().cycle().skip(1))
+        .filter(|(a, b)| (a.0 - x) * (b.0 - x) <= 0.0 && a.0 != b.0)
+        .map(|(a, b)| a.1 + (b.1 - a.1) * (x - a.0) / (b.0 - a.0))
+        .reduce(f64::max)
+}
+
+fn edge_error(rows: &[ErrorRow]) -> Option<EdgeError> {
+    if rows.is_empty() {
+        return None;
+    }
+    let n = rows.len() as f64;
+    let mean_px = rows.iter().map(|r| r.error_px).sum::<f64>() / n;
+    let rms_px = (rows.iter().map(|r| r.error_px * r.error_px).sum::<f64>() / n).sqrt();
+    let max_abs_px = rows.iter().map(|r| r.error_px.abs()).fold(0.0, f64::max);
+    let scale = rows[0].error_m / rows[0].error_px;
+    let scale = if scale.is_finite() { scale } else { 0.0 };
+    Some(EdgeError {
+        frames: rows.len(),
+        mean_px,
+        rms_px,
+        max_abs_px,
+        mean_m: mean_px * scale,
+        rms_m: rms_px * scale,
+        max_abs_m: max_abs_px * scale,
+    })
+}
+
+/// The last turns side by side: each row the footage's side window with the
+/// model drawn over it, and the model alone (its silhouette filled white on the
+/// dark plate, the plate line red), at the same place and scale.
+fn side_by_side(
+    tiles: &[(RgbImage, Option<ModelImage>)],
+    layout: &Layout,
+    (ox, oy): (f64, f64),
+) -> Result<RgbImage, String> {
+    let side = layout.side;
+    let (w, h) = (
+        side.zoom * side.width as u32,
+        side.zoom * side.height as u32,
+    );
+    let header = side.dst_y;
+    let gap = 6;
+    let title = 30;
+    let width = gap + 2 * (w + gap);
+    let height = title + tiles.len() as u32 * (h + header + gap) + gap;
+    let mut sheet = RgbImage::from_pixel(width, height, Rgb([250, 250, 250]));
+    for (k, (image, model)) in tiles.iter().enumerate() {
+        let y = title + k as u32 * (h + header + gap);
+        let footage =
+            image::imageops::crop_imm(image, 0, 0, w.min(image.width()), h + header).to_image();
+        image::imageops::replace(&mut sheet, &footage, i64::from(gap), i64::from(y));
+        let mut render = RgbImage::from_pixel(w, h + header, Rgb([20, 20, 20]));
+        if let Some(model) = model {
+            for py in 0..h {
+                for px in 0..w {
+                    let (fx, fy) = side.to_frame(f64::from(px) + 0.5, f64::from(header + py) + 0.5);
+                    if inside(&model.hull, (fx - ox, fy - oy)) {
+                        render.put_pixel(px, header + py, Rgb([238, 238, 238]));
+                    }
+                }
+            }
+        }
+        text_lines(&mut render, (8, 4), 14, &[("model".to_string(), TEXT)])?;
+        image::imageops::replace(&mut sheet, &render, i64::from(2 * gap + w), i64::from(y));
+    }
+    text_lines(
+        &mut sheet,
+        (8, 6),
+        16,
+        &[(
+            "The last turns: footage with the model's outline | the model alone".into(),
+            Rgb([20, 20, 20]),
+        )],
+    )?;
+    Ok(sheet)
+}
+
+/// Whether a point lies inside a convex polygon.
+fn inside(hull: &[(f64, f64)], p: (f64, f64)) -> bool {
+    let mut sign = 0.0;
+    for (a, b) in hull.iter().zip(hull.iter().cycle().skip(1)) {
+        let c = (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0);
+        if c != 0.0 {
+            if sign == 0.0 {
+                sign = c.signum();
+            } else if c.signum() != sign {
+                return false;
+            }
+        }
+    }
+    hull.len() >= 3
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A square's hull is its corners, and its lowest point on a column is its
+    /// bottom edge.
+    #[test]
+    fn hull_and_lowest_point() {
+        let points = vec![(0.0, 0.0), (2.0, 0.0), (1.0, 1.0), (2.0, 2.0), (0.0, 2.0)];
+        let hull = convex_hull(points);
+        assert_eq!(hull.len(), 4, "{hull:?}");
+        assert_eq!(lowest_on_column(&hull, 0.5), Some(2.0));
+        assert!(inside(&hull, (1.0, 1.5)) && !inside(&hull, (3.0, 1.0)));
+    }
+}
