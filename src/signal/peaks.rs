@@ -131,17 +131,43 @@ pub fn find_peaks(
     })
 }
 
-/// ψ advanced by `step` at each of the sorted `times`, zero at the last, with ψ̇ by
-/// eq. (3.11) (forward) and by central differences (non-uniform spacing).
+/// ψ advanced by `step` per turn between the sorted `times`, zero at the last, with
+/// ψ̇ by eq. (3.11) (forward) and by central differences (non-uniform spacing).
+///
+/// Consecutive times are usually one turn (`step`) apart; where an interval spans
+/// several local periods (frames missing from the clip, or a peak lost in the
+/// noise), it counts as that many turns: round(Δt / T), T the median of the two to
+/// four intervals around it, at least one (one turn each with fewer neighbours). The precession period changes by a few
+/// per cent a turn, so a missing turn doubles an interval against its neighbours.
 pub fn precession(times: &[f64], step: f64) -> Vec<PrecessionSample> {
     let n = times.len();
+    let intervals: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    let turns: Vec<f64> = (0..intervals.len())
+        .map(|j| {
+            let around: Vec<f64> = (j.saturating_sub(2)..(j + 3).min(intervals.len()))
+                .filter(|&i| i != j)
+                .map(|i| intervals[i])
+                .collect();
+            let period = super::median(&around);
+            if around.len() >= 2 && period.is_finite() && period > 0.0 {
+                (intervals[j] / period).round().max(1.0)
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    // ψ at each time, counted back from the last.
+    let mut psi = vec![0.0; n];
+    for k in (0..n.saturating_sub(1)).rev() {
+        psi[k] = psi[k + 1] - step * turns[k];
+    }
     (0..n)
         .map(|k| PrecessionSample {
             t: times[k],
-            psi: step * (k as f64 - (n as f64 - 1.0)),
-            psi_dot_forward: (k + 1 < n).then(|| step / (times[k + 1] - times[k])),
+            psi: psi[k],
+            psi_dot_forward: (k + 1 < n).then(|| step * turns[k] / intervals[k]),
             psi_dot_central: (k > 0 && k + 1 < n)
-                .then(|| 2.0 * step / (times[k + 1] - times[k - 1])),
+                .then(|| step * (turns[k - 1] + turns[k]) / (times[k + 1] - times[k - 1])),
         })
         .collect()
 }
@@ -442,6 +468,26 @@ mod tests {
         let v: Vec<f64> = t.iter().map(|&x: &f64| 4.0 - (x - 1.4).powi(2)).collect();
         let (tv, yv) = parabolic_vertex(&t, &v, 1);
         assert!((tv - 1.4).abs() < 1e-12 && (yv - 4.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_turn_lost_in_a_gap_is_still_counted() {
+        // Turns every 10 ms shortening by 2 % each; the 6th turning point missing.
+        let mut times = vec![0.0];
+        for k in 0..12 {
+            times.push(times[k] + 0.01 * 0.98f64.powi(k as i32));
+        }
+        let truth = precession(&times, 2.0 * PI);
+        let mut gapped = times.clone();
+        gapped.remove(6);
+        let samples = precession(&gapped, 2.0 * PI);
+        for (s, k) in samples.iter().zip((0..times.len()).filter(|&k| k != 6)) {
+            assert!((s.psi - truth[k].psi).abs() < 1e-12, "ψ at {k}");
+        }
+        // ψ̇ over the gap: two turns over its two intervals.
+        let over = samples[5].psi_dot_forward.expect("3.11");
+        let mean = 4.0 * PI / (times[7] - times[5]);
+        assert!((over - mean).abs() < 1e-9 * mean);
     }
 
     #[test]
