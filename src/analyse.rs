@@ -77,8 +77,14 @@ pub struct ExperimentPlan {
     #[serde(default)]
     pub frame_times: Option<FrameTiming>,
     pub frames: usize,
+    /// Displayed frame width [px] (after `orientation`).
     pub width: usize,
+    /// Displayed frame height [px].
     pub height: usize,
+    /// The display matrix's rotation and mirror, applied to every frame before it
+    /// was measured (identity in results written before it was recorded).
+    #[serde(default)]
+    pub orientation: footage::Orientation,
     pub disk: DiskParams,
     /// Side view or two-view, and whether the config said so or how it was detected.
     pub layout: String,
@@ -851,6 +857,7 @@ pub fn analyse_clip(
         frames: frames.len(),
         width,
         height,
+        orientation: source.orientation(),
         disk: params,
         layout,
         plate,

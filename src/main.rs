@@ -5,9 +5,11 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
+use clap::builder::TypedValueParser;
 use clap::{Args, Parser, Subcommand};
 
 use eulerdisk::compare::CompareOptions;
+use eulerdisk::footage::Orientation;
 use eulerdisk::model::dissipation::{Dissipation, ModelKind};
 use eulerdisk::model::params::Preset;
 use eulerdisk::model::simulate::{
@@ -324,6 +326,15 @@ struct RenderArgs {
     /// Capture indices (0-based) of frames to drop, e.g. 10,57.
     #[arg(long, value_delimiter = ',')]
     drop: Vec<usize>,
+    /// Tag the MP4 with a display matrix rotating it this far clockwise [deg: 0, 90,
+    /// 180, 270], as a phone tags its clips: the frames are stored turned the other
+    /// way, so the displayed frames are the rendered ones.
+    #[arg(long, default_value_t = 0, value_name = "DEG", value_parser = clap::builder::PossibleValuesParser::new(["0", "90", "180", "270"]).map(|s| s.parse::<u16>().expect("a listed value")))]
+    rotation_tag: u16,
+    /// Tag the MP4's display matrix with a left–right mirror (before the rotation),
+    /// as a front camera does; the frames are stored mirrored.
+    #[arg(long)]
+    mirror_tag: bool,
     /// Frame rate [frames/s] (thesis: 480).
     #[arg(long, default_value_t = 480.0)]
     fps: f64,
@@ -800,6 +811,8 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         seed: args.seed,
     };
     spec.dropped = args.drop.clone();
+    spec.display_orientation = Orientation::new(args.rotation_tag, args.mirror_tag)
+        .map_err(|reason| anyhow::anyhow!("--rotation-tag: {reason}"))?;
     let renderer = Renderer::new(&spec, &motion)?;
     eprintln!(
         "rendering {} frames ({} × {} px, {} fps)…",

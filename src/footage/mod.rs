@@ -6,8 +6,9 @@
 //! of PNG/TIFF/JPEG frames (read by the `image` crate, in natural name order).
 //! This stage owns everything about frames as they come off the disk: metadata,
 //! the capture fps and where it came from, frame times (the container's
-//! timestamps mapped to capture time, [`frame_times`]), frame-skip flags, the
-//! region of interest and the mirror split. The frames it delivers go on to
+//! timestamps mapped to capture time, [`frame_times`]), the display matrix a phone
+//! tags its frames with ([`Orientation`]: frames are lent out as displayed),
+//! frame-skip flags, the region of interest and the mirror split. The frames it delivers go on to
 //! `vision`, which turns them into `z_rim(t)` and `β(t)`.
 //!
 //! [`FrameSource`] streams a clip's frames; [`probe`] reports what OpenCV says
@@ -20,6 +21,7 @@ mod decoder;
 mod error;
 mod frame;
 mod info;
+mod orientation;
 mod source;
 mod timing;
 
@@ -32,5 +34,6 @@ pub use info::{
     ClipInfo, ClipKind, FRAME_EXTENSIONS, LOW_FPS_LIMIT, VIDEO_EXTENSIONS, frame_files,
     natural_cmp, probe,
 };
+pub use orientation::{Orientation, PixelMap};
 pub use source::{Frame, FrameSource};
 pub use timing::{FrameTiming, TimeSource, frame_times};

@@ -4,14 +4,15 @@
 //! the same libavcodec as OpenCV's `VideoCapture`, without converting pixels
 //! nobody reads) or reads a frame folder through the `image` crate, in natural
 //! name order. It holds one decoded frame at a time and lends it out as a
-//! [`FrameView`], so memory stays bounded whatever the clip length.
+//! [`FrameView`], so memory stays bounded whatever the clip length. A video
+//! tagged with a display matrix is lent out as displayed ([`Orientation`]).
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use super::decoder::VideoDecoder;
 use super::info::{VIDEO_EXTENSIONS, frame_files, lower_extension};
-use super::{ChannelOrder, FootageError, FrameView};
+use super::{ChannelOrder, FootageError, FrameView, Orientation};
 
 /// One frame lent out by [`FrameSource::next_frame`].
 #[derive(Clone, Copy, Debug)]
@@ -94,6 +95,15 @@ impl FrameSource {
         match &self.reader {
             Reader::Video(decoder) => decoder.fps(),
             Reader::Folder { .. } => None,
+        }
+    }
+
+    /// The rotation and mirror that turn the stored frames into the displayed
+    /// ones, which are what this source lends out (identity for a frame folder).
+    pub fn orientation(&self) -> Orientation {
+        match &self.reader {
+            Reader::Video(decoder) => decoder.orientation(),
+            Reader::Folder { .. } => Orientation::IDENTITY,
         }
     }
 

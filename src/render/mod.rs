@@ -143,6 +143,7 @@ use image::RgbImage;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::footage::Orientation;
 use crate::model::params::DiskParams;
 pub use motion::{
     DiskState, Motion, MotionSource, Nutation, PostFlatSpin, PowerLaw, Timing, add_nutation,
@@ -319,6 +320,11 @@ pub struct RenderSpec {
     pub effects: Effects,
     /// Capture indices (0-based) of frames missing from the output.
     pub dropped: Vec<usize>,
+    /// The display matrix an MP4 is tagged with, as a phone tags its clips: the
+    /// frames are stored turned the other way, so that the displayed frames are
+    /// the rendered ones (issue 14 §1).
+    #[serde(default)]
+    pub display_orientation: Orientation,
 }
 
 impl RenderSpec {
@@ -339,6 +345,7 @@ impl RenderSpec {
             strip_width: 0.005,
             effects: Effects::default(),
             dropped: Vec::new(),
+            display_orientation: Orientation::IDENTITY,
         }
     }
 }
@@ -496,6 +503,10 @@ pub struct GroundTruth {
     pub effects: Effects,
     /// Capture indices missing from the output.
     pub dropped: Vec<usize>,
+    /// The display matrix of the MP4: its stored frames are the rendered ones
+    /// turned the other way (`width` × `height` is the displayed size).
+    #[serde(default)]
+    pub display_orientation: Orientation,
     /// One entry per written frame, in output order.
     pub frames: Vec<FrameTruth>,
 }
@@ -682,6 +693,7 @@ impl Renderer {
                     d.dedup();
                     d
                 },
+                display_orientation: spec.display_orientation,
                 frames: Vec::new(),
             },
             written,

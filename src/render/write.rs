@@ -8,6 +8,7 @@
 
 use std::path::{Path, PathBuf};
 
+use ff::ffi;
 use ff::format::Pixel;
 use ff::software::scaling;
 use ffmpeg_next as ff;
@@ -105,6 +106,14 @@ pub fn write_clip(renderer: &Renderer, path: &Path, crf: u8) -> Result<WrittenCl
                 }
             }
         }
+        ClipFormat::PngFolder if !renderer.truth().display_orientation.is_identity() => {
+            return Err(fail(
+                path,
+                "a display matrix (rotation tag) is written into an MP4 only: give a path \
+                 ending in .mp4"
+                    .into(),
+            ));
+        }
         ClipFormat::PngFolder => {
             // 0777 less the umask, as any folder the user makes (not tempfile's 0700).
             let tmp = tempfile::Builder::new()
@@ -159,9 +168,16 @@ fn write_pngs(renderer: &Renderer, dir: &Path) -> Result<(), (PathBuf, String)> 
 ///   process) wrote different MP4s, while separate `render` processes agreed.
 /// - one encoder thread ([`X264_THREADS`]): x264's output depends on its thread
 ///   count, which by default follows the machine's cores.
+///
+/// With a display orientation (a rotation tag), each rendered frame is stored
+/// turned the other way and the stream carries the display matrix that turns it
+/// back, as a phone's MP4 does.
 fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String> {
     let truth = renderer.truth();
-    let (w, h) = (truth.width, truth.height);
+    let orientation = truth.display_orientation;
+    let stored = orientation.stored_size((truth.width as usize, truth.height as usize));
+    let map = orientation.displayed_from_stored(stored);
+    let (w, h) = (stored.0 as u32, stored.1 as u32);
     if w % 2 == 1 || h % 2 == 1 {
         return Err(format!(
             "H.264 (4:2:0) needs an even frame size, got {w} × {h}: render a PNG folder or an even size"
@@ -207,6 +223,22 @@ fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String
     // The muxer keeps a multiple of the frame rate (480 fps: 1/15360 s) rather
     // than its default 1/90000 s, so frame times are exact.
     stream.set_time_base(time_base);
+    if !orientation.is_identity() {
+        let matrix = orientation.display_matrix(stored);
+        // SAFETY: the stream belongs to `output`, whose header is not written yet;
+        // FFmpeg allocates the 36 bytes it returns, which are filled at once.
+        unsafe {
+            let data = ffi::av_stream_new_side_data(
+                stream.as_mut_ptr(),
+                ffi::AVPacketSideDataType::AV_PKT_DATA_DISPLAYMATRIX,
+                std::mem::size_of_val(&matrix),
+            );
+            if data.is_null() {
+                return Err("FFmpeg: cannot attach the display matrix".to_owned());
+            }
+            std::ptr::copy_nonoverlapping(matrix.as_ptr().cast::<u8>(), data, 36);
+        }
+    }
     output.write_header().map_err(av("write the MP4 header"))?;
     let stream_time_base = output
         .stream(0)
@@ -249,12 +281,23 @@ fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String
             .collect();
         for (i, image) in (start..).zip(images) {
             let stride = rgb.stride(0);
-            for (dst, src) in rgb
-                .data_mut(0)
-                .chunks_mut(stride)
-                .zip(image.as_raw().chunks_exact(row))
-            {
-                dst[..row].copy_from_slice(src);
+            if orientation.is_identity() {
+                for (dst, src) in rgb
+                    .data_mut(0)
+                    .chunks_mut(stride)
+                    .zip(image.as_raw().chunks_exact(row))
+                {
+                    dst[..row].copy_from_slice(src);
+                }
+            } else {
+                let data = rgb.data_mut(0);
+                for q in 0..stored.1 {
+                    for p in 0..stored.0 {
+                        let (x, y) = map.displayed(p, q);
+                        let at = q * stride + 3 * p;
+                        data[at..at + 3].copy_from_slice(&image.get_pixel(x as u32, y as u32).0);
+                    }
+                }
             }
             scaler.run(&rgb, &mut yuv).map_err(av("libswscale"))?;
             yuv.set_pts(Some(i as i64));

@@ -322,6 +322,13 @@ fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<Strin
             format!("{} ({} × {} px)", plan.frames, plan.width, plan.height),
         ],
         vec![
+            "orientation".into(),
+            format!(
+                "{} (the container's display matrix, applied to every frame)",
+                plan.orientation
+            ),
+        ],
+        vec![
             "capture fps".into(),
             format!("{} ({:?})", plan.fps.fps, plan.fps.source),
         ],
