@@ -40,6 +40,10 @@ use crate::vision::{
 /// Frames at the end of a clip that must show the disk at rest (calibration).
 pub const REST_FRAMES: usize = 5;
 
+/// Every second pixel of every second row is compared with the neighbouring
+/// frames' to find duplicated and interpolated frames (footage::RepeatGauge).
+const REPEAT_SAMPLE_STEP: usize = 2;
+
 /// The windows of the window-sensitivity table [s] (issue: 1, 0.5, 0.25, 0.1 s).
 pub const SENSITIVITY_WINDOWS_S: [f64; 4] = [1.0, 0.5, 0.25, 0.1];
 
@@ -618,6 +622,7 @@ pub fn analyse_clip(
     let mut gaps = Vec::with_capacity(if gap_gauge.is_some() { expected } else { 0 });
     let mut windows = Vec::with_capacity(if rest_window.is_some() { expected } else { 0 });
     let band_columns = gauge.band_columns();
+    let mut repeats = footage::RepeatGauge::new();
     let mut no_edge = 0usize;
     // The frame with the highest rim so far, kept for the threshold diagnostic.
     let mut highest: Option<(f64, f64, OwnedFrame)> = None;
@@ -667,6 +672,7 @@ pub fn analyse_clip(
         if index % 256 == 0 {
             progress(index, Some(expected));
         }
+        repeats.push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
         if let Some((z_rim_px, edge_row)) = new_highest {
             // The diagnostic shows the whole side view: convert the other columns.
             let whole = source.whole_frame()?;
@@ -720,6 +726,25 @@ pub fn analyse_clip(
         }
         None => "edge (vision::rim): the second edge from the bottom on a light plate".into(),
     };
+    // Duplicated and interpolated frames show no capture of their own: no rim
+    // height or strip angle from them reaches the fits.
+    let repeated = repeats.repeated(REST_FRAMES);
+    drop(repeats);
+    for r in &repeated {
+        frames[r.index].z_rim_px = None;
+        frames[r.index].beta_raw = None;
+    }
+    if !repeated.is_empty() {
+        let count = |kind| repeated.iter().filter(|r| r.kind == kind).count();
+        let list: Vec<String> = repeated.iter().map(|r| r.index.to_string()).collect();
+        warnings.push(format!(
+            "{} duplicated and {} interpolated frame(s) (frames {}) show no capture of \
+             their own: left out of the fits",
+            count(footage::RepeatKind::Duplicated),
+            count(footage::RepeatKind::Interpolated),
+            list.join(", ")
+        ));
+    }
     // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
     // z_rim in metres once, after every correction of z_rim in px.
     let scale = ScaleReport::new(&calibration.calibration, &params);
@@ -782,8 +807,26 @@ pub fn analyse_clip(
         radius: params.radius,
     };
     let signal_err = |error| signal_error(clip, &fps, error);
-    let series =
+    let mut series =
         signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;
+    for r in &repeated {
+        let (statistic, neighbours) = (r.statistic, r.neighbours);
+        series.flags.push(signal::FrameFlag {
+            index: r.index,
+            t: series.halt.shifted_t[r.index],
+            reason: match r.kind {
+                footage::RepeatKind::Duplicated => signal::SkipReason::DuplicatedFrame {
+                    step: statistic,
+                    neighbours,
+                },
+                footage::RepeatKind::Interpolated => signal::SkipReason::InterpolatedFrame {
+                    residual: statistic,
+                    neighbours,
+                },
+            },
+        });
+    }
+    series.flags.sort_by_key(|f| f.index);
     for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
         record.t = *shifted;
     }
@@ -807,7 +850,7 @@ pub fn analyse_clip(
             format!(" (timestamp gaps: {})", gaps.join("; "))
         };
         warnings.push(format!(
-            "{skips_in_window} flagged frame(s) (skips or jumps) inside the fit window{gaps}"
+            "{skips_in_window} flagged frame(s) (skips, jumps or repeated frames) inside the fit window{gaps}"
         ));
     }
 

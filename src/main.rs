@@ -326,6 +326,14 @@ struct RenderArgs {
     /// Capture indices (0-based) of frames to drop, e.g. 10,57.
     #[arg(long, value_delimiter = ',')]
     drop: Vec<usize>,
+    /// Capture indices (0-based) whose frame repeats the previous frame's bytes, as a
+    /// phone that misses a capture writes it, e.g. 120,181.
+    #[arg(long, value_delimiter = ',')]
+    duplicate: Vec<usize>,
+    /// Capture indices (0-based) whose frame is the rounded mean of the previous and
+    /// next frames, as a phone inserts to reach 240 or 960 fps, e.g. 150.
+    #[arg(long, value_delimiter = ',')]
+    interpolate: Vec<usize>,
     /// Tag the MP4 with a display matrix rotating it this far clockwise [deg: 0, 90,
     /// 180, 270], as a phone tags its clips: the frames are stored turned the other
     /// way, so the displayed frames are the rendered ones.
@@ -490,7 +498,7 @@ fn run_analyse(
     }
     let flagged = match experiment.skips_in_window {
         0 => String::new(),
-        k => format!("; WARNING: {k} flagged frame(s) (dropped frames?) in the window"),
+        k => format!("; WARNING: {k} flagged frame(s) (dropped or repeated frames?) in the window"),
     };
     println!(
         "{}: n = {:.3} (95 % CI {:.3} … {:.3}), {} peaks in the last {} s; fps {} ({:?}), \
@@ -811,6 +819,8 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         seed: args.seed,
     };
     spec.dropped = args.drop.clone();
+    spec.duplicated = args.duplicate.clone();
+    spec.interpolated = args.interpolate.clone();
     spec.display_orientation = Orientation::new(args.rotation_tag, args.mirror_tag)
         .map_err(|reason| anyhow::anyhow!("--rotation-tag: {reason}"))?;
     let renderer = Renderer::new(&spec, &motion)?;

@@ -93,3 +93,56 @@ fn a_rotation_tagged_clip_measures_as_the_original() {
         assert!(dn < 1e-3, "{expected}: n differs by {dn}");
     }
 }
+
+/// §2: duplicated frames (the previous frame's bytes again) and interpolated frames
+/// (the rounded mean of their neighbours), written at known captures, are flagged
+/// as such and left out of the fits; a clip without them has no such flag.
+#[test]
+fn duplicated_and_interpolated_frames_are_flagged_and_left_out() {
+    use eulerdisk::signal::SkipReason;
+    let dir = tempfile::tempdir().unwrap();
+    let clip = render(
+        dir.path(),
+        "repeats.mp4",
+        &["--duplicate", "100,181", "--interpolate", "150,220"],
+    );
+    let truth: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("repeats.truth.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(truth["duplicated"], serde_json::json!([100, 181]));
+    assert_eq!(truth["interpolated"], serde_json::json!([150, 220]));
+
+    let e = analyse(&clip);
+    let flagged = |duplicated: bool| -> Vec<usize> {
+        e.series
+            .flags
+            .iter()
+            .filter(|f| match f.reason {
+                SkipReason::DuplicatedFrame { .. } => duplicated,
+                SkipReason::InterpolatedFrame { .. } => !duplicated,
+                _ => false,
+            })
+            .map(|f| f.index)
+            .collect()
+    };
+    // No frame is dropped, so file frames are captures.
+    assert_eq!(flagged(true), vec![100, 181], "{:?}", e.series.flags);
+    assert_eq!(flagged(false), vec![150, 220], "{:?}", e.series.flags);
+    for k in [100, 150, 181, 220] {
+        assert!(e.frames[k].z_rim_px.is_none(), "frame {k} reaches the fits");
+    }
+    // Prescribed n = 0.5; 24 peaks over 0.5 s at crf 23 fit it within 0.01 (the
+    // four repeated frames left in moved it to 0.512 on this clip).
+    let n = e.peaks_fit.fit.n;
+    assert!((n - 0.5).abs() < 0.01, "n = {n}");
+
+    let plain = analyse(&render(dir.path(), "plain.mp4", &[]));
+    let repeats = plain.series.flags.iter().filter(|f| {
+        matches!(
+            f.reason,
+            SkipReason::DuplicatedFrame { .. } | SkipReason::InterpolatedFrame { .. }
+        )
+    });
+    assert_eq!(repeats.count(), 0, "{:?}", plain.series.flags);
+}

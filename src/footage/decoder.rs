@@ -203,6 +203,42 @@ impl VideoDecoder {
         self.orientation
     }
 
+    /// Every `step`-th luma sample of every `step`-th row of the current stored
+    /// frame, in grey levels of 8 bits (a deeper format is scaled down), or `None`
+    /// when the codec's format has no plain luma plane. The order of the samples
+    /// is the stored frame's, the same every frame.
+    pub(super) fn luma_samples(&self, step: usize) -> Option<Vec<f32>> {
+        self.check_decoded().ok()?;
+        let descriptor = self.yuv.format().descriptor()?;
+        // SAFETY: the descriptor is libavutil's static table entry for the format.
+        let (flags, depth) = unsafe {
+            let d = &*descriptor.as_ptr();
+            (d.flags, d.comp[0].depth as usize)
+        };
+        let planar_yuv = descriptor.nb_components() >= 3
+            && flags & ffi::AV_PIX_FMT_FLAG_RGB as u64 == 0
+            && flags & ffi::AV_PIX_FMT_FLAG_PLANAR as u64 != 0;
+        if !planar_yuv || !(8..=16).contains(&depth) {
+            return None;
+        }
+        let (stride, data) = (self.yuv.stride(0), self.yuv.data(0));
+        let scale = 1.0 / f32::from(1u16 << (depth - 8));
+        let step = step.max(1);
+        let mut samples = Vec::with_capacity((self.width / step + 1) * (self.height / step + 1));
+        for y in (0..self.height).step_by(step) {
+            let row = &data[y * stride..];
+            for x in (0..self.width).step_by(step) {
+                let v = if depth > 8 {
+                    f32::from(u16::from_le_bytes([row[2 * x], row[2 * x + 1]]))
+                } else {
+                    f32::from(row[x])
+                };
+                samples.push(v * scale);
+            }
+        }
+        Some(samples)
+    }
+
     /// Convert only the displayed `columns` of the following frames (`None`: whole
     /// frames). Only planar 4:2:0 video is converted by columns; other formats
     /// always whole.

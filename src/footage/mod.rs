@@ -22,6 +22,7 @@ mod error;
 mod frame;
 mod info;
 mod orientation;
+mod repeats;
 mod source;
 mod timing;
 
@@ -35,5 +36,6 @@ pub use info::{
     natural_cmp, probe,
 };
 pub use orientation::{Orientation, PixelMap};
+pub use repeats::{RepeatGauge, RepeatKind, RepeatedFrame};
 pub use source::{Frame, FrameSource};
 pub use timing::{FrameTiming, TimeSource, frame_times};

@@ -144,6 +144,31 @@ impl FrameSource {
         }
     }
 
+    /// Every `step`-th brightness sample of every `step`-th row of the frame last
+    /// returned by [`Self::next_frame`] [grey levels of 8 bits], the same pixels
+    /// every frame: a video's luma plane as decoded (no colour conversion), a
+    /// frame folder's mean of the three channels. For comparing frames with their
+    /// neighbours ([`super::RepeatGauge`]).
+    ///
+    /// # Errors
+    /// `Unreadable` when no frame has been read.
+    pub fn brightness_samples(&mut self, step: usize) -> Result<Vec<f32>, FootageError> {
+        let step = step.max(1);
+        if let Reader::Video(decoder) = &self.reader
+            && let Some(samples) = decoder.luma_samples(step)
+        {
+            return Ok(samples);
+        }
+        let view = self.whole_frame()?;
+        let mut samples = Vec::with_capacity((view.width / step + 1) * (view.height / step + 1));
+        for y in (0..view.height).step_by(step) {
+            for x in (0..view.width).step_by(step) {
+                samples.push(view.intensity(x, y));
+            }
+        }
+        Ok(samples)
+    }
+
     /// Skip ahead so that the next frame returned is `index` (for a video, by
     /// seeking; a codec may land on a nearby key frame, so the caller should
     /// read [`Frame::index`] rather than assume it).
