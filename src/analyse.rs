@@ -89,6 +89,12 @@ pub struct ExperimentPlan {
     /// was measured (identity in results written before it was recorded).
     #[serde(default)]
     pub orientation: footage::Orientation,
+    /// A video's pixel format, bit depth, range, YUV matrix and transfer function,
+    /// from which frames were converted to 8-bit full-range colour before any
+    /// threshold (`None`: a frame folder, or a result written before it was
+    /// recorded).
+    #[serde(default)]
+    pub video_signal: Option<footage::VideoSignal>,
     pub disk: DiskParams,
     /// Side view or two-view, and whether the config said so or how it was detected.
     pub layout: String,
@@ -901,6 +907,7 @@ pub fn analyse_clip(
         width,
         height,
         orientation: source.orientation(),
+        video_signal: source.video_signal(),
         disk: params,
         layout,
         plate,

@@ -17,8 +17,9 @@ use eulerdisk::model::simulate::{
 };
 use eulerdisk::model::tuning::tune_eta;
 use eulerdisk::render::{
-    DEFAULT_CRF, Effects, Nutation, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Scenery,
-    Timing, add_nutation, power_law_motion, trajectory_motion, write_clip,
+    DEFAULT_CRF, Effects, HdrTransfer, Nutation, Plate, PostFlatSpin, PowerLaw, RenderSpec,
+    Renderer, SampleStorage, Scenery, Timing, add_nutation, power_law_motion, trajectory_motion,
+    write_clip,
 };
 use eulerdisk::report::OutputLock;
 use eulerdisk::report::compare::{comparison_dir, write_comparison};
@@ -61,7 +62,7 @@ enum Command {
     Simulate(SimulateArgs),
     /// Render synthetic footage (MP4 or PNG folder) of a prescribed power-law motion
     /// or a simulated one, with its ground truth as `<clip>.truth.json`.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Measure one clip (thesis Chapter 3): calibration, rim height, peaks, φ, ψ̇,
     /// energy and its power law; writes CSV, JSON, plots and an HTML page.
     Analyse {
@@ -339,6 +340,16 @@ struct RenderArgs {
     /// way, so the displayed frames are the rendered ones.
     #[arg(long, default_value_t = 0, value_name = "DEG", value_parser = clap::builder::PossibleValuesParser::new(["0", "90", "180", "270"]).map(|s| s.parse::<u16>().expect("a listed value")))]
     rotation_tag: u16,
+    /// Store 10-bit samples (yuv420p10le), as phones record HDR.
+    #[arg(long)]
+    ten_bit: bool,
+    /// Store full-range samples (JPEG style, color_range = pc) instead of limited.
+    #[arg(long)]
+    full_range: bool,
+    /// Tag the MP4 as HDR with this transfer function and BT.2020 primaries and
+    /// matrix (the samples keep the rendered grey levels).
+    #[arg(long, value_enum, value_name = "TRANSFER")]
+    hdr: Option<HdrTransfer>,
     /// Tag the MP4's display matrix with a left–right mirror (before the rotation),
     /// as a front camera does; the frames are stored mirrored.
     #[arg(long)]
@@ -819,6 +830,11 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         seed: args.seed,
     };
     spec.dropped = args.drop.clone();
+    spec.storage = SampleStorage {
+        ten_bit: args.ten_bit,
+        full_range: args.full_range,
+        hdr: args.hdr,
+    };
     spec.duplicated = args.duplicate.clone();
     spec.interpolated = args.interpolate.clone();
     spec.display_orientation = Orientation::new(args.rotation_tag, args.mirror_tag)

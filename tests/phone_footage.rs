@@ -146,3 +146,73 @@ fn duplicated_and_interpolated_frames_are_flagged_and_left_out() {
     });
     assert_eq!(repeats.count(), 0, "{:?}", plain.series.flags);
 }
+
+/// The mean grey level of a clip's last frame (the disk at rest), as decoded.
+fn last_frame_mean(clip: &Path) -> f64 {
+    let mut source = footage::FrameSource::open(clip).unwrap();
+    let last = source.expected_frames().unwrap() - 1;
+    source.seek(last).unwrap();
+    let v = source.next_frame().unwrap().unwrap().view;
+    let sum: f64 = (0..v.height)
+        .flat_map(|y| (0..v.width).map(move |x| (x, y)))
+        .map(|(x, y)| f64::from(v.intensity(x, y)))
+        .sum();
+    sum / (v.width * v.height) as f64
+}
+
+/// §4: one scene stored 8-bit limited range, 8-bit full range, and 10-bit HDR (HLG
+/// limited, PQ full, BT.2020) decodes to one brightness scale and gives one z_rim
+/// series; the plan names the format, range, matrix and transfer function found.
+#[test]
+fn ten_bit_and_full_range_clips_measure_as_eight_bit_limited() {
+    let dir = tempfile::tempdir().unwrap();
+    // crf 0 (lossless) so that what differs is the storage, not the codec's error.
+    let base = render(dir.path(), "limited.mp4", &["--crf", "0"]);
+    let reference = analyse(&base);
+    let signal = reference.plan.video_signal.clone().unwrap();
+    assert_eq!((signal.bit_depth, signal.full_range), (8, false));
+    let grey = last_frame_mean(&base);
+    for (name, extra, depth, full, transfer) in [
+        ("full.mp4", &["--full-range"][..], 8, true, "unspecified"),
+        (
+            "hlg.mp4",
+            &["--ten-bit", "--hdr", "hlg"][..],
+            10,
+            false,
+            "HLG (ARIB STD-B67)",
+        ),
+        (
+            "pq.mp4",
+            &["--ten-bit", "--full-range", "--hdr", "pq"][..],
+            10,
+            true,
+            "PQ (SMPTE ST 2084)",
+        ),
+    ] {
+        let mut args = vec!["--crf", "0"];
+        args.extend_from_slice(extra);
+        let clip = render(dir.path(), name, &args);
+        let e = analyse(&clip);
+        let signal = e.plan.video_signal.clone().unwrap();
+        assert_eq!(
+            (signal.bit_depth, signal.full_range),
+            (depth, full),
+            "{name}: {signal}"
+        );
+        assert_eq!(signal.transfer, transfer, "{name}");
+        if depth == 10 {
+            assert_eq!(signal.matrix, "BT.2020", "{name}");
+        }
+        // One brightness scale: the rest frame's mean grey level agrees to half a
+        // level (8-bit limited range rounds to 220 steps; a range read wrongly
+        // moves it by 7 % of the level).
+        let mean = last_frame_mean(&clip);
+        assert!(
+            (mean - grey).abs() < 0.5,
+            "{name}: mean grey {mean} against {grey}"
+        );
+        // Issue §4: the same z_rim series within 0.05 px (0.027 px measured).
+        let dz = max_difference(&z_rim(&reference), &z_rim(&e));
+        assert!(dz < 0.05, "{name}: z_rim differs by {dz} px");
+    }
+}

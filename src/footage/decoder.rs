@@ -27,6 +27,7 @@ use ff::software::scaling;
 use ffmpeg_next as ff;
 
 use super::FootageError;
+use super::colour::VideoSignal;
 use super::orientation::{Orientation, PixelMap};
 
 /// libswscale's interpolation flag as OpenCV 4.6 passes it; for a conversion
@@ -59,6 +60,8 @@ pub(super) struct VideoDecoder {
     orientation: Orientation,
     /// Stored → displayed pixels, when the orientation is not the identity.
     map: Option<PixelMap>,
+    /// Bit depth, range, matrix and transfer function of the samples.
+    signal: VideoSignal,
     /// The current decoded frame, in the codec's pixel format.
     yuv: ff::frame::Video,
     /// A frame decoded while seeking that is the next one to lend out.
@@ -157,6 +160,12 @@ impl VideoDecoder {
         }
         let map = (!orientation.is_identity())
             .then(|| orientation.displayed_from_stored((width, height)));
+        let signal = VideoSignal::new(
+            decoder.format(),
+            decoder.color_range(),
+            decoder.color_space(),
+            decoder.color_transfer_characteristic(),
+        );
         Ok(Self {
             path: path.to_path_buf(),
             input,
@@ -170,6 +179,7 @@ impl VideoDecoder {
             height,
             orientation,
             map,
+            signal,
             yuv: ff::frame::Video::empty(),
             pending: false,
             skip_before: None,
@@ -201,6 +211,30 @@ impl VideoDecoder {
     /// The rotation and mirror of the stream's display matrix.
     pub(super) fn orientation(&self) -> Orientation {
         self.orientation
+    }
+
+    /// The bit depth, range, matrix and transfer function of the samples.
+    pub(super) fn signal(&self) -> &VideoSignal {
+        &self.signal
+    }
+
+    /// A libswscale context from `w × h` of the codec's format to BGR24, set up
+    /// for the stream's range and matrix.
+    fn bgr_context(&self, w: usize, h: usize) -> Result<scaling::Context, FootageError> {
+        let mut context = scaling::Context::get(
+            self.decoder.format(),
+            w as u32,
+            h as u32,
+            Pixel::BGR24,
+            w as u32,
+            h as u32,
+            SWS_FLAGS,
+        )
+        .map_err(|e| self.error(format!("libswscale: {e}")))?;
+        self.signal
+            .configure(&mut context)
+            .map_err(|reason| self.error(reason))?;
+        Ok(context)
     }
 
     /// Every `step`-th luma sample of every `step`-th row of the current stored
@@ -251,7 +285,10 @@ impl VideoDecoder {
             return Ok(());
         };
         let format = self.decoder.format();
-        if !matches!(format, Pixel::YUV420P | Pixel::YUVJ420P) {
+        if !matches!(
+            format,
+            Pixel::YUV420P | Pixel::YUVJ420P | Pixel::YUV420P10LE
+        ) {
             return Ok(());
         }
         let shown_width = self.size().0;
@@ -269,16 +306,7 @@ impl VideoDecoder {
         if columns.is_empty() || rows.is_empty() {
             return Ok(());
         }
-        let context = scaling::Context::get(
-            format,
-            columns.len() as u32,
-            rows.len() as u32,
-            Pixel::BGR24,
-            columns.len() as u32,
-            rows.len() as u32,
-            SWS_FLAGS,
-        )
-        .map_err(|e| self.error(format!("libswscale: {e}")))?;
+        let context = self.bgr_context(columns.len(), rows.len())?;
         self.band = Some(Band {
             shown,
             columns,
@@ -353,10 +381,12 @@ impl VideoDecoder {
             Some(band) => {
                 let path = &self.path;
                 let origin = (band.columns.start, band.rows.start);
+                let sample_bytes = if self.signal.bit_depth > 8 { 2 } else { 1 };
                 convert(
                     &mut band.context,
                     &self.yuv,
                     origin,
+                    sample_bytes,
                     &mut self.bgr,
                     self.width,
                 )
@@ -388,20 +418,10 @@ impl VideoDecoder {
     fn convert_whole(&mut self) -> Result<(), FootageError> {
         self.check_decoded()?;
         if self.whole.is_none() {
-            let context = scaling::Context::get(
-                self.yuv.format(),
-                self.width as u32,
-                self.height as u32,
-                Pixel::BGR24,
-                self.width as u32,
-                self.height as u32,
-                SWS_FLAGS,
-            )
-            .map_err(|e| self.error(format!("libswscale: {e}")))?;
-            self.whole = Some(context);
+            self.whole = Some(self.bgr_context(self.width, self.height)?);
         }
         let context = self.whole.as_mut().expect("just made");
-        convert(context, &self.yuv, (0, 0), &mut self.bgr, self.width)
+        convert(context, &self.yuv, (0, 0), 1, &mut self.bgr, self.width)
             .map_err(|e| FootageError::unreadable(&self.path, format!("libswscale: {e}")))?;
         if let Some(map) = &self.map {
             map.copy_columns(&self.bgr, &mut self.shown, 0..map.displayed.0);
@@ -484,12 +504,13 @@ impl VideoDecoder {
 }
 
 /// Convert the rectangle `w × h` at column `x0`, row `y0` of `yuv` (w, h: the
-/// context's input size) into the same place of the BGR buffer `bgr` (`3 · width`
-/// bytes a row).
+/// context's input size; planar samples of `sample_bytes` each) into the same
+/// place of the BGR buffer `bgr` (`3 · width` bytes a row).
 fn convert(
     context: &mut scaling::Context,
     yuv: &ff::frame::Video,
     (x0, y0): (usize, usize),
+    sample_bytes: usize,
     bgr: &mut [u8],
     width: usize,
 ) -> Result<(), ff::Error> {
@@ -509,7 +530,7 @@ fn convert(
             if p.is_null() {
                 p
             } else {
-                p.offset(y as isize * lines[i] as isize + x as isize)
+                p.offset(y as isize * lines[i] as isize + (x * sample_bytes) as isize)
             }
         };
         let src = [

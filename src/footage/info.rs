@@ -17,6 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use super::FootageError;
 use super::capture_rate::{ContainerCaptureRate, container_capture_rate};
+use super::colour::VideoSignal;
 use super::decoder::VideoDecoder;
 use super::orientation::Orientation;
 
@@ -63,6 +64,11 @@ pub struct ClipInfo {
     /// every command applies: `width` × `height` is the displayed size.
     #[serde(default)]
     pub orientation: Orientation,
+    /// A video's pixel format, bit depth, range, YUV matrix and transfer function
+    /// (`None` for a frame folder): every command converts frames from it to 8-bit
+    /// full-range colour.
+    #[serde(default)]
+    pub signal: Option<VideoSignal>,
     /// Frames in the clip (as the container states it; for a folder, the frame files).
     pub frame_count: u64,
     /// The fps stored in the container: often the playback rate, not the capture
@@ -101,6 +107,12 @@ impl fmt::Display for ClipInfo {
             ("kind", self.kind.to_string()),
             ("size", format!("{} x {} px", self.width, self.height)),
             ("rotation", self.orientation.to_string()),
+            (
+                "signal",
+                self.signal
+                    .as_ref()
+                    .map_or_else(|| "frame images (8-bit)".into(), ToString::to_string),
+            ),
             ("frames", self.frame_count.to_string()),
             ("fps", fps),
             ("capture", capture),
@@ -191,6 +203,7 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
     let decoder = VideoDecoder::open(path)?;
     let (width, height) = decoder.size();
     let orientation = decoder.orientation();
+    let signal = Some(decoder.signal().clone());
     let capture_rate = container_capture_rate(path);
     match (container_fps, &capture_rate) {
         (_, Some(rate)) => warnings.push(format!(
@@ -216,6 +229,7 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
         width: width as u32,
         height: height as u32,
         orientation,
+        signal,
         frame_count,
         container_fps,
         capture_rate,
@@ -286,6 +300,7 @@ fn probe_folder(dir: &Path) -> Result<ClipInfo, FootageError> {
         width,
         height,
         orientation: Orientation::IDENTITY,
+        signal: None,
         frame_count: frames.len() as u64,
         container_fps: None,
         capture_rate: None,

@@ -17,6 +17,7 @@
 //! Failures are [`FootageError`]s that name the file.
 
 mod capture_rate;
+mod colour;
 mod decoder;
 mod error;
 mod frame;
@@ -29,6 +30,7 @@ mod timing;
 pub use capture_rate::{
     CaptureFps, ContainerCaptureRate, FpsSource, container_capture_rate, resolve_capture_fps,
 };
+pub use colour::VideoSignal;
 pub use error::FootageError;
 pub use frame::{ChannelOrder, FrameView};
 pub use info::{

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use super::decoder::VideoDecoder;
 use super::info::{VIDEO_EXTENSIONS, frame_files, lower_extension};
-use super::{ChannelOrder, FootageError, FrameView, Orientation};
+use super::{ChannelOrder, FootageError, FrameView, Orientation, VideoSignal};
 
 /// One frame lent out by [`FrameSource::next_frame`].
 #[derive(Clone, Copy, Debug)]
@@ -104,6 +104,16 @@ impl FrameSource {
         match &self.reader {
             Reader::Video(decoder) => decoder.orientation(),
             Reader::Folder { .. } => Orientation::IDENTITY,
+        }
+    }
+
+    /// The bit depth, range, matrix and transfer function of a video's samples,
+    /// which frames are converted from to 8-bit full-range colour; `None` for a
+    /// frame folder.
+    pub fn video_signal(&self) -> Option<VideoSignal> {
+        match &self.reader {
+            Reader::Video(decoder) => Some(decoder.signal().clone()),
+            Reader::Folder { .. } => None,
         }
     }
 

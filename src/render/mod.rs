@@ -159,7 +159,7 @@ use scene::{
     Surface, View,
 };
 use std::f64::consts::PI;
-pub use write::{ClipFormat, DEFAULT_CRF, truth_path, write_clip};
+pub use write::{ClipFormat, DEFAULT_CRF, HdrTransfer, SampleStorage, truth_path, write_clip};
 
 /// Errors of the render stage; file errors name the file.
 #[derive(Debug, thiserror::Error)]
@@ -329,6 +329,9 @@ pub struct RenderSpec {
     /// the rendered ones (issue 14 §1).
     #[serde(default)]
     pub display_orientation: Orientation,
+    /// How an MP4 stores its samples: bit depth, range, HDR tags.
+    #[serde(default)]
+    pub storage: SampleStorage,
     /// Capture indices whose written frame repeats the previous written frame.
     #[serde(default)]
     pub duplicated: Vec<usize>,
@@ -357,6 +360,7 @@ impl RenderSpec {
             effects: Effects::default(),
             dropped: Vec::new(),
             display_orientation: Orientation::IDENTITY,
+            storage: SampleStorage::default(),
             duplicated: Vec::new(),
             interpolated: Vec::new(),
         }
@@ -520,6 +524,9 @@ pub struct GroundTruth {
     /// turned the other way (`width` × `height` is the displayed size).
     #[serde(default)]
     pub display_orientation: Orientation,
+    /// How the MP4 stores its samples (bit depth, range, HDR tags).
+    #[serde(default)]
+    pub storage: SampleStorage,
     /// Capture indices whose frame repeats the previous written frame's bytes
     /// (their `frames` entries keep the true pose, which the image does not show).
     #[serde(default)]
@@ -723,6 +730,7 @@ impl Renderer {
                     d
                 },
                 display_orientation: spec.display_orientation,
+                storage: spec.storage,
                 duplicated: sorted(&spec.duplicated),
                 interpolated: sorted(&spec.interpolated),
                 frames: Vec::new(),
@@ -903,7 +911,7 @@ impl Renderer {
             );
             let mut blend = before;
             for (b, a) in blend.iter_mut().zip(after.iter()) {
-                *b = ((u16::from(*b) + u16::from(*a) + 1) / 2) as u8;
+                *b = (u16::from(*b) + u16::from(*a)).div_ceil(2) as u8;
             }
             return blend;
         }

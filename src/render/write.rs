@@ -37,6 +37,32 @@ impl ClipFormat {
     }
 }
 
+/// How an MP4 stores its samples (issue 14 §4): phones write 8-bit limited range,
+/// full range, or 10-bit HDR with a BT.2020 matrix and the HLG or PQ transfer
+/// function. The samples always encode the rendered grey levels (an HDR tag is a
+/// tag: no tone curve is applied), so every storage shows one scene.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct SampleStorage {
+    /// 10-bit samples (`yuv420p10le`) rather than 8-bit (`yuv420p`).
+    pub ten_bit: bool,
+    /// Full range (JPEG style, `color_range = pc`) rather than limited.
+    pub full_range: bool,
+    /// An HDR transfer function to tag, with BT.2020 primaries and matrix.
+    pub hdr: Option<HdrTransfer>,
+}
+
+/// The HDR transfer functions phones record with.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum HdrTransfer {
+    /// Hybrid log-gamma (ARIB STD-B67).
+    Hlg,
+    /// Perceptual quantiser (SMPTE ST 2084).
+    Pq,
+}
+
 /// What [`write_clip`] wrote.
 #[derive(Debug, Clone, PartialEq)]
 pub struct WrittenClip {
@@ -106,6 +132,14 @@ pub fn write_clip(renderer: &Renderer, path: &Path, crf: u8) -> Result<WrittenCl
                 }
             }
         }
+        ClipFormat::PngFolder if renderer.truth().storage != SampleStorage::default() => {
+            return Err(fail(
+                path,
+                "10-bit, full-range and HDR storage apply to an MP4 only: give a path \
+                 ending in .mp4"
+                    .into(),
+            ));
+        }
         ClipFormat::PngFolder if !renderer.truth().display_orientation.is_identity() => {
             return Err(fail(
                 path,
@@ -174,6 +208,12 @@ fn write_pngs(renderer: &Renderer, dir: &Path) -> Result<(), (PathBuf, String)> 
 /// back, as a phone's MP4 does.
 fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String> {
     let truth = renderer.truth();
+    let storage = truth.storage;
+    let pixel = if storage.ten_bit {
+        Pixel::YUV420P10LE
+    } else {
+        Pixel::YUV420P
+    };
     let orientation = truth.display_orientation;
     let stored = orientation.stored_size((truth.width as usize, truth.height as usize));
     let map = orientation.displayed_from_stored(stored);
@@ -204,7 +244,20 @@ fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String
         .map_err(av("encoder"))?;
     encoder.set_width(w);
     encoder.set_height(h);
-    encoder.set_format(Pixel::YUV420P);
+    encoder.set_format(pixel);
+    encoder.set_color_range(if storage.full_range {
+        ff::color::Range::JPEG
+    } else {
+        ff::color::Range::MPEG
+    });
+    if let Some(hdr) = storage.hdr {
+        encoder.set_colorspace(ff::color::Space::BT2020NCL);
+        encoder.set_color_primaries(ff::color::Primaries::BT2020);
+        encoder.set_color_transfer_characteristic(match hdr {
+            HdrTransfer::Hlg => ff::color::TransferCharacteristic::ARIB_STD_B67,
+            HdrTransfer::Pq => ff::color::TransferCharacteristic::SMPTE2084,
+        });
+    }
     encoder.set_time_base(time_base);
     encoder.set_frame_rate(Some(rate));
     if global_header {
@@ -244,18 +297,35 @@ fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String
         .stream(0)
         .map(|s| s.time_base())
         .ok_or_else(|| "FFmpeg: the MP4 lost its video stream".to_owned())?;
-    let mut scaler = scaling::Context::get(
-        Pixel::RGB24,
-        w,
-        h,
-        Pixel::YUV420P,
-        w,
-        h,
-        scaling::Flags::BICUBIC,
-    )
-    .map_err(av("libswscale"))?;
+    let mut scaler =
+        scaling::Context::get(Pixel::RGB24, w, h, pixel, w, h, scaling::Flags::BICUBIC)
+            .map_err(av("libswscale"))?;
+    // The matrix and range the stream declares (BT.601, libswscale's default,
+    // when nothing is declared).
+    let matrix = if storage.hdr.is_some() {
+        ffi::SWS_CS_BT2020
+    } else {
+        ffi::SWS_CS_DEFAULT
+    };
+    // SAFETY: a live SwsContext; the coefficient table is libswscale's static one.
+    let ret = unsafe {
+        let table = ffi::sws_getCoefficients(matrix);
+        ffi::sws_setColorspaceDetails(
+            scaler.as_mut_ptr(),
+            table,
+            1,
+            table,
+            i32::from(storage.full_range),
+            0,
+            1 << 16,
+            1 << 16,
+        )
+    };
+    if ret < 0 {
+        return Err("libswscale: cannot set the matrix and range".to_owned());
+    }
     let mut rgb = ff::frame::Video::new(Pixel::RGB24, w, h);
-    let mut yuv = ff::frame::Video::new(Pixel::YUV420P, w, h);
+    let mut yuv = ff::frame::Video::new(pixel, w, h);
     let mut packet = ff::Packet::empty();
     let mut drain = |encoder: &mut ff::encoder::Video,
                      output: &mut ff::format::context::Output|

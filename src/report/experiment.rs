@@ -329,6 +329,13 @@ fn experiment_page(e: &Experiment, energy_svg: &str, dir: &Path) -> Result<Strin
             ),
         ],
         vec![
+            "video signal".into(),
+            plan.video_signal.as_ref().map_or_else(
+                || "frame images (8-bit), or not recorded".into(),
+                |v| format!("{v}; converted to 8-bit full-range colour before thresholds"),
+            ),
+        ],
+        vec![
             "capture fps".into(),
             format!("{} ({:?})", plan.fps.fps, plan.fps.source),
         ],
