@@ -7,8 +7,11 @@
 //! This stage owns everything about frames as they come off the disk: metadata,
 //! the capture fps and where it came from, frame times (the container's
 //! timestamps mapped to capture time, [`frame_times`]), the display matrix a phone
-//! tags its frames with ([`Orientation`]: frames are lent out as displayed),
-//! frame-skip flags, the region of interest and the mirror split. The frames it delivers go on to
+//! tags its frames with ([`Orientation`]: frames are lent out as displayed), the
+//! samples' bit depth, range, matrix and transfer function ([`VideoSignal`]:
+//! frames are converted to one 8-bit brightness scale), duplicated and
+//! interpolated frames ([`RepeatGauge`]), frame-skip flags, the region of interest
+//! and the mirror split. The frames it delivers go on to
 //! `vision`, which turns them into `z_rim(t)` and `β(t)`.
 //!
 //! [`FrameSource`] streams a clip's frames; [`probe`] reports what OpenCV says
