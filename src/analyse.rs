@@ -40,6 +40,10 @@ use crate::vision::{
 /// Frames at the end of a clip that must show the disk at rest (calibration).
 pub const REST_FRAMES: usize = 5;
 
+/// Every second pixel of every second row is compared with the neighbouring
+/// frames' to find duplicated and interpolated frames (footage::RepeatGauge).
+const REPEAT_SAMPLE_STEP: usize = 2;
+
 /// The windows of the window-sensitivity table [s] (issue: 1, 0.5, 0.25, 0.1 s).
 pub const SENSITIVITY_WINDOWS_S: [f64; 4] = [1.0, 0.5, 0.25, 0.1];
 
@@ -77,8 +81,20 @@ pub struct ExperimentPlan {
     #[serde(default)]
     pub frame_times: Option<FrameTiming>,
     pub frames: usize,
+    /// Displayed frame width [px] (after `orientation`).
     pub width: usize,
+    /// Displayed frame height [px].
     pub height: usize,
+    /// The display matrix's rotation and mirror, applied to every frame before it
+    /// was measured (identity in results written before it was recorded).
+    #[serde(default)]
+    pub orientation: footage::Orientation,
+    /// A video's pixel format, bit depth, range, YUV matrix and transfer function,
+    /// from which frames were converted to 8-bit full-range colour before any
+    /// threshold (`None`: a frame folder, or a result written before it was
+    /// recorded).
+    #[serde(default)]
+    pub video_signal: Option<footage::VideoSignal>,
     pub disk: DiskParams,
     /// Side view or two-view, and whether the config said so or how it was detected.
     pub layout: String,
@@ -639,6 +655,7 @@ pub fn analyse_clip(
     let mut gaps = Vec::with_capacity(if gap_gauge.is_some() { expected } else { 0 });
     let mut windows = Vec::with_capacity(if rest_window.is_some() { expected } else { 0 });
     let band_columns = gauge.band_columns();
+    let mut repeats = footage::RepeatGauge::new();
     let mut no_edge = 0usize;
     // The frame with the highest rim so far, kept for the threshold diagnostic.
     let mut highest: Option<(f64, f64, OwnedFrame)> = None;
@@ -688,6 +705,7 @@ pub fn analyse_clip(
         if index % 256 == 0 {
             progress(index, Some(expected));
         }
+        repeats.push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
         if let Some((z_rim_px, edge_row)) = new_highest {
             // The diagnostic shows the whole side view: convert the other columns.
             let whole = source.whole_frame()?;
@@ -768,6 +786,25 @@ pub fn analyse_clip(
         }
         None => first_pass.into(),
     };
+    // Duplicated and interpolated frames show no capture of their own: no rim
+    // height or strip angle from them reaches the fits.
+    let repeated = repeats.repeated(REST_FRAMES);
+    drop(repeats);
+    for r in &repeated {
+        frames[r.index].z_rim_px = None;
+        frames[r.index].beta_raw = None;
+    }
+    if !repeated.is_empty() {
+        let count = |kind| repeated.iter().filter(|r| r.kind == kind).count();
+        let list: Vec<String> = repeated.iter().map(|r| r.index.to_string()).collect();
+        warnings.push(format!(
+            "{} duplicated and {} interpolated frame(s) (frames {}) show no capture of \
+             their own: left out of the fits",
+            count(footage::RepeatKind::Duplicated),
+            count(footage::RepeatKind::Interpolated),
+            list.join(", ")
+        ));
+    }
     // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
     // z_rim in metres once, after every correction of z_rim in px.
     let scale = ScaleReport::new(&calibration.calibration, &params);
@@ -830,8 +867,26 @@ pub fn analyse_clip(
         radius: params.radius,
     };
     let signal_err = |error| signal_error(clip, &fps, error);
-    let series =
+    let mut series =
         signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;
+    for r in &repeated {
+        let (statistic, neighbours) = (r.statistic, r.neighbours);
+        series.flags.push(signal::FrameFlag {
+            index: r.index,
+            t: series.halt.shifted_t[r.index],
+            reason: match r.kind {
+                footage::RepeatKind::Duplicated => signal::SkipReason::DuplicatedFrame {
+                    step: statistic,
+                    neighbours,
+                },
+                footage::RepeatKind::Interpolated => signal::SkipReason::InterpolatedFrame {
+                    residual: statistic,
+                    neighbours,
+                },
+            },
+        });
+    }
+    series.flags.sort_by_key(|f| f.index);
     for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
         record.t = *shifted;
     }
@@ -855,7 +910,7 @@ pub fn analyse_clip(
             format!(" (timestamp gaps: {})", gaps.join("; "))
         };
         warnings.push(format!(
-            "{skips_in_window} flagged frame(s) (skips or jumps) inside the fit window{gaps}"
+            "{skips_in_window} flagged frame(s) (skips, jumps or repeated frames) inside the fit window{gaps}"
         ));
     }
 
@@ -905,6 +960,8 @@ pub fn analyse_clip(
         frames: frames.len(),
         width,
         height,
+        orientation: source.orientation(),
+        video_signal: source.video_signal(),
         disk: params,
         layout,
         plate,

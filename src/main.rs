@@ -5,9 +5,11 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
+use clap::builder::TypedValueParser;
 use clap::{Args, Parser, Subcommand};
 
 use eulerdisk::compare::CompareOptions;
+use eulerdisk::footage::Orientation;
 use eulerdisk::model::dissipation::{Dissipation, ModelKind};
 use eulerdisk::model::params::Preset;
 use eulerdisk::model::simulate::{
@@ -16,8 +18,9 @@ use eulerdisk::model::simulate::{
 use eulerdisk::model::tuning::tune_eta;
 use eulerdisk::overlay::{OverlaySpec, write_model_overlay};
 use eulerdisk::render::{
-    DEFAULT_CRF, Effects, Nutation, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Scenery,
-    Timing, add_nutation, power_law_motion, trajectory_motion, write_clip,
+    DEFAULT_CRF, Effects, HdrTransfer, Nutation, Plate, PostFlatSpin, PowerLaw, RenderSpec,
+    Renderer, SampleStorage, Scenery, Timing, add_nutation, power_law_motion, trajectory_motion,
+    write_clip,
 };
 use eulerdisk::report::OutputLock;
 use eulerdisk::report::compare::{comparison_dir, write_comparison};
@@ -60,7 +63,7 @@ enum Command {
     Simulate(SimulateArgs),
     /// Render synthetic footage (MP4 or PNG folder) of a prescribed power-law motion
     /// or a simulated one, with its ground truth as `<clip>.truth.json`.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Measure one clip (thesis Chapter 3): calibration, rim height, peaks, φ, ψ̇,
     /// energy and its power law; writes CSV, JSON, plots and an HTML page.
     Analyse {
@@ -374,6 +377,33 @@ struct RenderArgs {
     /// Capture indices (0-based) of frames to drop, e.g. 10,57.
     #[arg(long, value_delimiter = ',')]
     drop: Vec<usize>,
+    /// Capture indices (0-based) whose frame repeats the previous frame's bytes, as a
+    /// phone that misses a capture writes it, e.g. 120,181.
+    #[arg(long, value_delimiter = ',')]
+    duplicate: Vec<usize>,
+    /// Capture indices (0-based) whose frame is the rounded mean of the previous and
+    /// next frames, as a phone inserts to reach 240 or 960 fps, e.g. 150.
+    #[arg(long, value_delimiter = ',')]
+    interpolate: Vec<usize>,
+    /// Tag the MP4 with a display matrix rotating it this far clockwise [deg: 0, 90,
+    /// 180, 270], as a phone tags its clips: the frames are stored turned the other
+    /// way, so the displayed frames are the rendered ones.
+    #[arg(long, default_value_t = 0, value_name = "DEG", value_parser = clap::builder::PossibleValuesParser::new(["0", "90", "180", "270"]).map(|s| s.parse::<u16>().expect("a listed value")))]
+    rotation_tag: u16,
+    /// Store 10-bit samples (yuv420p10le), as phones record HDR.
+    #[arg(long)]
+    ten_bit: bool,
+    /// Store full-range samples (JPEG style, color_range = pc) instead of limited.
+    #[arg(long)]
+    full_range: bool,
+    /// Tag the MP4 as HDR with this transfer function and BT.2020 primaries and
+    /// matrix (the samples keep the rendered grey levels).
+    #[arg(long, value_enum, value_name = "TRANSFER")]
+    hdr: Option<HdrTransfer>,
+    /// Tag the MP4's display matrix with a left–right mirror (before the rotation),
+    /// as a front camera does; the frames are stored mirrored.
+    #[arg(long)]
+    mirror_tag: bool,
     /// Frame rate [frames/s] (thesis: 480).
     #[arg(long, default_value_t = 480.0)]
     fps: f64,
@@ -539,7 +569,7 @@ fn run_analyse(
     }
     let flagged = match experiment.skips_in_window {
         0 => String::new(),
-        k => format!("; WARNING: {k} flagged frame(s) (dropped frames?) in the window"),
+        k => format!("; WARNING: {k} flagged frame(s) (dropped or repeated frames?) in the window"),
     };
     println!(
         "{}: n = {:.3} (95 % CI {:.3} … {:.3}), {} peaks in the last {} s; fps {} ({:?}), \
@@ -863,6 +893,15 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         seed: args.seed,
     };
     spec.dropped = args.drop.clone();
+    spec.storage = SampleStorage {
+        ten_bit: args.ten_bit,
+        full_range: args.full_range,
+        hdr: args.hdr,
+    };
+    spec.duplicated = args.duplicate.clone();
+    spec.interpolated = args.interpolate.clone();
+    spec.display_orientation = Orientation::new(args.rotation_tag, args.mirror_tag)
+        .map_err(|reason| anyhow::anyhow!("--rotation-tag: {reason}"))?;
     let renderer = Renderer::new(&spec, &motion)?;
     eprintln!(
         "rendering {} frames ({} × {} px, {} fps)…",

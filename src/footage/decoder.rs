@@ -9,6 +9,11 @@
 //! libswscale routine and flags as OpenCV (`SWS_BICUBIC`, BGR24), which gives
 //! the same bytes (tested against `VideoCapture::read` in this module).
 //!
+//! A stream tagged with a display matrix (a phone's rotation, a mirror flip; see
+//! [`super::orientation`]) is lent out as displayed: the columns asked for are
+//! the displayed frame's, converted from the stored rectangle that holds them and
+//! copied into place.
+//!
 //! Seeking lands on the key frame before the target and decodes forward from
 //! there, discarding frames, as a decoder must; unlike OpenCV's seek it does not
 //! back off a further 16 frames first.
@@ -22,6 +27,8 @@ use ff::software::scaling;
 use ffmpeg_next as ff;
 
 use super::FootageError;
+use super::colour::VideoSignal;
+use super::orientation::{Orientation, PixelMap};
 
 /// libswscale's interpolation flag as OpenCV 4.6 passes it; for a conversion
 /// without scaling it selects the same YUV→RGB routine whatever the width.
@@ -45,8 +52,16 @@ pub(super) struct VideoDecoder {
     fps: Option<f64>,
     /// Frames the container says it holds (or its duration times its fps).
     frames: Option<usize>,
+    /// The stored (coded) frame's width [px].
     width: usize,
+    /// The stored (coded) frame's height [px].
     height: usize,
+    /// The display matrix's rotation and mirror.
+    orientation: Orientation,
+    /// Stored → displayed pixels, when the orientation is not the identity.
+    map: Option<PixelMap>,
+    /// Bit depth, range, matrix and transfer function of the samples.
+    signal: VideoSignal,
     /// The current decoded frame, in the codec's pixel format.
     yuv: ff::frame::Video,
     /// A frame decoded while seeking that is the next one to lend out.
@@ -55,11 +70,24 @@ pub(super) struct VideoDecoder {
     /// frames refer to them (the frames themselves are dropped anyway).
     skip_before: Option<i64>,
     eof_sent: bool,
-    /// The current frame in BGR, 3 bytes a pixel, rows `3 · width` apart.
+    /// The current stored frame in BGR, 3 bytes a pixel, rows `3 · width` apart.
     bgr: Vec<u8>,
+    /// The displayed frame in BGR (rows `3 ·` displayed width apart), when a
+    /// display matrix turns the stored frame.
+    shown: Vec<u8>,
     whole: Option<scaling::Context>,
     /// Only these columns are converted (`None`: all of them).
-    band: Option<(Range<usize>, scaling::Context)>,
+    band: Option<Band>,
+}
+
+/// The displayed columns lent out, and the stored rectangle converted for them.
+struct Band {
+    /// Displayed columns.
+    shown: Range<usize>,
+    /// Stored columns and rows (even bounds: a chroma sample covers 2 × 2 pixels).
+    columns: Range<usize>,
+    rows: Range<usize>,
+    context: scaling::Context,
 }
 
 impl VideoDecoder {
@@ -115,6 +143,13 @@ impl VideoDecoder {
             kind: ff::threading::Type::Frame,
             ..Default::default()
         });
+        let orientation = stream
+            .side_data()
+            .find(|d| d.kind() == ff::codec::packet::side_data::Type::DisplayMatrix)
+            .map(|d| Orientation::from_display_matrix(d.data()))
+            .transpose()
+            .map_err(|reason| FootageError::unreadable(path, reason))?
+            .unwrap_or_default();
         let decoder = context.decoder().video().map_err(err)?;
         let (width, height) = (decoder.width() as usize, decoder.height() as usize);
         if width == 0 || height == 0 {
@@ -123,6 +158,14 @@ impl VideoDecoder {
                 "the video stream has no frame size",
             ));
         }
+        let map = (!orientation.is_identity())
+            .then(|| orientation.displayed_from_stored((width, height)));
+        let signal = VideoSignal::new(
+            decoder.format(),
+            decoder.color_range(),
+            decoder.color_space(),
+            decoder.color_transfer_characteristic(),
+        );
         Ok(Self {
             path: path.to_path_buf(),
             input,
@@ -134,11 +177,19 @@ impl VideoDecoder {
             frames,
             width,
             height,
+            orientation,
+            map,
+            signal,
             yuv: ff::frame::Video::empty(),
             pending: false,
             skip_before: None,
             eof_sent: false,
             bgr: vec![0; 3 * width * height],
+            shown: if map.is_some() {
+                vec![0; 3 * width * height]
+            } else {
+                Vec::new()
+            },
             whole: None,
             band: None,
         })
@@ -152,12 +203,79 @@ impl VideoDecoder {
         self.fps
     }
 
+    /// The displayed frame's (width, height) [px].
     pub(super) fn size(&self) -> (usize, usize) {
-        (self.width, self.height)
+        self.orientation.displayed_size((self.width, self.height))
     }
 
-    /// Convert only `columns` of the following frames (`None`: whole frames). Only
-    /// planar 4:2:0 video is converted by columns; other formats always whole.
+    /// The rotation and mirror of the stream's display matrix.
+    pub(super) fn orientation(&self) -> Orientation {
+        self.orientation
+    }
+
+    /// The bit depth, range, matrix and transfer function of the samples.
+    pub(super) fn signal(&self) -> &VideoSignal {
+        &self.signal
+    }
+
+    /// A libswscale context from `w × h` of the codec's format to BGR24, set up
+    /// for the stream's range and matrix.
+    fn bgr_context(&self, w: usize, h: usize) -> Result<scaling::Context, FootageError> {
+        let mut context = scaling::Context::get(
+            self.decoder.format(),
+            w as u32,
+            h as u32,
+            Pixel::BGR24,
+            w as u32,
+            h as u32,
+            SWS_FLAGS,
+        )
+        .map_err(|e| self.error(format!("libswscale: {e}")))?;
+        self.signal
+            .configure(&mut context)
+            .map_err(|reason| self.error(reason))?;
+        Ok(context)
+    }
+
+    /// Every `step`-th luma sample of every `step`-th row of the current stored
+    /// frame, in grey levels of 8 bits (a deeper format is scaled down), or `None`
+    /// when the codec's format has no plain luma plane. The order of the samples
+    /// is the stored frame's, the same every frame.
+    pub(super) fn luma_samples(&self, step: usize) -> Option<Vec<f32>> {
+        self.check_decoded().ok()?;
+        let descriptor = self.yuv.format().descriptor()?;
+        // SAFETY: the descriptor is libavutil's static table entry for the format.
+        let (flags, depth) = unsafe {
+            let d = &*descriptor.as_ptr();
+            (d.flags, d.comp[0].depth as usize)
+        };
+        let planar_yuv = descriptor.nb_components() >= 3
+            && flags & ffi::AV_PIX_FMT_FLAG_RGB as u64 == 0
+            && flags & ffi::AV_PIX_FMT_FLAG_PLANAR as u64 != 0;
+        if !planar_yuv || !(8..=16).contains(&depth) {
+            return None;
+        }
+        let (stride, data) = (self.yuv.stride(0), self.yuv.data(0));
+        let scale = 1.0 / f32::from(1u16 << (depth - 8));
+        let step = step.max(1);
+        let mut samples = Vec::with_capacity((self.width / step + 1) * (self.height / step + 1));
+        for y in (0..self.height).step_by(step) {
+            let row = &data[y * stride..];
+            for x in (0..self.width).step_by(step) {
+                let v = if depth > 8 {
+                    f32::from(u16::from_le_bytes([row[2 * x], row[2 * x + 1]]))
+                } else {
+                    f32::from(row[x])
+                };
+                samples.push(v * scale);
+            }
+        }
+        Some(samples)
+    }
+
+    /// Convert only the displayed `columns` of the following frames (`None`: whole
+    /// frames). Only planar 4:2:0 video is converted by columns; other formats
+    /// always whole.
     pub(super) fn set_columns(
         &mut self,
         columns: Option<Range<usize>>,
@@ -167,26 +285,34 @@ impl VideoDecoder {
             return Ok(());
         };
         let format = self.decoder.format();
-        if !matches!(format, Pixel::YUV420P | Pixel::YUVJ420P) {
-            return Ok(());
-        }
-        // Even start and width: a chroma sample covers two columns.
-        let x0 = columns.start.min(self.width) & !1;
-        let x1 = (columns.end.min(self.width) + 1).min(self.width) & !1;
-        if x1 <= x0 {
-            return Ok(());
-        }
-        let context = scaling::Context::get(
+        if !matches!(
             format,
-            (x1 - x0) as u32,
-            self.height as u32,
-            Pixel::BGR24,
-            (x1 - x0) as u32,
-            self.height as u32,
-            SWS_FLAGS,
-        )
-        .map_err(|e| self.error(format!("libswscale: {e}")))?;
-        self.band = Some((x0..x1, context));
+            Pixel::YUV420P | Pixel::YUVJ420P | Pixel::YUV420P10LE
+        ) {
+            return Ok(());
+        }
+        let shown_width = self.size().0;
+        let shown = columns.start.min(shown_width)..columns.end.min(shown_width);
+        if shown.is_empty() {
+            return Ok(());
+        }
+        let (columns, rows) = match &self.map {
+            Some(map) => map.stored_rect(shown.clone()),
+            None => (shown.clone(), 0..self.height),
+        };
+        // Even bounds: a chroma sample covers two columns and two rows.
+        let even = |r: Range<usize>, size: usize| (r.start & !1)..((r.end + 1).min(size) & !1);
+        let (columns, rows) = (even(columns, self.width), even(rows, self.height));
+        if columns.is_empty() || rows.is_empty() {
+            return Ok(());
+        }
+        let context = self.bgr_context(columns.len(), rows.len())?;
+        self.band = Some(Band {
+            shown,
+            columns,
+            rows,
+            context,
+        });
         Ok(())
     }
 
@@ -247,44 +373,60 @@ impl VideoDecoder {
         Ok(())
     }
 
-    /// The current frame in BGR: the columns set by [`Self::set_columns`], or all.
+    /// The current displayed frame in BGR (rows `3 ·` displayed width apart): the
+    /// columns set by [`Self::set_columns`], or all.
     pub(super) fn bgr(&mut self) -> Result<&[u8], FootageError> {
         self.check_decoded()?;
         match &mut self.band {
-            Some((columns, context)) => {
-                let (x0, path) = (columns.start, &self.path);
-                convert(context, &self.yuv, x0, &mut self.bgr, self.width)
-                    .map_err(|e| FootageError::unreadable(path, format!("libswscale: {e}")))?;
+            Some(band) => {
+                let path = &self.path;
+                let origin = (band.columns.start, band.rows.start);
+                let sample_bytes = if self.signal.bit_depth > 8 { 2 } else { 1 };
+                convert(
+                    &mut band.context,
+                    &self.yuv,
+                    origin,
+                    sample_bytes,
+                    &mut self.bgr,
+                    self.width,
+                )
+                .map_err(|e| FootageError::unreadable(path, format!("libswscale: {e}")))?;
+                if let Some(map) = &self.map {
+                    map.copy_columns(&self.bgr, &mut self.shown, band.shown.clone());
+                }
             }
             None => self.convert_whole()?,
         }
-        Ok(&self.bgr)
+        Ok(self.displayed())
     }
 
-    /// The current frame in BGR, every column.
+    /// The current displayed frame in BGR, every column.
     pub(super) fn bgr_whole(&mut self) -> Result<&[u8], FootageError> {
         self.convert_whole()?;
-        Ok(&self.bgr)
+        Ok(self.displayed())
+    }
+
+    /// The displayed frame's buffer: the stored one unless a display matrix turns it.
+    fn displayed(&self) -> &[u8] {
+        if self.map.is_some() {
+            &self.shown
+        } else {
+            &self.bgr
+        }
     }
 
     fn convert_whole(&mut self) -> Result<(), FootageError> {
         self.check_decoded()?;
         if self.whole.is_none() {
-            let context = scaling::Context::get(
-                self.yuv.format(),
-                self.width as u32,
-                self.height as u32,
-                Pixel::BGR24,
-                self.width as u32,
-                self.height as u32,
-                SWS_FLAGS,
-            )
-            .map_err(|e| self.error(format!("libswscale: {e}")))?;
-            self.whole = Some(context);
+            self.whole = Some(self.bgr_context(self.width, self.height)?);
         }
         let context = self.whole.as_mut().expect("just made");
-        convert(context, &self.yuv, 0, &mut self.bgr, self.width)
-            .map_err(|e| FootageError::unreadable(&self.path, format!("libswscale: {e}")))
+        convert(context, &self.yuv, (0, 0), 1, &mut self.bgr, self.width)
+            .map_err(|e| FootageError::unreadable(&self.path, format!("libswscale: {e}")))?;
+        if let Some(map) = &self.map {
+            map.copy_columns(&self.bgr, &mut self.shown, 0..map.displayed.0);
+        }
+        Ok(())
     }
 
     /// Decode until a frame is out (true) or the stream has ended (false).
@@ -361,34 +503,44 @@ impl VideoDecoder {
     }
 }
 
-/// Convert the columns `x0..x0 + w` of `yuv` (w: the context's width) into the
-/// same columns of the BGR buffer `bgr` (`3 · width` bytes a row).
+/// Convert the rectangle `w × h` at column `x0`, row `y0` of `yuv` (w, h: the
+/// context's input size; planar samples of `sample_bytes` each) into the same
+/// place of the BGR buffer `bgr` (`3 · width` bytes a row).
 fn convert(
     context: &mut scaling::Context,
     yuv: &ff::frame::Video,
-    x0: usize,
+    (x0, y0): (usize, usize),
+    sample_bytes: usize,
     bgr: &mut [u8],
     width: usize,
 ) -> Result<(), ff::Error> {
     let input = context.input();
     let (w, h) = (input.width as usize, input.height as usize);
-    assert!(x0 + w <= width && bgr.len() >= 3 * width * h);
-    // SAFETY: the source planes are the decoded frame's (x0 is even, so the
-    // chroma offset x0 / 2 addresses the sample of columns x0 and x0 + 1, and
-    // whole frames use x0 = 0); the destination rows x0..x0 + w of h rows fit in
-    // `bgr`, as asserted.
+    assert!(x0 + w <= width && bgr.len() >= 3 * width * (y0 + h));
+    // SAFETY: the source planes are the decoded frame's (x0 and y0 are even, so
+    // the chroma offsets x0 / 2, y0 / 2 address the sample of columns x0, x0 + 1
+    // and rows y0, y0 + 1, and whole frames use x0 = y0 = 0); the destination
+    // columns x0..x0 + w of rows y0..y0 + h fit in `bgr`, as asserted.
     let ret = unsafe {
         let frame = yuv.as_ptr();
         let planes = (*frame).data;
-        let chroma = |p: *mut u8| if p.is_null() { p } else { p.add(x0 / 2) };
+        let lines = (*frame).linesize;
+        let at = |i: usize, x: usize, y: usize| {
+            let p = planes[i];
+            if p.is_null() {
+                p
+            } else {
+                p.offset(y as isize * lines[i] as isize + (x * sample_bytes) as isize)
+            }
+        };
         let src = [
-            planes[0].add(x0),
-            chroma(planes[1]),
-            chroma(planes[2]),
+            at(0, x0, y0),
+            at(1, x0 / 2, y0 / 2),
+            at(2, x0 / 2, y0 / 2),
             planes[3],
         ];
         let dst = [
-            bgr.as_mut_ptr().add(3 * x0),
+            bgr.as_mut_ptr().add(3 * (y0 * width + x0)),
             std::ptr::null_mut(),
             std::ptr::null_mut(),
             std::ptr::null_mut(),

@@ -2,7 +2,9 @@
 //!
 //! [`probe`] opens a video with `videoio::VideoCapture` (or the first frame of a
 //! frame folder with `imgcodecs`) and reports size, frame count, the fps stored in
-//! the container, codec and backend, without decoding the whole clip.
+//! the container, codec and backend, without decoding the whole clip. The frame
+//! size and orientation are FFmpeg's, as every other command decodes them: the
+//! displayed frame, after the display matrix's rotation and mirror.
 
 use std::cmp::Ordering;
 use std::fmt;
@@ -15,6 +17,9 @@ use serde::{Deserialize, Serialize};
 
 use super::FootageError;
 use super::capture_rate::{ContainerCaptureRate, container_capture_rate};
+use super::colour::VideoSignal;
+use super::decoder::VideoDecoder;
+use super::orientation::Orientation;
 
 /// Video containers that [`probe`] hands to OpenCV (lower case, no dot).
 pub const VIDEO_EXTENSIONS: &[&str] = &["mp4", "m4v", "mov", "avi", "mkv"];
@@ -55,6 +60,15 @@ pub struct ClipInfo {
     pub width: u32,
     /// Frame height [px].
     pub height: u32,
+    /// The display matrix's rotation and mirror (a phone's orientation tag), which
+    /// every command applies: `width` × `height` is the displayed size.
+    #[serde(default)]
+    pub orientation: Orientation,
+    /// A video's pixel format, bit depth, range, YUV matrix and transfer function
+    /// (`None` for a frame folder): every command converts frames from it to 8-bit
+    /// full-range colour.
+    #[serde(default)]
+    pub signal: Option<VideoSignal>,
     /// Frames in the clip (as the container states it; for a folder, the frame files).
     pub frame_count: u64,
     /// The fps stored in the container: often the playback rate, not the capture
@@ -92,6 +106,13 @@ impl fmt::Display for ClipInfo {
             ("path", self.path.display().to_string()),
             ("kind", self.kind.to_string()),
             ("size", format!("{} x {} px", self.width, self.height)),
+            ("rotation", self.orientation.to_string()),
+            (
+                "signal",
+                self.signal
+                    .as_ref()
+                    .map_or_else(|| "frame images (8-bit)".into(), ToString::to_string),
+            ),
             ("frames", self.frame_count.to_string()),
             ("fps", fps),
             ("capture", capture),
@@ -177,6 +198,12 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
         n
     };
     let container_fps = (stored_fps.is_finite() && stored_fps > 0.0).then_some(stored_fps);
+    // Size and orientation as `analyse` decodes them (FFmpeg's display matrix,
+    // mirror flips included), so that the two commands agree.
+    let decoder = VideoDecoder::open(path)?;
+    let (width, height) = decoder.size();
+    let orientation = decoder.orientation();
+    let signal = Some(decoder.signal().clone());
     let capture_rate = container_capture_rate(path);
     match (container_fps, &capture_rate) {
         (_, Some(rate)) => warnings.push(format!(
@@ -199,8 +226,10 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
     Ok(ClipInfo {
         path: path.to_path_buf(),
         kind: ClipKind::Video,
-        width: first.cols().unsigned_abs(),
-        height: first.rows().unsigned_abs(),
+        width: width as u32,
+        height: height as u32,
+        orientation,
+        signal,
         frame_count,
         container_fps,
         capture_rate,
@@ -270,6 +299,8 @@ fn probe_folder(dir: &Path) -> Result<ClipInfo, FootageError> {
         kind: ClipKind::FrameFolder,
         width,
         height,
+        orientation: Orientation::IDENTITY,
+        signal: None,
         frame_count: frames.len() as u64,
         container_fps: None,
         capture_rate: None,

@@ -6,8 +6,12 @@
 //! of PNG/TIFF/JPEG frames (read by the `image` crate, in natural name order).
 //! This stage owns everything about frames as they come off the disk: metadata,
 //! the capture fps and where it came from, frame times (the container's
-//! timestamps mapped to capture time, [`frame_times`]), frame-skip flags, the
-//! region of interest and the mirror split. The frames it delivers go on to
+//! timestamps mapped to capture time, [`frame_times`]), the display matrix a phone
+//! tags its frames with ([`Orientation`]: frames are lent out as displayed), the
+//! samples' bit depth, range, matrix and transfer function ([`VideoSignal`]:
+//! frames are converted to one 8-bit brightness scale), duplicated and
+//! interpolated frames ([`RepeatGauge`]), frame-skip flags, the region of interest
+//! and the mirror split. The frames it delivers go on to
 //! `vision`, which turns them into `z_rim(t)` and `β(t)`.
 //!
 //! [`FrameSource`] streams a clip's frames; [`probe`] reports what OpenCV says
@@ -16,21 +20,27 @@
 //! Failures are [`FootageError`]s that name the file.
 
 mod capture_rate;
+mod colour;
 mod decoder;
 mod error;
 mod frame;
 mod info;
+mod orientation;
+mod repeats;
 mod source;
 mod timing;
 
 pub use capture_rate::{
     CaptureFps, ContainerCaptureRate, FpsSource, container_capture_rate, resolve_capture_fps,
 };
+pub use colour::VideoSignal;
 pub use error::FootageError;
 pub use frame::{ChannelOrder, FrameView};
 pub use info::{
     ClipInfo, ClipKind, FRAME_EXTENSIONS, LOW_FPS_LIMIT, VIDEO_EXTENSIONS, frame_files,
     natural_cmp, probe,
 };
+pub use orientation::{Orientation, PixelMap};
+pub use repeats::{RepeatGauge, RepeatKind, RepeatedFrame};
 pub use source::{Frame, FrameSource};
 pub use timing::{FrameTiming, TimeSource, frame_times};

@@ -4,14 +4,15 @@
 //! the same libavcodec as OpenCV's `VideoCapture`, without converting pixels
 //! nobody reads) or reads a frame folder through the `image` crate, in natural
 //! name order. It holds one decoded frame at a time and lends it out as a
-//! [`FrameView`], so memory stays bounded whatever the clip length.
+//! [`FrameView`], so memory stays bounded whatever the clip length. A video
+//! tagged with a display matrix is lent out as displayed ([`Orientation`]).
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use super::decoder::VideoDecoder;
 use super::info::{VIDEO_EXTENSIONS, frame_files, lower_extension};
-use super::{ChannelOrder, FootageError, FrameView};
+use super::{ChannelOrder, FootageError, FrameView, Orientation, VideoSignal};
 
 /// One frame lent out by [`FrameSource::next_frame`].
 #[derive(Clone, Copy, Debug)]
@@ -97,6 +98,25 @@ impl FrameSource {
         }
     }
 
+    /// The rotation and mirror that turn the stored frames into the displayed
+    /// ones, which are what this source lends out (identity for a frame folder).
+    pub fn orientation(&self) -> Orientation {
+        match &self.reader {
+            Reader::Video(decoder) => decoder.orientation(),
+            Reader::Folder { .. } => Orientation::IDENTITY,
+        }
+    }
+
+    /// The bit depth, range, matrix and transfer function of a video's samples,
+    /// which frames are converted from to 8-bit full-range colour; `None` for a
+    /// frame folder.
+    pub fn video_signal(&self) -> Option<VideoSignal> {
+        match &self.reader {
+            Reader::Video(decoder) => Some(decoder.signal().clone()),
+            Reader::Folder { .. } => None,
+        }
+    }
+
     /// From the next frame on, lend frames in which only `columns` need to be
     /// right (`None`: every column). A video then converts just those columns
     /// from the codec's YUV to colour, and the other columns of a lent frame
@@ -132,6 +152,31 @@ impl FrameSource {
                 Ok(FrameView::from_rgb(frame))
             }
         }
+    }
+
+    /// Every `step`-th brightness sample of every `step`-th row of the frame last
+    /// returned by [`Self::next_frame`] [grey levels of 8 bits], the same pixels
+    /// every frame: a video's luma plane as decoded (no colour conversion), a
+    /// frame folder's mean of the three channels. For comparing frames with their
+    /// neighbours ([`super::RepeatGauge`]).
+    ///
+    /// # Errors
+    /// `Unreadable` when no frame has been read.
+    pub fn brightness_samples(&mut self, step: usize) -> Result<Vec<f32>, FootageError> {
+        let step = step.max(1);
+        if let Reader::Video(decoder) = &self.reader
+            && let Some(samples) = decoder.luma_samples(step)
+        {
+            return Ok(samples);
+        }
+        let view = self.whole_frame()?;
+        let mut samples = Vec::with_capacity((view.width / step + 1) * (view.height / step + 1));
+        for y in (0..view.height).step_by(step) {
+            for x in (0..view.width).step_by(step) {
+                samples.push(view.intensity(x, y));
+            }
+        }
+        Ok(samples)
     }
 
     /// Skip ahead so that the next frame returned is `index` (for a video, by

@@ -25,8 +25,9 @@ use serde::Serialize;
 use super::OverlayError;
 use super::canvas::{Window, text_lines};
 use crate::analyse::{Experiment, ExperimentPlan};
+use crate::footage::Orientation;
 use crate::footage::{FrameSource, FrameView};
-use crate::render::{ChromaFilter, H264Settings, H264Writer};
+use crate::render::{ChromaFilter, H264Settings, H264Writer, SampleStorage};
 use crate::report::{write_atomic, write_json};
 use crate::signal::FrameFlag;
 use crate::vision::{self, StripFinder};
@@ -85,6 +86,12 @@ pub const OVERLAY_H264: H264Settings = H264Settings {
     crf: 20,
     preset: "ultrafast",
     chroma: ChromaFilter::FastBilinear,
+    storage: SampleStorage {
+        ten_bit: false,
+        full_range: false,
+        hdr: None,
+    },
+    orientation: Orientation::IDENTITY,
 };
 
 /// One video frame: the clip frame it shows.

@@ -122,7 +122,11 @@
 //! the exposure time, centred on the capture time, which the truth describes); lateral
 //! drift (px/s at the disk's centre, ending at the rest position at the halt) and
 //! dropped frames (missing from the output; the truth keeps every written frame's
-//! capture index and true time). The motion may carry a nutation about stationary
+//! capture index and true time); duplicated frames (a written frame that repeats the
+//! previous one's bytes, as a phone that misses a capture does) and interpolated
+//! frames (the rounded mean of the previous and next frames, as a phone inserts to
+//! reach 240 or 960 fps): the truth keeps their true pose and lists them. The motion
+//! may carry a nutation about stationary
 //! rolling ([`Nutation`]). Pixels are anti-aliased:
 //! rays are cast at the corners of 2 × 2 pixel blocks, then at the pixel corners of
 //! blocks whose corners see different surfaces, then 16 rays (a rank-1 lattice, so
@@ -143,6 +147,7 @@ use image::RgbImage;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::footage::Orientation;
 use crate::model::params::DiskParams;
 pub use motion::{
     DiskState, Motion, MotionSource, Nutation, PostFlatSpin, PowerLaw, Timing, add_nutation,
@@ -155,7 +160,8 @@ use scene::{
 };
 use std::f64::consts::PI;
 pub use write::{
-    ChromaFilter, ClipFormat, DEFAULT_CRF, H264Settings, H264Writer, truth_path, write_clip,
+    ChromaFilter, ClipFormat, DEFAULT_CRF, H264Settings, H264Writer, HdrTransfer, SampleStorage,
+    truth_path, write_clip,
 };
 
 /// Errors of the render stage; file errors name the file.
@@ -321,6 +327,21 @@ pub struct RenderSpec {
     pub effects: Effects,
     /// Capture indices (0-based) of frames missing from the output.
     pub dropped: Vec<usize>,
+    /// The display matrix an MP4 is tagged with, as a phone tags its clips: the
+    /// frames are stored turned the other way, so that the displayed frames are
+    /// the rendered ones (issue 14 §1).
+    #[serde(default)]
+    pub display_orientation: Orientation,
+    /// How an MP4 stores its samples: bit depth, range, HDR tags.
+    #[serde(default)]
+    pub storage: SampleStorage,
+    /// Capture indices whose written frame repeats the previous written frame.
+    #[serde(default)]
+    pub duplicated: Vec<usize>,
+    /// Capture indices whose written frame is the blend (rounded mean) of the
+    /// previous and next written frames.
+    #[serde(default)]
+    pub interpolated: Vec<usize>,
 }
 
 impl RenderSpec {
@@ -341,6 +362,10 @@ impl RenderSpec {
             strip_width: 0.005,
             effects: Effects::default(),
             dropped: Vec::new(),
+            display_orientation: Orientation::IDENTITY,
+            storage: SampleStorage::default(),
+            duplicated: Vec::new(),
+            interpolated: Vec::new(),
         }
     }
 }
@@ -498,8 +523,31 @@ pub struct GroundTruth {
     pub effects: Effects,
     /// Capture indices missing from the output.
     pub dropped: Vec<usize>,
+    /// The display matrix of the MP4: its stored frames are the rendered ones
+    /// turned the other way (`width` × `height` is the displayed size).
+    #[serde(default)]
+    pub display_orientation: Orientation,
+    /// How the MP4 stores its samples (bit depth, range, HDR tags).
+    #[serde(default)]
+    pub storage: SampleStorage,
+    /// Capture indices whose frame repeats the previous written frame's bytes
+    /// (their `frames` entries keep the true pose, which the image does not show).
+    #[serde(default)]
+    pub duplicated: Vec<usize>,
+    /// Capture indices whose frame is the rounded mean of the previous and next
+    /// written frames.
+    #[serde(default)]
+    pub interpolated: Vec<usize>,
     /// One entry per written frame, in output order.
     pub frames: Vec<FrameTruth>,
+}
+
+/// Capture indices sorted, each once.
+fn sorted(indices: &[usize]) -> Vec<usize> {
+    let mut v = indices.to_vec();
+    v.sort_unstable();
+    v.dedup();
+    v
 }
 
 /// z_rim at a peak (ψ ≡ −π/2, contact point straight behind) as the thesis converts
@@ -684,6 +732,10 @@ impl Renderer {
                     d.dedup();
                     d
                 },
+                display_orientation: spec.display_orientation,
+                storage: spec.storage,
+                duplicated: sorted(&spec.duplicated),
+                interpolated: sorted(&spec.interpolated),
                 frames: Vec::new(),
             },
             written,
@@ -842,11 +894,35 @@ impl Renderer {
         mirror
     }
 
-    /// Renders written frame `file_index` (0-based position in the output).
+    /// Renders written frame `file_index` (0-based position in the output): the
+    /// capture, or for a duplicated frame the previous written frame, for an
+    /// interpolated one the rounded mean of its written neighbours.
     ///
     /// # Panics
     /// If `file_index >= self.frame_count()`.
     pub fn render_frame(&self, file_index: usize) -> RgbImage {
+        let index = self.written[file_index];
+        if self.truth.duplicated.contains(&index) {
+            // `validate` keeps the first written frame a capture.
+            return self.render_frame(file_index - 1);
+        }
+        if self.truth.interpolated.contains(&index) {
+            // `validate` makes both neighbours captures.
+            let (before, after) = (
+                self.render_capture(file_index - 1),
+                self.render_capture(file_index + 1),
+            );
+            let mut blend = before;
+            for (b, a) in blend.iter_mut().zip(after.iter()) {
+                *b = (u16::from(*b) + u16::from(*a)).div_ceil(2) as u8;
+            }
+            return blend;
+        }
+        self.render_capture(file_index)
+    }
+
+    /// Renders the capture shown by written frame `file_index`.
+    fn render_capture(&self, file_index: usize) -> RgbImage {
         let index = self.written[file_index];
         let poses = self.exposure_poses(index);
         let (w, h) = (self.spec.width as usize, self.spec.height as usize);
@@ -1484,6 +1560,44 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
     }
     if motion.states.len() <= spec.dropped.len() {
         return fail("every frame would be dropped".into());
+    }
+    let written: Vec<usize> = (0..motion.states.len())
+        .filter(|k| !spec.dropped.contains(k))
+        .collect();
+    let substituted = |k: usize| spec.duplicated.contains(&k) || spec.interpolated.contains(&k);
+    for (list, what) in [
+        (&spec.duplicated, "duplicated"),
+        (&spec.interpolated, "interpolated"),
+    ] {
+        for &k in list.iter() {
+            let Some(at) = written.iter().position(|&w| w == k) else {
+                return fail(format!(
+                    "{what} frame {k} is not a written frame (the clip captures {} frames, \
+                     0-based; dropped frames are not written)",
+                    motion.states.len()
+                ));
+            };
+            if spec.duplicated.contains(&k) && spec.interpolated.contains(&k) {
+                return fail(format!(
+                    "frame {k} cannot be both duplicated and interpolated"
+                ));
+            }
+            // A duplicate repeats a capture; a blend needs a capture on each side.
+            let neighbours_needed: &[usize] = if what == "duplicated" {
+                &[at.wrapping_sub(1)]
+            } else {
+                &[at.wrapping_sub(1), at + 1]
+            };
+            for &n in neighbours_needed {
+                if written.get(n).is_none_or(|&w| substituted(w)) {
+                    return fail(format!(
+                        "{what} frame {k} needs a captured (not duplicated or interpolated) \
+                         frame {} it",
+                        if n < at { "before" } else { "after" }
+                    ));
+                }
+            }
+        }
     }
     Ok(())
 }

@@ -8,12 +8,14 @@
 
 use std::path::{Path, PathBuf};
 
+use ff::ffi;
 use ff::format::Pixel;
 use ff::software::scaling;
 use ffmpeg_next as ff;
 use rayon::prelude::*;
 
 use super::{RenderError, Renderer};
+use crate::footage::Orientation;
 use crate::report::write_json;
 
 /// Container of a written clip.
@@ -34,6 +36,32 @@ impl ClipFormat {
             _ => ClipFormat::PngFolder,
         }
     }
+}
+
+/// How an MP4 stores its samples (issue 14 §4): phones write 8-bit limited range,
+/// full range, or 10-bit HDR with a BT.2020 matrix and the HLG or PQ transfer
+/// function. The samples always encode the rendered grey levels (an HDR tag is a
+/// tag: no tone curve is applied), so every storage shows one scene.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct SampleStorage {
+    /// 10-bit samples (`yuv420p10le`) rather than 8-bit (`yuv420p`).
+    pub ten_bit: bool,
+    /// Full range (JPEG style, `color_range = pc`) rather than limited.
+    pub full_range: bool,
+    /// An HDR transfer function to tag, with BT.2020 primaries and matrix.
+    pub hdr: Option<HdrTransfer>,
+}
+
+/// The HDR transfer functions phones record with.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum HdrTransfer {
+    /// Hybrid log-gamma (ARIB STD-B67).
+    Hlg,
+    /// Perceptual quantiser (SMPTE ST 2084).
+    Pq,
 }
 
 /// What [`write_clip`] wrote.
@@ -105,6 +133,22 @@ pub fn write_clip(renderer: &Renderer, path: &Path, crf: u8) -> Result<WrittenCl
                 }
             }
         }
+        ClipFormat::PngFolder if renderer.truth().storage != SampleStorage::default() => {
+            return Err(fail(
+                path,
+                "10-bit, full-range and HDR storage apply to an MP4 only: give a path \
+                 ending in .mp4"
+                    .into(),
+            ));
+        }
+        ClipFormat::PngFolder if !renderer.truth().display_orientation.is_identity() => {
+            return Err(fail(
+                path,
+                "a display matrix (rotation tag) is written into an MP4 only: give a path \
+                 ending in .mp4"
+                    .into(),
+            ));
+        }
         ClipFormat::PngFolder => {
             // 0777 less the umask, as any folder the user makes (not tempfile's 0700).
             let tmp = tempfile::Builder::new()
@@ -155,6 +199,8 @@ fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String
         crf,
         preset: "medium",
         chroma: ChromaFilter::Bicubic,
+        storage: truth.storage,
+        orientation: truth.display_orientation,
     };
     let mut writer = H264Writer::create(path, truth.width, truth.height, truth.fps, settings)?;
     let n = renderer.frame_count();
@@ -180,6 +226,10 @@ pub struct H264Settings {
     pub preset: &'static str,
     /// How colour is subsampled to 4:2:0 (libswscale's filter).
     pub chroma: ChromaFilter,
+    /// Bit depth, range and HDR transfer of the stored samples.
+    pub storage: SampleStorage,
+    /// The display orientation the stream declares (a rotation tag).
+    pub orientation: Orientation,
 }
 
 /// libswscale's filter for the RGB → YUV 4:2:0 conversion.
@@ -215,8 +265,13 @@ pub struct H264Writer {
     packet: ff::Packet,
     time_base: ff::Rational,
     stream_time_base: ff::Rational,
+    /// The displayed frame's size, which `push` takes.
     width: u32,
     height: u32,
+    /// How a displayed frame is stored (turned the other way under a display
+    /// matrix, or as it is).
+    orientation: Orientation,
+    stored: (usize, usize),
     frames: i64,
 }
 
@@ -225,7 +280,11 @@ fn av(what: &'static str) -> impl Fn(ff::Error) -> String {
 }
 
 impl H264Writer {
-    /// Opens `path` for a `width` × `height` clip played at `fps` frames/s.
+    /// Opens `path` for a `width` × `height` clip (as displayed) played at `fps`
+    /// frames/s. With a display orientation (`settings.orientation`, a rotation
+    /// tag), each frame is stored turned the other way and the stream carries the
+    /// display matrix that turns it back, as a phone's MP4 does; with
+    /// `settings.storage`, 10-bit samples, full range and an HDR transfer's tags.
     ///
     /// # Errors
     /// An odd frame size (4:2:0 needs even sizes), no libx264 in this FFmpeg, or
@@ -237,7 +296,15 @@ impl H264Writer {
         fps: f64,
         settings: H264Settings,
     ) -> Result<Self, String> {
-        let (w, h) = (width, height);
+        let storage = settings.storage;
+        let pixel = if storage.ten_bit {
+            Pixel::YUV420P10LE
+        } else {
+            Pixel::YUV420P
+        };
+        let orientation = settings.orientation;
+        let stored = orientation.stored_size((width as usize, height as usize));
+        let (w, h) = (stored.0 as u32, stored.1 as u32);
         if w % 2 == 1 || h % 2 == 1 {
             return Err(format!(
                 "H.264 (4:2:0) needs an even frame size, got {w} × {h}: render a PNG folder or an even size"
@@ -262,7 +329,20 @@ impl H264Writer {
             .map_err(av("encoder"))?;
         encoder.set_width(w);
         encoder.set_height(h);
-        encoder.set_format(Pixel::YUV420P);
+        encoder.set_format(pixel);
+        encoder.set_color_range(if storage.full_range {
+            ff::color::Range::JPEG
+        } else {
+            ff::color::Range::MPEG
+        });
+        if let Some(hdr) = storage.hdr {
+            encoder.set_colorspace(ff::color::Space::BT2020NCL);
+            encoder.set_color_primaries(ff::color::Primaries::BT2020);
+            encoder.set_color_transfer_characteristic(match hdr {
+                HdrTransfer::Hlg => ff::color::TransferCharacteristic::ARIB_STD_B67,
+                HdrTransfer::Pq => ff::color::TransferCharacteristic::SMPTE2084,
+            });
+        }
         encoder.set_time_base(time_base);
         encoder.set_frame_rate(Some(rate));
         if global_header {
@@ -281,16 +361,32 @@ impl H264Writer {
         // The muxer keeps a multiple of the frame rate (480 fps: 1/15360 s) rather
         // than its default 1/90000 s, so frame times are exact.
         stream.set_time_base(time_base);
+        if !orientation.is_identity() {
+            let matrix = orientation.display_matrix(stored);
+            // SAFETY: the stream belongs to `output`, whose header is not written
+            // yet; FFmpeg allocates the 36 bytes it returns, which are filled at once.
+            unsafe {
+                let data = ffi::av_stream_new_side_data(
+                    stream.as_mut_ptr(),
+                    ffi::AVPacketSideDataType::AV_PKT_DATA_DISPLAYMATRIX,
+                    std::mem::size_of_val(&matrix),
+                );
+                if data.is_null() {
+                    return Err("FFmpeg: cannot attach the display matrix".to_owned());
+                }
+                std::ptr::copy_nonoverlapping(matrix.as_ptr().cast::<u8>(), data, 36);
+            }
+        }
         output.write_header().map_err(av("write the MP4 header"))?;
         let stream_time_base = output
             .stream(0)
             .map(|s| s.time_base())
             .ok_or_else(|| "FFmpeg: the MP4 lost its video stream".to_owned())?;
-        let scaler = scaling::Context::get(
+        let mut scaler = scaling::Context::get(
             Pixel::RGB24,
             w,
             h,
-            Pixel::YUV420P,
+            pixel,
             w,
             h,
             match settings.chroma {
@@ -299,17 +395,43 @@ impl H264Writer {
             },
         )
         .map_err(av("libswscale"))?;
+        // The matrix and range the stream declares (BT.601, libswscale's default,
+        // when nothing is declared).
+        let matrix = if storage.hdr.is_some() {
+            ffi::SWS_CS_BT2020
+        } else {
+            ffi::SWS_CS_DEFAULT
+        };
+        // SAFETY: a live SwsContext; the coefficient table is libswscale's static one.
+        let ret = unsafe {
+            let table = ffi::sws_getCoefficients(matrix);
+            ffi::sws_setColorspaceDetails(
+                scaler.as_mut_ptr(),
+                table,
+                1,
+                table,
+                i32::from(storage.full_range),
+                0,
+                1 << 16,
+                1 << 16,
+            )
+        };
+        if ret < 0 {
+            return Err("libswscale: cannot set the matrix and range".to_owned());
+        }
         Ok(Self {
             output,
             encoder,
             scaler,
             rgb: ff::frame::Video::new(Pixel::RGB24, w, h),
-            yuv: ff::frame::Video::new(Pixel::YUV420P, w, h),
+            yuv: ff::frame::Video::new(pixel, w, h),
             packet: ff::Packet::empty(),
             time_base,
             stream_time_base,
-            width: w,
-            height: h,
+            width,
+            height,
+            orientation,
+            stored,
             frames: 0,
         })
     }
@@ -328,13 +450,25 @@ impl H264Writer {
         }
         let row = 3 * self.width as usize;
         let stride = self.rgb.stride(0);
-        for (dst, src) in self
-            .rgb
-            .data_mut(0)
-            .chunks_mut(stride)
-            .zip(image.as_raw().chunks_exact(row))
-        {
-            dst[..row].copy_from_slice(src);
+        if self.orientation.is_identity() {
+            for (dst, src) in self
+                .rgb
+                .data_mut(0)
+                .chunks_mut(stride)
+                .zip(image.as_raw().chunks_exact(row))
+            {
+                dst[..row].copy_from_slice(src);
+            }
+        } else {
+            let map = self.orientation.displayed_from_stored(self.stored);
+            let data = self.rgb.data_mut(0);
+            for q in 0..self.stored.1 {
+                for p in 0..self.stored.0 {
+                    let (x, y) = map.displayed(p, q);
+                    let at = q * stride + 3 * p;
+                    data[at..at + 3].copy_from_slice(&image.get_pixel(x as u32, y as u32).0);
+                }
+            }
         }
         self.scaler
             .run(&self.rgb, &mut self.yuv)

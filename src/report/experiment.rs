@@ -342,6 +342,20 @@ fn experiment_page(
             format!("{} ({} × {} px)", plan.frames, plan.width, plan.height),
         ],
         vec![
+            "orientation".into(),
+            format!(
+                "{} (the container's display matrix, applied to every frame)",
+                plan.orientation
+            ),
+        ],
+        vec![
+            "video signal".into(),
+            plan.video_signal.as_ref().map_or_else(
+                || "frame images (8-bit), or not recorded".into(),
+                |v| format!("{v}; converted to 8-bit full-range colour before thresholds"),
+            ),
+        ],
+        vec![
             "capture fps".into(),
             format!("{} ({:?})", plan.fps.fps, plan.fps.source),
         ],

@@ -1,6 +1,8 @@
 //! Frame skips (thesis §3.3.2: "spikes appear due to frame skips occurring in the
 //! footage"): timestamp gaps, and dropped frames that the timestamps hide but the motion
-//! shows, as a step in the strip's angle or in the rim's phase.
+//! shows, as a step in the strip's angle or in the rim's phase. Duplicated and
+//! interpolated frames, found on the pixels by `footage::RepeatGauge`, are flagged
+//! with the same type.
 
 use super::local::{LocalInit, PhaseTrack, fit_local};
 use super::peaks::nominal_period;
@@ -43,6 +45,22 @@ pub enum SkipReason {
         /// (SSR without − SSR with the step) / (residual variance with it).
         statistic: f64,
     },
+    /// The frame repeats the previous one (`footage::RepeatGauge`): its capture is
+    /// missing, and the frame is left out of the fits.
+    DuplicatedFrame {
+        /// Mean |difference| from the previous frame [grey levels].
+        step: f64,
+        /// The smaller of the neighbouring frames' steps [grey levels].
+        neighbours: f64,
+    },
+    /// The frame is the blend of its neighbours, inserted by the camera: its
+    /// capture is missing, and the frame is left out of the fits.
+    InterpolatedFrame {
+        /// Mean |frame − mean of its neighbours| [grey levels].
+        residual: f64,
+        /// The smaller of the neighbouring frames' residuals [grey levels].
+        neighbours: f64,
+    },
 }
 
 impl SkipReason {
@@ -67,12 +85,23 @@ impl SkipReason {
                 "the rim's phase jumps by {:.2}° (dropped frame?)",
                 phase_step.to_degrees()
             ),
+            SkipReason::DuplicatedFrame { step, neighbours } => format!(
+                "a copy of the frame before (changed {step:.2} grey levels, its neighbours \
+                 {neighbours:.2})"
+            ),
+            SkipReason::InterpolatedFrame {
+                residual,
+                neighbours,
+            } => format!(
+                "a blend of its neighbours (off it by {residual:.2} grey levels, they by \
+                 {neighbours:.2})"
+            ),
         }
     }
 }
 
-/// A frame flagged as following a skip: something is missing between frame
-/// `index − 1` and frame `index`.
+/// A frame flagged as following a skip (something is missing between frame
+/// `index − 1` and frame `index`), or as showing no capture of its own.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FrameFlag {
     /// The frame after the suspected skip.
