@@ -38,6 +38,13 @@ const SWS_FLAGS: scaling::Flags = scaling::Flags::BICUBIC;
 /// reordering; x264's default pyramid needs 3, HEVC encoders up to 16).
 const REORDER_MARGIN: usize = 16;
 
+/// Bytes past the end of the BGR buffer that libswscale's vector code may write
+/// when a conversion ends at the frame's last row and column: it stores whole
+/// 8- and 16-byte words (valgrind: 8-byte writes 0 and 8 bytes past a
+/// 1280 × 720 × 3 buffer, which corrupted the heap when the overlays converted a
+/// band reaching the right edge). FFmpeg pads its own buffers by 64 bytes.
+const SWSCALE_OVERRUN: usize = 64;
+
 /// One video stream being decoded frame by frame.
 pub(super) struct VideoDecoder {
     path: PathBuf,
@@ -184,7 +191,7 @@ impl VideoDecoder {
             pending: false,
             skip_before: None,
             eof_sent: false,
-            bgr: vec![0; 3 * width * height],
+            bgr: vec![0; 3 * width * height + SWSCALE_OVERRUN],
             shown: if map.is_some() {
                 vec![0; 3 * width * height]
             } else {
@@ -411,7 +418,7 @@ impl VideoDecoder {
         if self.map.is_some() {
             &self.shown
         } else {
-            &self.bgr
+            &self.bgr[..3 * self.width * self.height]
         }
     }
 

@@ -169,11 +169,11 @@ const STEP_NEIGHBOURS: usize = 12;
 /// frames of it). A skip is thus seen only where the strip turns by more than
 /// `sigmas` spreads in a frame. Of flags within 6 frames, the largest step is kept.
 ///
-/// Only boundaries whose two windows end before `t_beta`, the strip's stop, are
-/// tested: a stopped strip shows no skip, and a strip that stops at once (o07 of the
-/// open footage, its rotation after the fall lasting 15 ms) puts a kink between the
-/// windows that straddle it, which a quadratic does not follow and which read as a
-/// step of 1.4 frames' turn.
+/// Only frames before `t_beta`, the strip's stop, are flagged: a stopped strip shows
+/// no skip, and a strip that stops at once (o07 of the open footage, 3.4 frames
+/// after the fall) puts a kink in the windows across its stop, which a quadratic
+/// does not follow: it read as a step of 1.4 frames' turn one frame after the stop.
+/// The spread of the steps is still taken over the whole clip.
 pub fn strip_angle_steps(
     t: &[f64],
     beta_unwrapped: &[f64],
@@ -181,10 +181,7 @@ pub fn strip_angle_steps(
     sigmas: f64,
     floor: f64,
 ) -> Vec<FrameFlag> {
-    let idx: Vec<usize> = finite_samples(t, beta_unwrapped)
-        .into_iter()
-        .filter(|&i| t[i] < t_beta)
-        .collect();
+    let idx = finite_samples(t, beta_unwrapped);
     let frame = nominal_period(t);
     if frame.is_nan() || frame <= 0.0 {
         return Vec::new();
@@ -211,7 +208,7 @@ pub fn strip_angle_steps(
     let sigma = mad_sigma(&steps, 0.0).max(floor);
     let mut candidates: Vec<(usize, f64, f64)> = boundaries
         .iter()
-        .filter(|b| b.1.abs() > sigmas * sigma.max(b.3))
+        .filter(|b| t[idx[b.0]] < t_beta && b.1.abs() > sigmas * sigma.max(b.3))
         .map(|&(k, step, turn, _)| (k, step, turn))
         .collect();
     // The largest steps first; a smaller one within 6 frames of a kept one is the
