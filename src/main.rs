@@ -469,10 +469,25 @@ fn main() -> ExitCode {
         Ok(Status::Complete) => ExitCode::SUCCESS,
         Ok(Status::ClipsFailed) => ExitCode::from(2),
         Err(err) => {
-            eprintln!("error: {err:#}");
+            eprintln!("error: {}", error_chain(&err));
             ExitCode::from(1)
         }
     }
+}
+
+/// The error and its causes, joined by ": ", leaving out a cause whose text the
+/// message already carries (an I/O error the message quotes would otherwise be
+/// printed twice: "… (os error 2): No such file or directory (os error 2)").
+fn error_chain(err: &anyhow::Error) -> String {
+    let mut text = err.to_string();
+    for cause in err.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
 }
 
 fn run(cli: Cli) -> Result<Status> {

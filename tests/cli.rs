@@ -73,6 +73,28 @@ fn info_missing_clip_names_the_file() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("no-such-clip.mp4"));
 }
 
+/// An error that quotes its I/O cause names it once (issue 13.6: "os error"
+/// printed twice): an output folder under a path that cannot hold one.
+#[test]
+fn an_io_error_is_named_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let fixture =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/side-dark-n050.mp4");
+    let out = eulerdisk(
+        dir.path(),
+        &[
+            "analyse",
+            fixture.to_str().unwrap(),
+            "-o",
+            "/proc/eulerdisk-cannot-write-here",
+        ],
+    );
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("/proc/"), "{err}");
+    assert_eq!(err.matches("os error").count(), 1, "{err}");
+}
+
 /// `reproduce --skip-table-4-1` writes the table, and its Painlevé row is eq. 4.48 at
 /// λ = 4.08 (1.105; the thesis prints 1.11).
 #[test]
