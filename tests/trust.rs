@@ -440,6 +440,16 @@ fn container_timestamp_gaps_are_flagged_and_keep_the_time() {
     // the median timestamp interval gives the capture rate.
     assert!((fps(&gap) - 480.0).abs() < 1e-9, "{}", gap["plan"]["fps"]);
     assert_eq!(gap["plan"]["fps"]["source"]["kind"], "container_timestamps");
+    // `info` reads the same timestamps: the median interval, the gap, and a warning
+    // that the stored fps (an average over the gap) is not the frames' rate.
+    let info = eulerdisk(d, &["info", "gap.mp4"]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(
+        text.contains("median interval 2.083 ms (480 fps)")
+            && text.contains("longest 54.167 ms, 1 gap(s)")
+            && text.contains("is an average: the frames' timestamps are 480 fps apart"),
+        "{text}"
+    );
     let timing = &gap["plan"]["frame_times"];
     assert_eq!(timing["source"], "container_pts");
     assert!((timing["median_interval_s"].as_f64().unwrap() - 1.0 / 480.0).abs() < 1e-12);

@@ -20,6 +20,8 @@ use super::capture_rate::{ContainerCaptureRate, container_capture_rate};
 use super::colour::VideoSignal;
 use super::decoder::VideoDecoder;
 use super::orientation::Orientation;
+use crate::signal::{mad_sigma, median};
+use ffmpeg_next as ff;
 
 /// Video containers that [`probe`] hands to OpenCV (lower case, no dot).
 pub const VIDEO_EXTENSIONS: &[&str] = &["mp4", "m4v", "mov", "avi", "mkv"];
@@ -79,6 +81,10 @@ pub struct ClipInfo {
     pub capture_rate: Option<ContainerCaptureRate>,
     /// `frame_count / container_fps` [s]: the playback duration.
     pub duration_s: Option<f64>,
+    /// The intervals between the container's per-frame timestamps (what `analyse`
+    /// times frames by), when every packet has one.
+    #[serde(default)]
+    pub timestamps: Option<TimestampSummary>,
     /// FOURCC of a video (`MJPG`, `avc1`, `hvc1`, …); image format of a folder (`PNG`).
     pub codec: String,
     /// The OpenCV backend that read it (`FFMPEG`, …; `imgcodecs` for a folder).
@@ -102,6 +108,10 @@ impl fmt::Display for ClipInfo {
             || "unknown".into(),
             |d| format!("{} s at the stored fps", number(d)),
         );
+        let timestamps = self
+            .timestamps
+            .as_ref()
+            .map_or_else(|| "none per frame".into(), ToString::to_string);
         let rows = [
             ("path", self.path.display().to_string()),
             ("kind", self.kind.to_string()),
@@ -117,14 +127,15 @@ impl fmt::Display for ClipInfo {
             ("fps", fps),
             ("capture", capture),
             ("duration", duration),
+            ("timestamps", timestamps),
             ("codec", self.codec.clone()),
             ("backend", self.backend.clone()),
         ];
         for (name, value) in rows {
-            writeln!(f, "{name:<10}{value}")?;
+            writeln!(f, "{name:<11}{value}")?;
         }
         for warning in &self.warnings {
-            writeln!(f, "{:<10}{warning}", "warning")?;
+            writeln!(f, "{:<11}{warning}", "warning")?;
         }
         Ok(())
     }
@@ -223,6 +234,20 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
             "the container stores no fps: give the capture fps in the experiment config".into(),
         ),
     }
+    let timestamps = TimestampSummary::read(path);
+    if let (Some(stamps), Some(fps)) = (&timestamps, container_fps) {
+        let by_stamps = 1.0 / stamps.median_interval_s;
+        if (by_stamps / fps - 1.0).abs() > FPS_AGREEMENT {
+            warnings.push(format!(
+                "the stored fps {} is an average: the frames' timestamps are {} fps apart \
+                 (median interval), with {} gap(s) of more than 1.5 intervals; `analyse` \
+                 times frames by their timestamps",
+                number(fps),
+                number(by_stamps),
+                stamps.gaps
+            ));
+        }
+    }
     Ok(ClipInfo {
         path: path.to_path_buf(),
         kind: ClipKind::Video,
@@ -234,10 +259,76 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
         container_fps,
         capture_rate,
         duration_s: container_fps.map(|fps| frame_count as f64 / fps),
+        timestamps,
         codec: fourcc_string(fourcc),
         backend,
         warnings,
     })
+}
+
+/// Relative difference between the stored fps and the timestamps' rate above which
+/// `info` warns: a variable frame rate or missing frames (one frame missing in 100
+/// moves the average by 1 %).
+const FPS_AGREEMENT: f64 = 0.005;
+
+/// The intervals between a video's per-frame container timestamps, read from its
+/// packets without decoding (playback clock).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TimestampSummary {
+    /// Median interval [s].
+    pub median_interval_s: f64,
+    /// 1.4826 × the intervals' median absolute deviation [s]: a phone's jitter.
+    pub interval_spread_s: f64,
+    /// Longest interval [s].
+    pub max_interval_s: f64,
+    /// Intervals longer than 1.5 × the median: frames missing there.
+    pub gaps: usize,
+}
+
+impl TimestampSummary {
+    /// The summary of `path`'s video stream, `None` when a packet has no
+    /// timestamp or fewer than three have one.
+    fn read(path: &Path) -> Option<Self> {
+        let mut input = ff::format::input(path).ok()?;
+        let stream = input.streams().best(ff::media::Type::Video)?;
+        let (index, base) = (stream.index(), f64::from(stream.time_base()));
+        let mut times = Vec::new();
+        for (s, packet) in input.packets() {
+            if s.index() == index {
+                times.push(packet.pts()? as f64 * base);
+            }
+        }
+        // Packets come in decoding order; B-frames are shown in another.
+        times.sort_by(f64::total_cmp);
+        let intervals: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+        if intervals.len() < 2 {
+            return None;
+        }
+        let median_interval_s = median(&intervals);
+        (median_interval_s > 0.0).then(|| Self {
+            median_interval_s,
+            interval_spread_s: mad_sigma(&intervals, median_interval_s),
+            max_interval_s: intervals.iter().copied().fold(0.0, f64::max),
+            gaps: intervals
+                .iter()
+                .filter(|&&d| d > 1.5 * median_interval_s)
+                .count(),
+        })
+    }
+}
+
+impl fmt::Display for TimestampSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "median interval {} ms ({} fps), spread {} ms, longest {} ms, {} gap(s)",
+            number(1e3 * self.median_interval_s),
+            number(1.0 / self.median_interval_s),
+            number(1e3 * self.interval_spread_s),
+            number(1e3 * self.max_interval_s),
+            self.gaps
+        )
+    }
 }
 
 /// The four characters of a FOURCC code as OpenCV returns it (a little-endian
@@ -305,6 +396,7 @@ fn probe_folder(dir: &Path) -> Result<ClipInfo, FootageError> {
         container_fps: None,
         capture_rate: None,
         duration_s: None,
+        timestamps: None,
         codec: formats.join("+"),
         backend: "imgcodecs".into(),
         warnings,
