@@ -176,8 +176,9 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // The last rise is the last peak or a frame on its way up; the rim then comes
     // down to the plate, and frames that continue that descent by more than the
     // noise above the rest level are motion still, below the threshold or not (o03
-    // of the open footage: 0.25 and 0.14 px after a last peak of 1.23 px, on a rest
-    // noise of 0.08 px; the truth 0.23 and 0.29 px, at rest one frame later).
+    // of the open footage: 0.33 and 0.22 px above the rest level after a last peak
+    // of 1.23 px, with a rest noise σ of 0.18 px and a 5σ threshold; the truth 0.23
+    // and 0.29 px, at rest one frame later).
     while let Some(&next) = samples.iter().find(|&&i| i > index) {
         if z_rim[next] - level > noise && z_rim[next] < z_rim[index] {
             index = next;
