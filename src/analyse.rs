@@ -20,7 +20,10 @@
 //!
 //! [`analyse_clip`] reads the clip twice (the calibration must be known before the
 //! rim can be measured) and keeps only scalars per frame, so memory does not grow
-//! with frame size or, beyond a few numbers per frame, with clip length.
+//! with frame size or, beyond a few numbers per frame, with clip length. A video
+//! longer than [`WHOLE_CLIP_UP_TO_S`] is measured in pass 2 from a key frame near
+//! its end ([`Decoding::NearTheEnd`], the span grown back until it holds the fits'
+//! motion), so a minutes-long clip costs about what its last seconds cost.
 
 use std::path::{Path, PathBuf};
 
@@ -225,9 +228,7 @@ impl SpanPlan {
             Some(m) => {
                 let peaks = &m.series.peaks.peaks;
                 let needed = match peaks.as_slice() {
-                    [p0, p1, ..] => {
-                        widest + (m.local_fit_periods + LEAD_PERIODS) * (p1.t - p0.t)
-                    }
+                    [p0, p1, ..] => widest + (m.local_fit_periods + LEAD_PERIODS) * (p1.t - p0.t),
                     _ => f64::INFINITY,
                 };
                 let span_start = m.frames.first().map_or(f64::INFINITY, |f| f.t);
@@ -295,7 +296,11 @@ impl SpanPlan {
         DecodedSpan {
             first_frame: first,
             last_frame: (first + decoded).saturating_sub(1),
-            clip_frames: if first == 0 { decoded } else { self.clip_frames },
+            clip_frames: if first == 0 {
+                decoded
+            } else {
+                self.clip_frames
+            },
             first_t_capture_s: self.times.get(first).copied().unwrap_or(0.0),
             attempts,
             reason,
@@ -934,113 +939,117 @@ pub fn analyse_clip_decoding(
     // Measures the frames from `first` to the end: rim heights, strip angles,
     // frame times and the signal analysis.
     let mut measure_span = |first: usize| -> Result<MeasuredSpan, AnalyseError> {
-    let mut warnings = Vec::new();
-    let mut fps = fps.clone();
-    match &plan_span.index {
-        Some(index) if first > 0 => source.seek_frame(first, index.container_times_s[first])?,
-        _ => source.seek(0)?,
-    }
-    if split.is_none() {
-        let x = roi.map_or(0, |r| r[0] as usize);
-        let mut band = gauge.band_columns();
-        if let Some(gap) = &gap_gauge {
-            let columns = gap.band_columns();
-            band = band.start.min(columns.start)..band.end.max(columns.end);
+        let mut warnings = Vec::new();
+        let mut fps = fps.clone();
+        match &plan_span.index {
+            Some(index) if first > 0 => source.seek_frame(first, index.container_times_s[first])?,
+            _ => source.seek(0)?,
         }
-        source.convert_only_columns(Some(x + band.start..x + band.end))?;
-    }
-    let mut strip_finder = colour_thresholds
-        .as_ref()
-        .map(|(t, s)| StripFinder::new(*t, *s));
-    let span_frames = expected - first;
-    let mut frames = Vec::with_capacity(span_frames);
-    let mut gaps = Vec::with_capacity(if gap_gauge.is_some() { span_frames } else { 0 });
-    let mut windows = Vec::with_capacity(if rest_window.is_some() { span_frames } else { 0 });
-    let band_columns = gauge.band_columns();
-    let mut repeats = footage::RepeatGauge::new();
-    let mut no_edge = 0usize;
-    // The frame with the highest rim so far, kept for the threshold diagnostic.
-    let mut highest: Option<(f64, f64, OwnedFrame)> = None;
-    while let Some(frame) = source.next_frame()? {
-        let index = frame.index;
-        if first > 0 {
-            plan_span.check_frame(clip, index, frame.container_time_s)?;
-        }
-        let (side, plan) = side_view(&frame.view, roi, split, index).map_err(vision_err)?;
-        let mut new_highest = None;
-        let rim = gauge.measure(&side, index).map_err(vision_err)?;
-        if rest_window.is_some() {
-            let edge0 = match rim {
-                RimHeight::Edge { edge_row, .. } => Some(edge_row),
-                RimHeight::Contact => Some(cal.z_base),
-                RimHeight::NoEdge => None,
-            };
-            windows.push(edge0.and_then(|e| BandWindow::read(&side, &band_columns, e)));
-        }
-        let z_rim_px = match rim {
-            RimHeight::Edge { z_rim_px, edge_row } => {
-                if highest.as_ref().is_none_or(|(z, _, _)| z_rim_px > *z) {
-                    new_highest = Some((z_rim_px, edge_row));
-                }
-                Some(z_rim_px)
+        if split.is_none() {
+            let x = roi.map_or(0, |r| r[0] as usize);
+            let mut band = gauge.band_columns();
+            if let Some(gap) = &gap_gauge {
+                let columns = gap.band_columns();
+                band = band.start.min(columns.start)..band.end.max(columns.end);
             }
-            RimHeight::Contact => Some(0.0),
-            RimHeight::NoEdge => {
-                no_edge += 1;
-                None
-            }
-        };
-        if let Some(gauge) = &gap_gauge {
-            gaps.push(gauge.measure(&side));
+            source.convert_only_columns(Some(x + band.start..x + band.end))?;
         }
-        let beta_raw = match (&mut strip_finder, plan) {
-            (Some(finder), Some(plan)) => finder.measure(&plan, index).ok().map(|s| s.beta),
-            _ => None,
-        };
-        frames.push(FrameRecord {
-            index,
-            // Set from the container's timestamps once every frame is read.
-            t_capture: f64::NAN,
-            t: f64::NAN,
-            container_time_s: frame.container_time_s,
-            z_rim_px,
-            z_rim_m: None,
-            beta_raw,
+        let mut strip_finder = colour_thresholds
+            .as_ref()
+            .map(|(t, s)| StripFinder::new(*t, *s));
+        let span_frames = expected - first;
+        let mut frames = Vec::with_capacity(span_frames);
+        let mut gaps = Vec::with_capacity(if gap_gauge.is_some() { span_frames } else { 0 });
+        let mut windows = Vec::with_capacity(if rest_window.is_some() {
+            span_frames
+        } else {
+            0
         });
-        if index % 256 == 0 {
-            progress(index - first, Some(span_frames));
+        let band_columns = gauge.band_columns();
+        let mut repeats = footage::RepeatGauge::new();
+        let mut no_edge = 0usize;
+        // The frame with the highest rim so far, kept for the threshold diagnostic.
+        let mut highest: Option<(f64, f64, OwnedFrame)> = None;
+        while let Some(frame) = source.next_frame()? {
+            let index = frame.index;
+            if first > 0 {
+                plan_span.check_frame(clip, index, frame.container_time_s)?;
+            }
+            let (side, plan) = side_view(&frame.view, roi, split, index).map_err(vision_err)?;
+            let mut new_highest = None;
+            let rim = gauge.measure(&side, index).map_err(vision_err)?;
+            if rest_window.is_some() {
+                let edge0 = match rim {
+                    RimHeight::Edge { edge_row, .. } => Some(edge_row),
+                    RimHeight::Contact => Some(cal.z_base),
+                    RimHeight::NoEdge => None,
+                };
+                windows.push(edge0.and_then(|e| BandWindow::read(&side, &band_columns, e)));
+            }
+            let z_rim_px = match rim {
+                RimHeight::Edge { z_rim_px, edge_row } => {
+                    if highest.as_ref().is_none_or(|(z, _, _)| z_rim_px > *z) {
+                        new_highest = Some((z_rim_px, edge_row));
+                    }
+                    Some(z_rim_px)
+                }
+                RimHeight::Contact => Some(0.0),
+                RimHeight::NoEdge => {
+                    no_edge += 1;
+                    None
+                }
+            };
+            if let Some(gauge) = &gap_gauge {
+                gaps.push(gauge.measure(&side));
+            }
+            let beta_raw = match (&mut strip_finder, plan) {
+                (Some(finder), Some(plan)) => finder.measure(&plan, index).ok().map(|s| s.beta),
+                _ => None,
+            };
+            frames.push(FrameRecord {
+                index,
+                // Set from the container's timestamps once every frame is read.
+                t_capture: f64::NAN,
+                t: f64::NAN,
+                container_time_s: frame.container_time_s,
+                z_rim_px,
+                z_rim_m: None,
+                beta_raw,
+            });
+            if index % 256 == 0 {
+                progress(index - first, Some(span_frames));
+            }
+            repeats.push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
+            if let Some((z_rim_px, edge_row)) = new_highest {
+                // The diagnostic shows the whole side view: convert the other columns.
+                let whole = source.whole_frame()?;
+                let side = side_view(&whole, roi, split, index).map_err(vision_err)?.0;
+                highest = Some((z_rim_px, edge_row, OwnedFrame::copy(index, &side)));
+            }
         }
-        repeats.push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
-        if let Some((z_rim_px, edge_row)) = new_highest {
-            // The diagnostic shows the whole side view: convert the other columns.
-            let whole = source.whole_frame()?;
-            let side = side_view(&whole, roi, split, index).map_err(vision_err)?.0;
-            highest = Some((z_rim_px, edge_row, OwnedFrame::copy(index, &side)));
-        }
-    }
-    progress(frames.len(), Some(span_frames));
-    if let Some(gauge) = &gap_gauge {
-        let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
-        if gauge.resolve(&mut heights, &gaps).is_none() {
-            warnings.push(
+        progress(frames.len(), Some(span_frames));
+        if let Some(gauge) = &gap_gauge {
+            let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
+            if gauge.resolve(&mut heights, &gaps).is_none() {
+                warnings.push(
                 "the rim never lifts 2.5–4.5 px, so the darkness of the gap per pixel is unknown: \
                  rim heights below 2 px come from the edge alone and read up to 0.2 px high"
                     .into(),
             );
+            }
+            for (record, z) in frames.iter_mut().zip(heights) {
+                record.z_rim_px = z;
+            }
         }
-        for (record, z) in frames.iter_mut().zip(heights) {
-            record.z_rim_px = z;
-        }
-    }
-    let first_pass = match side_config.plate {
-        Plate::Dark => "edge and gap darkness (vision::rim, vision::gap)",
-        Plate::Light => "edge (vision::rim): the second edge from the bottom on a light plate",
-    };
-    let mut rim_zero_row_px = cal.z_base;
-    let rim = match &rest_window {
-        Some((rest_window, edge0)) => {
-            let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
-            let refit = match side_config.plate {
+        let first_pass = match side_config.plate {
+            Plate::Dark => "edge and gap darkness (vision::rim, vision::gap)",
+            Plate::Light => "edge (vision::rim): the second edge from the bottom on a light plate",
+        };
+        let mut rim_zero_row_px = cal.z_base;
+        let rim = match &rest_window {
+            Some((rest_window, edge0)) => {
+                let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
+                let refit = match side_config.plate {
                 Plate::Dark => vision::remeasure_dark_rim(
                     &mut heights,
                     &windows,
@@ -1078,149 +1087,149 @@ pub fn analyse_clip_decoding(
                         })
                 }
             };
-            match refit {
-                Ok((description, rest_edge)) => {
-                    for (record, z) in frames.iter_mut().zip(heights) {
-                        record.z_rim_px = z;
+                match refit {
+                    Ok((description, rest_edge)) => {
+                        for (record, z) in frames.iter_mut().zip(heights) {
+                            record.z_rim_px = z;
+                        }
+                        rim_zero_row_px = rest_edge;
+                        description
                     }
-                    rim_zero_row_px = rest_edge;
-                    description
+                    Err(reason) => format!("{first_pass}: {reason}"),
                 }
-                Err(reason) => format!("{first_pass}: {reason}"),
             }
+            None => first_pass.into(),
+        };
+        // Duplicated and interpolated frames show no capture of their own: no rim
+        // height or strip angle from them reaches the fits.
+        let repeated = repeats.repeated(REST_FRAMES);
+        drop(repeats);
+        for r in &repeated {
+            frames[r.index].z_rim_px = None;
+            frames[r.index].beta_raw = None;
         }
-        None => first_pass.into(),
-    };
-    // Duplicated and interpolated frames show no capture of their own: no rim
-    // height or strip angle from them reaches the fits.
-    let repeated = repeats.repeated(REST_FRAMES);
-    drop(repeats);
-    for r in &repeated {
-        frames[r.index].z_rim_px = None;
-        frames[r.index].beta_raw = None;
-    }
-    if !repeated.is_empty() {
-        let count = |kind| repeated.iter().filter(|r| r.kind == kind).count();
-        let list: Vec<String> = repeated
-            .iter()
-            .map(|r| frames[r.index].index.to_string())
-            .collect();
-        warnings.push(format!(
-            "{} duplicated and {} interpolated frame(s) (frames {}) show no capture of \
+        if !repeated.is_empty() {
+            let count = |kind| repeated.iter().filter(|r| r.kind == kind).count();
+            let list: Vec<String> = repeated
+                .iter()
+                .map(|r| frames[r.index].index.to_string())
+                .collect();
+            warnings.push(format!(
+                "{} duplicated and {} interpolated frame(s) (frames {}) show no capture of \
              their own: left out of the fits",
-            count(footage::RepeatKind::Duplicated),
-            count(footage::RepeatKind::Interpolated),
-            list.join(", ")
-        ));
-    }
-    // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
-    // z_rim in metres once, after every correction of z_rim in px.
-    let scale = ScaleReport::new(&calibration.calibration, &params);
-    let metres_per_px = scale.metres_per_px();
-    if !scale.at_near_rim() {
-        warnings.push(format!("scale from the {}", scale.used));
-    }
-    for record in &mut frames {
-        record.z_rim_m = record.z_rim_px.map(|z| z * metres_per_px);
-    }
-    if no_edge == frames.len() {
-        return Err(AnalyseError::Clip {
-            path: clip.to_path_buf(),
-            reason: format!(
-                "no rim edge found on the centre line in any of the {} frames (γ = {:.1})",
-                frames.len(),
-                calibration.threshold.gamma
-            ),
-        });
-    }
-    if no_edge > 0 {
-        warnings.push(format!(
-            "no rim edge found in {no_edge} of {} frames",
-            frames.len()
-        ));
-    }
-
-    // Frame times: the container's timestamps on the capture clock, else index /
-    // fps; a span's from the timestamps of the whole clip (its index), so that
-    // they count from the clip's first frame.
-    let (t, frame_times) = match &plan_span.index {
-        Some(index) if first > 0 => {
-            let stamps: Vec<Option<f64>> =
-                index.container_times_s.iter().copied().map(Some).collect();
-            let (mut t, timing) = footage::frame_times(&stamps, &mut fps);
-            (t.split_off(first), timing)
+                count(footage::RepeatKind::Duplicated),
+                count(footage::RepeatKind::Interpolated),
+                list.join(", ")
+            ));
         }
-        _ => {
-            let stamps: Vec<Option<f64>> = frames.iter().map(|f| f.container_time_s).collect();
-            footage::frame_times(&stamps, &mut fps)
+        // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
+        // z_rim in metres once, after every correction of z_rim in px.
+        let scale = ScaleReport::new(&calibration.calibration, &params);
+        let metres_per_px = scale.metres_per_px();
+        if !scale.at_near_rim() {
+            warnings.push(format!("scale from the {}", scale.used));
         }
-    };
-    for (record, &t) in frames.iter_mut().zip(&t) {
-        record.t_capture = t;
-    }
-    warnings.splice(0..0, fps.warnings.iter().cloned());
+        for record in &mut frames {
+            record.z_rim_m = record.z_rim_px.map(|z| z * metres_per_px);
+        }
+        if no_edge == frames.len() {
+            return Err(AnalyseError::Clip {
+                path: clip.to_path_buf(),
+                reason: format!(
+                    "no rim edge found on the centre line in any of the {} frames (γ = {:.1})",
+                    frames.len(),
+                    calibration.threshold.gamma
+                ),
+            });
+        }
+        if no_edge > 0 {
+            warnings.push(format!(
+                "no rim edge found in {no_edge} of {} frames",
+                frames.len()
+            ));
+        }
 
-    // Signal.
-    let z: Vec<f64> = frames
-        .iter()
-        .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
-        .collect();
-    let beta: Option<Vec<f64>> = strip_finder.as_ref().map(|_| {
-        frames
+        // Frame times: the container's timestamps on the capture clock, else index /
+        // fps; a span's from the timestamps of the whole clip (its index), so that
+        // they count from the clip's first frame.
+        let (t, frame_times) = match &plan_span.index {
+            Some(index) if first > 0 => {
+                let stamps: Vec<Option<f64>> =
+                    index.container_times_s.iter().copied().map(Some).collect();
+                let (mut t, timing) = footage::frame_times(&stamps, &mut fps);
+                (t.split_off(first), timing)
+            }
+            _ => {
+                let stamps: Vec<Option<f64>> = frames.iter().map(|f| f.container_time_s).collect();
+                footage::frame_times(&stamps, &mut fps)
+            }
+        };
+        for (record, &t) in frames.iter_mut().zip(&t) {
+            record.t_capture = t;
+        }
+        warnings.splice(0..0, fps.warnings.iter().cloned());
+
+        // Signal.
+        let z: Vec<f64> = frames
             .iter()
-            .map(|f| f.beta_raw.unwrap_or(f64::NAN))
-            .collect()
-    });
-    let signal_config = SignalConfig {
-        window_s,
-        // The rim is located to about 0.01 px on lossless frames (the edge, and
-        // the gap's darkness below 2 px), so a clean rest tail can have almost no
-        // spread: floor the noise at 0.02 px (motion from 0.1 px on), and ask a
-        // peak to stand 0.2 px above its surroundings.
-        noise_floor: 0.02 * metres_per_px,
-        min_prominence: 0.2 * metres_per_px,
-        ..SignalConfig::default()
-    };
-    let model = ThesisRim {
-        radius: params.radius,
-    };
-    let signal_err = |error| signal_error(clip, &fps, error);
-    let mut series =
-        signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;
-    for r in &repeated {
-        let (statistic, neighbours) = (r.statistic, r.neighbours);
-        series.flags.push(signal::FrameFlag {
-            index: r.index,
-            t: series.halt.shifted_t[r.index],
-            reason: match r.kind {
-                footage::RepeatKind::Duplicated => signal::SkipReason::DuplicatedFrame {
-                    step: statistic,
-                    neighbours,
-                },
-                footage::RepeatKind::Interpolated => signal::SkipReason::InterpolatedFrame {
-                    residual: statistic,
-                    neighbours,
-                },
-            },
+            .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
+            .collect();
+        let beta: Option<Vec<f64>> = strip_finder.as_ref().map(|_| {
+            frames
+                .iter()
+                .map(|f| f.beta_raw.unwrap_or(f64::NAN))
+                .collect()
         });
-    }
-    series.flags.sort_by_key(|f| f.index);
-    for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
-        record.t = *shifted;
-    }
-    Ok(MeasuredSpan {
-        frames,
-        series,
-        fps,
-        frame_times,
-        warnings,
-        highest,
-        rim,
-        rim_zero_row_px,
-        scale,
-        metres_per_px,
-        local_fit_periods: signal_config.state_window_periods,
-    })
+        let signal_config = SignalConfig {
+            window_s,
+            // The rim is located to about 0.01 px on lossless frames (the edge, and
+            // the gap's darkness below 2 px), so a clean rest tail can have almost no
+            // spread: floor the noise at 0.02 px (motion from 0.1 px on), and ask a
+            // peak to stand 0.2 px above its surroundings.
+            noise_floor: 0.02 * metres_per_px,
+            min_prominence: 0.2 * metres_per_px,
+            ..SignalConfig::default()
+        };
+        let model = ThesisRim {
+            radius: params.radius,
+        };
+        let signal_err = |error| signal_error(clip, &fps, error);
+        let mut series =
+            signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;
+        for r in &repeated {
+            let (statistic, neighbours) = (r.statistic, r.neighbours);
+            series.flags.push(signal::FrameFlag {
+                index: r.index,
+                t: series.halt.shifted_t[r.index],
+                reason: match r.kind {
+                    footage::RepeatKind::Duplicated => signal::SkipReason::DuplicatedFrame {
+                        step: statistic,
+                        neighbours,
+                    },
+                    footage::RepeatKind::Interpolated => signal::SkipReason::InterpolatedFrame {
+                        residual: statistic,
+                        neighbours,
+                    },
+                },
+            });
+        }
+        series.flags.sort_by_key(|f| f.index);
+        for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
+            record.t = *shifted;
+        }
+        Ok(MeasuredSpan {
+            frames,
+            series,
+            fps,
+            frame_times,
+            warnings,
+            highest,
+            rim,
+            rim_zero_row_px,
+            scale,
+            metres_per_px,
+            local_fit_periods: signal_config.state_window_periods,
+        })
     };
     let mut first = plan_span.first_span();
     let mut attempts = 1;

@@ -364,7 +364,9 @@ impl VideoDecoder {
                 continue;
             }
             match packet.pts() {
-                Some(pts) => stamps.push(((pts - self.start) as f64 * self.time_base, packet.is_key())),
+                Some(pts) => {
+                    stamps.push(((pts - self.start) as f64 * self.time_base, packet.is_key()))
+                }
                 None => complete = false,
             }
         }
@@ -398,10 +400,7 @@ impl VideoDecoder {
             )
         };
         if ret < 0 {
-            return Err(self.error(format!(
-                "cannot seek to {what}: {}",
-                ff::Error::from(ret)
-            )));
+            return Err(self.error(format!("cannot seek to {what}: {}", ff::Error::from(ret))));
         }
         self.decoder.flush();
         self.eof_sent = false;

@@ -455,7 +455,10 @@ fn experiment_page(
         .iter()
         .map(|f| {
             vec![
-                e.frames.get(f.index).map_or(f.index, |r| r.index).to_string(),
+                e.frames
+                    .get(f.index)
+                    .map_or(f.index, |r| r.index)
+                    .to_string(),
                 format!("{:.5}", f.t),
                 format!("{:?}", f.reason),
             ]
