@@ -20,7 +20,10 @@
 //!
 //! [`analyse_clip`] reads the clip twice (the calibration must be known before the
 //! rim can be measured) and keeps only scalars per frame, so memory does not grow
-//! with frame size or, beyond a few numbers per frame, with clip length.
+//! with frame size or, beyond a few numbers per frame, with clip length. A video
+//! longer than [`WHOLE_CLIP_UP_TO_S`] is measured in pass 2 from a key frame near
+//! its end ([`Decoding::NearTheEnd`], the span grown back until it holds the fits'
+//! motion), so a minutes-long clip costs about what its last seconds cost.
 
 use std::path::{Path, PathBuf};
 
@@ -46,6 +49,280 @@ const REPEAT_SAMPLE_STEP: usize = 2;
 
 /// The windows of the window-sensitivity table [s] (issue: 1, 0.5, 0.25, 0.1 s).
 pub const SENSITIVITY_WINDOWS_S: [f64; 4] = [1.0, 0.5, 0.25, 0.1];
+
+/// Clips up to this long [s, capture clock] are decoded whole: every clip the
+/// thesis and our renders analyse (under 5 s) gives the same result as before
+/// spans existed, and decoding a few seconds more costs little.
+pub const WHOLE_CLIP_UP_TO_S: f64 = 8.0;
+
+/// The first span decoded of a longer clip: its last this many seconds. With the
+/// disk halting in the clip's last 2 s, it holds the rest tail, the 1 s of the
+/// widest fit window and a margin.
+pub const FIRST_SPAN_S: f64 = 4.0;
+
+/// Turns of the rim's oscillation decoded before the widest fit window beyond the
+/// local fits' own window ([`SignalConfig::state_window_periods`]): one for the
+/// peak finder to see the first peak whole and the central difference of ψ̇ at
+/// it, one more for the turn counting's median interval.
+const LEAD_PERIODS: f64 = 2.0;
+
+/// How much of a clip `analyse` decodes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Decoding {
+    /// A span at the end of a video longer than [`WHOLE_CLIP_UP_TO_S`], found
+    /// from the container's index and grown back by key frames until it holds
+    /// the fits' motion and the rest tail; shorter clips and frame folders whole.
+    #[default]
+    NearTheEnd,
+    /// Every frame (`analyse --whole`).
+    Whole,
+}
+
+/// The frames an analysis decoded, and why those: recorded in the plan.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DecodedSpan {
+    /// The first decoded frame's number in the clip (0: the whole clip).
+    pub first_frame: usize,
+    /// The last decoded frame's number.
+    pub last_frame: usize,
+    /// Frames in the clip.
+    pub clip_frames: usize,
+    /// Capture time of the first decoded frame from the clip's first [s].
+    pub first_t_capture_s: f64,
+    /// Spans decoded before the last one held the motion the fits need, plus one.
+    pub attempts: usize,
+    /// Why this span: the clip was short, `--whole`, or what the span holds.
+    pub reason: String,
+}
+
+impl DecodedSpan {
+    /// Whether every frame of the clip was decoded.
+    pub fn is_whole(&self) -> bool {
+        self.first_frame == 0
+    }
+
+    /// One line for the terminal and the report.
+    pub fn summary(&self) -> String {
+        if self.is_whole() {
+            format!(
+                "decoded the whole clip ({} frames): {}",
+                self.clip_frames, self.reason
+            )
+        } else {
+            format!(
+                "decoded frames {}–{} of {} (from t = {:.3} s of the clip): {}; frame-skip \
+                 flags, repeated frames and plots cover these frames only (analyse --whole \
+                 for all)",
+                self.first_frame,
+                self.last_frame,
+                self.clip_frames,
+                self.first_t_capture_s,
+                self.reason
+            )
+        }
+    }
+}
+
+/// Where pass 2 starts: the container's index of a long video, read without
+/// decoding, and the capture time of each of its frames.
+struct SpanPlan {
+    /// The index, when a span may be decoded (`None`: the whole clip is).
+    index: Option<footage::StreamIndex>,
+    /// Capture time of every frame from the clip's first [s] (empty without index).
+    times: Vec<f64>,
+    clip_frames: usize,
+    /// Why the whole clip is decoded, when it is.
+    whole_reason: String,
+}
+
+impl SpanPlan {
+    /// Read the index of `source` (the packets' timestamps) unless `decoding` is
+    /// [`Decoding::Whole`], the clip is a frame folder or at most
+    /// [`WHOLE_CLIP_UP_TO_S`] long, or the index does not list the `expected`
+    /// frames.
+    fn new(
+        source: &mut FrameSource,
+        decoding: Decoding,
+        expected: usize,
+        fps: &footage::CaptureFps,
+    ) -> Result<Self, FootageError> {
+        let whole = |reason: String| SpanPlan {
+            index: None,
+            times: Vec::new(),
+            clip_frames: expected,
+            whole_reason: reason,
+        };
+        if decoding == Decoding::Whole {
+            return Ok(whole("--whole".into()));
+        }
+        let Some(index) = source.stream_index()? else {
+            return Ok(whole(
+                "a frame folder, or a video whose packets carry no timestamps".into(),
+            ));
+        };
+        let listed = index.container_times_s.len();
+        if listed != expected {
+            return Ok(whole(format!(
+                "the container's packets list {listed} frames, its frame count {expected}"
+            )));
+        }
+        let stamps: Vec<Option<f64>> = index.container_times_s.iter().copied().map(Some).collect();
+        let (times, _) = footage::frame_times(&stamps, &mut fps.clone());
+        let duration = times.last().copied().unwrap_or(0.0);
+        if duration <= WHOLE_CLIP_UP_TO_S {
+            return Ok(whole(format!(
+                "a {duration:.2} s clip (clips up to {WHOLE_CLIP_UP_TO_S} s are decoded whole)"
+            )));
+        }
+        Ok(SpanPlan {
+            index: Some(index),
+            times,
+            clip_frames: expected,
+            whole_reason: String::new(),
+        })
+    }
+
+    /// The key frame at or before the last frame at capture time `t` [s] (0
+    /// before the clip's first key frame, or without an index).
+    fn key_frame_at(&self, t: f64) -> usize {
+        let frame = self.times.partition_point(|&x| x <= t).saturating_sub(1);
+        self.key_frame_at_or_before(frame)
+    }
+
+    /// The first frame of the first span: the key frame before the clip's last
+    /// [`FIRST_SPAN_S`], or 0 for a whole clip.
+    fn first_span(&self) -> usize {
+        match self.times.last() {
+            Some(&end) if self.index.is_some() => self.key_frame_at(end - FIRST_SPAN_S),
+            _ => 0,
+        }
+    }
+
+    /// An earlier key frame to start from when the span from `first` may miss
+    /// motion the fits need, else `None`. The fits need the wider of the
+    /// analysis window (`window_s`) and the sensitivity table's 1 s before the
+    /// halt, plus the local fits' window and [`LEAD_PERIODS`] turns of the rim
+    /// before that, a turn measured between the span's first two peaks (the
+    /// longest: turns slow away from the halt). A span that failed to analyse
+    /// (`measured` is `None`: no halt, too few peaks) or that starts after that
+    /// time is grown back to that time, and at least to twice its length.
+    fn earlier_start(
+        &self,
+        first: usize,
+        measured: Option<&MeasuredSpan>,
+        window_s: f64,
+    ) -> Option<usize> {
+        let (Some(_), Some(&end)) = (&self.index, self.times.last()) else {
+            return None;
+        };
+        if first == 0 {
+            return None;
+        }
+        let doubled = end - 2.0 * (end - self.times[first]);
+        let widest = SENSITIVITY_WINDOWS_S
+            .iter()
+            .copied()
+            .fold(window_s, f64::max);
+        let wanted = match measured {
+            None => doubled,
+            Some(m) => {
+                let peaks = &m.series.peaks.peaks;
+                let needed = match peaks.as_slice() {
+                    [p0, p1, ..] => widest + (m.local_fit_periods + LEAD_PERIODS) * (p1.t - p0.t),
+                    _ => f64::INFINITY,
+                };
+                let span_start = m.frames.first().map_or(f64::INFINITY, |f| f.t);
+                if span_start <= -needed {
+                    return None;
+                }
+                (m.series.halt.t_phi - needed).min(doubled)
+            }
+        };
+        Some(self.key_frame_at_or_before(self.key_frame_at(wanted).min(first - 1)))
+    }
+
+    /// The key frame at or before frame `frame`.
+    fn key_frame_at_or_before(&self, frame: usize) -> usize {
+        self.index.as_ref().map_or(0, |index| {
+            let k = index.key_frames.partition_point(|&key| key <= frame);
+            k.checked_sub(1).map_or(0, |k| index.key_frames[k])
+        })
+    }
+
+    /// Frame `index` of a span must carry the container time the index lists
+    /// for it (`time_s`); otherwise the span's frames are not numbered as in
+    /// the clip.
+    fn check_frame(
+        &self,
+        clip: &Path,
+        index: usize,
+        time_s: Option<f64>,
+    ) -> Result<(), AnalyseError> {
+        let listed = self
+            .index
+            .as_ref()
+            .and_then(|i| i.container_times_s.get(index));
+        match (listed, time_s) {
+            (Some(&listed), Some(t)) if (listed - t).abs() <= 1e-9 => Ok(()),
+            _ => Err(AnalyseError::Clip {
+                path: clip.to_path_buf(),
+                reason: format!(
+                    "decoded frame {index} has container time {time_s:?} s, the container's \
+                     packets list {listed:?} s: its frames cannot be numbered from a seek \
+                     (analyse --whole)"
+                ),
+            }),
+        }
+    }
+
+    /// What was decoded: frames `first` to the end of the clip, after `attempts`
+    /// spans, `decoded` frames in all.
+    fn decoded(&self, first: usize, attempts: usize, decoded: usize) -> DecodedSpan {
+        let reason = if first == 0 {
+            if self.index.is_some() {
+                "the spans at its end did not hold the fits' motion and rest tail".into()
+            } else {
+                self.whole_reason.clone()
+            }
+        } else {
+            format!(
+                "the last {:.2} s of a {:.2} s clip hold the analysis window, the \
+                 sensitivity table's 1 s, the local fits' margin and the rest tail \
+                 ({attempts} span(s) tried)",
+                self.times[self.times.len() - 1] - self.times[first],
+                self.times[self.times.len() - 1]
+            )
+        };
+        DecodedSpan {
+            first_frame: first,
+            last_frame: (first + decoded).saturating_sub(1),
+            clip_frames: if first == 0 {
+                decoded
+            } else {
+                self.clip_frames
+            },
+            first_t_capture_s: self.times.get(first).copied().unwrap_or(0.0),
+            attempts,
+            reason,
+        }
+    }
+}
+
+/// Pass 2's measurements of one span, through the signal analysis.
+struct MeasuredSpan {
+    frames: Vec<FrameRecord>,
+    series: StateSeries,
+    fps: CaptureFps,
+    frame_times: FrameTiming,
+    warnings: Vec<String>,
+    highest: Option<(f64, f64, OwnedFrame)>,
+    rim: String,
+    rim_zero_row_px: f64,
+    scale: ScaleReport,
+    metres_per_px: f64,
+    /// Width of the local fits' window [turns of the rim].
+    local_fit_periods: f64,
+}
 
 /// Why a clip could not be analysed. Every message names the clip; vision errors
 /// name the frame.
@@ -80,7 +357,12 @@ pub struct ExperimentPlan {
     /// it was recorded.
     #[serde(default)]
     pub frame_times: Option<FrameTiming>,
+    /// Frames measured: the decoded span's.
     pub frames: usize,
+    /// Which frames were decoded and why (`None` in results written before spans
+    /// were decoded: the whole clip).
+    #[serde(default)]
+    pub decoded: Option<DecodedSpan>,
     /// Displayed frame width [px] (after `orientation`).
     pub width: usize,
     /// Displayed frame height [px].
@@ -448,6 +730,19 @@ pub fn analyse_clip(
     config: &ExperimentConfig,
     progress: &dyn Fn(usize, Option<usize>),
 ) -> Result<Experiment, AnalyseError> {
+    analyse_clip_decoding(clip, config, Decoding::NearTheEnd, progress)
+}
+
+/// [`analyse_clip`], decoding the whole clip or a span at its end (`decoding`).
+///
+/// # Errors
+/// As [`analyse_clip`].
+pub fn analyse_clip_decoding(
+    clip: &Path,
+    config: &ExperimentConfig,
+    decoding: Decoding,
+    progress: &dyn Fn(usize, Option<usize>),
+) -> Result<Experiment, AnalyseError> {
     let vision_err = |error| AnalyseError::Vision {
         path: clip.to_path_buf(),
         error,
@@ -455,7 +750,7 @@ pub fn analyse_clip(
     // One source serves both passes: the rest frames at the end, then every
     // frame from the start.
     let mut source = FrameSource::open(clip)?;
-    let mut fps = footage::resolve_capture_fps(
+    let fps = footage::resolve_capture_fps(
         config.fps,
         footage::container_capture_rate(clip),
         source.container_fps(),
@@ -464,8 +759,6 @@ pub fn analyse_clip(
         path: clip.to_path_buf(),
         reason,
     })?;
-    // The fps's own warnings come first, once the frame times have settled it.
-    let mut warnings = Vec::new();
     let params = config.disk_params();
     let vision_config = config.vision.clone().unwrap_or_default();
     let roi = vision_config.roi;
@@ -636,106 +929,127 @@ pub fn analyse_clip(
     drop(rest_sides);
     drop(rest);
 
-    // Pass 2: every frame, streamed. A side view reads only the band of columns
-    // about the centre line, so only that band is converted to colour.
-    source.seek(0)?;
-    if split.is_none() {
-        let x = roi.map_or(0, |r| r[0] as usize);
-        let mut band = gauge.band_columns();
-        if let Some(gap) = &gap_gauge {
-            let columns = gap.band_columns();
-            band = band.start.min(columns.start)..band.end.max(columns.end);
+    // Which frames pass 2 decodes: the whole clip, or a span at its end found
+    // from the container's index (see `SpanPlan`).
+    let window_s = config.window_s();
+    let plan_span = SpanPlan::new(&mut source, decoding, expected, &fps)?;
+
+    // Pass 2: the span's frames, streamed. A side view reads only the band of
+    // columns about the centre line, so only that band is converted to colour.
+    // Measures the frames from `first` to the end: rim heights, strip angles,
+    // frame times and the signal analysis.
+    let mut measure_span = |first: usize| -> Result<MeasuredSpan, AnalyseError> {
+        let mut warnings = Vec::new();
+        let mut fps = fps.clone();
+        match &plan_span.index {
+            Some(index) if first > 0 => source.seek_frame(first, index.container_times_s[first])?,
+            _ => source.seek(0)?,
         }
-        source.convert_only_columns(Some(x + band.start..x + band.end))?;
-    }
-    let mut strip_finder = colour_thresholds
-        .as_ref()
-        .map(|(t, s)| StripFinder::new(*t, *s));
-    let mut frames = Vec::with_capacity(expected);
-    let mut gaps = Vec::with_capacity(if gap_gauge.is_some() { expected } else { 0 });
-    let mut windows = Vec::with_capacity(if rest_window.is_some() { expected } else { 0 });
-    let band_columns = gauge.band_columns();
-    let mut repeats = footage::RepeatGauge::new();
-    let mut no_edge = 0usize;
-    // The frame with the highest rim so far, kept for the threshold diagnostic.
-    let mut highest: Option<(f64, f64, OwnedFrame)> = None;
-    while let Some(frame) = source.next_frame()? {
-        let index = frame.index;
-        let (side, plan) = side_view(&frame.view, roi, split, index).map_err(vision_err)?;
-        let mut new_highest = None;
-        let rim = gauge.measure(&side, index).map_err(vision_err)?;
-        if rest_window.is_some() {
-            let edge0 = match rim {
-                RimHeight::Edge { edge_row, .. } => Some(edge_row),
-                RimHeight::Contact => Some(cal.z_base),
-                RimHeight::NoEdge => None,
-            };
-            windows.push(edge0.and_then(|e| BandWindow::read(&side, &band_columns, e)));
-        }
-        let z_rim_px = match rim {
-            RimHeight::Edge { z_rim_px, edge_row } => {
-                if highest.as_ref().is_none_or(|(z, _, _)| z_rim_px > *z) {
-                    new_highest = Some((z_rim_px, edge_row));
-                }
-                Some(z_rim_px)
+        if split.is_none() {
+            let x = roi.map_or(0, |r| r[0] as usize);
+            let mut band = gauge.band_columns();
+            if let Some(gap) = &gap_gauge {
+                let columns = gap.band_columns();
+                band = band.start.min(columns.start)..band.end.max(columns.end);
             }
-            RimHeight::Contact => Some(0.0),
-            RimHeight::NoEdge => {
-                no_edge += 1;
-                None
-            }
-        };
-        if let Some(gauge) = &gap_gauge {
-            gaps.push(gauge.measure(&side));
+            source.convert_only_columns(Some(x + band.start..x + band.end))?;
         }
-        let beta_raw = match (&mut strip_finder, plan) {
-            (Some(finder), Some(plan)) => finder.measure(&plan, index).ok().map(|s| s.beta),
-            _ => None,
-        };
-        frames.push(FrameRecord {
-            index,
-            // Set from the container's timestamps once every frame is read.
-            t_capture: f64::NAN,
-            t: f64::NAN,
-            container_time_s: frame.container_time_s,
-            z_rim_px,
-            z_rim_m: None,
-            beta_raw,
+        let mut strip_finder = colour_thresholds
+            .as_ref()
+            .map(|(t, s)| StripFinder::new(*t, *s));
+        let span_frames = expected - first;
+        let mut frames = Vec::with_capacity(span_frames);
+        let mut gaps = Vec::with_capacity(if gap_gauge.is_some() { span_frames } else { 0 });
+        let mut windows = Vec::with_capacity(if rest_window.is_some() {
+            span_frames
+        } else {
+            0
         });
-        if index % 256 == 0 {
-            progress(index, Some(expected));
+        let band_columns = gauge.band_columns();
+        let mut repeats = footage::RepeatGauge::new();
+        let mut no_edge = 0usize;
+        // The frame with the highest rim so far, kept for the threshold diagnostic.
+        let mut highest: Option<(f64, f64, OwnedFrame)> = None;
+        while let Some(frame) = source.next_frame()? {
+            let index = frame.index;
+            if first > 0 {
+                plan_span.check_frame(clip, index, frame.container_time_s)?;
+            }
+            let (side, plan) = side_view(&frame.view, roi, split, index).map_err(vision_err)?;
+            let mut new_highest = None;
+            let rim = gauge.measure(&side, index).map_err(vision_err)?;
+            if rest_window.is_some() {
+                let edge0 = match rim {
+                    RimHeight::Edge { edge_row, .. } => Some(edge_row),
+                    RimHeight::Contact => Some(cal.z_base),
+                    RimHeight::NoEdge => None,
+                };
+                windows.push(edge0.and_then(|e| BandWindow::read(&side, &band_columns, e)));
+            }
+            let z_rim_px = match rim {
+                RimHeight::Edge { z_rim_px, edge_row } => {
+                    if highest.as_ref().is_none_or(|(z, _, _)| z_rim_px > *z) {
+                        new_highest = Some((z_rim_px, edge_row));
+                    }
+                    Some(z_rim_px)
+                }
+                RimHeight::Contact => Some(0.0),
+                RimHeight::NoEdge => {
+                    no_edge += 1;
+                    None
+                }
+            };
+            if let Some(gauge) = &gap_gauge {
+                gaps.push(gauge.measure(&side));
+            }
+            let beta_raw = match (&mut strip_finder, plan) {
+                (Some(finder), Some(plan)) => finder.measure(&plan, index).ok().map(|s| s.beta),
+                _ => None,
+            };
+            frames.push(FrameRecord {
+                index,
+                // Set from the container's timestamps once every frame is read.
+                t_capture: f64::NAN,
+                t: f64::NAN,
+                container_time_s: frame.container_time_s,
+                z_rim_px,
+                z_rim_m: None,
+                beta_raw,
+            });
+            if index % 256 == 0 {
+                progress(index - first, Some(span_frames));
+            }
+            repeats.push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
+            if let Some((z_rim_px, edge_row)) = new_highest {
+                // The diagnostic shows the whole side view: convert the other columns.
+                let whole = source.whole_frame()?;
+                let side = side_view(&whole, roi, split, index).map_err(vision_err)?.0;
+                highest = Some((z_rim_px, edge_row, OwnedFrame::copy(index, &side)));
+            }
         }
-        repeats.push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
-        if let Some((z_rim_px, edge_row)) = new_highest {
-            // The diagnostic shows the whole side view: convert the other columns.
-            let whole = source.whole_frame()?;
-            let side = side_view(&whole, roi, split, index).map_err(vision_err)?.0;
-            highest = Some((z_rim_px, edge_row, OwnedFrame::copy(index, &side)));
-        }
-    }
-    progress(frames.len(), Some(expected));
-    if let Some(gauge) = &gap_gauge {
-        let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
-        if gauge.resolve(&mut heights, &gaps).is_none() {
-            warnings.push(
+        progress(frames.len(), Some(span_frames));
+        if let Some(gauge) = &gap_gauge {
+            let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
+            if gauge.resolve(&mut heights, &gaps).is_none() {
+                warnings.push(
                 "the rim never lifts 2.5–4.5 px, so the darkness of the gap per pixel is unknown: \
                  rim heights below 2 px come from the edge alone and read up to 0.2 px high"
                     .into(),
             );
+            }
+            for (record, z) in frames.iter_mut().zip(heights) {
+                record.z_rim_px = z;
+            }
         }
-        for (record, z) in frames.iter_mut().zip(heights) {
-            record.z_rim_px = z;
-        }
-    }
-    let first_pass = match side_config.plate {
-        Plate::Dark => "edge and gap darkness (vision::rim, vision::gap)",
-        Plate::Light => "edge (vision::rim): the second edge from the bottom on a light plate",
-    };
-    let mut rim_zero_row_px = cal.z_base;
-    let rim = match &rest_window {
-        Some((rest_window, edge0)) => {
-            let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
-            let refit = match side_config.plate {
+        let first_pass = match side_config.plate {
+            Plate::Dark => "edge and gap darkness (vision::rim, vision::gap)",
+            Plate::Light => "edge (vision::rim): the second edge from the bottom on a light plate",
+        };
+        let mut rim_zero_row_px = cal.z_base;
+        let rim = match &rest_window {
+            Some((rest_window, edge0)) => {
+                let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
+                let refit = match side_config.plate {
                 Plate::Dark => vision::remeasure_dark_rim(
                     &mut heights,
                     &windows,
@@ -773,123 +1087,183 @@ pub fn analyse_clip(
                         })
                 }
             };
-            match refit {
-                Ok((description, rest_edge)) => {
-                    for (record, z) in frames.iter_mut().zip(heights) {
-                        record.z_rim_px = z;
+                match refit {
+                    Ok((description, rest_edge)) => {
+                        for (record, z) in frames.iter_mut().zip(heights) {
+                            record.z_rim_px = z;
+                        }
+                        rim_zero_row_px = rest_edge;
+                        description
                     }
-                    rim_zero_row_px = rest_edge;
-                    description
+                    Err(reason) => format!("{first_pass}: {reason}"),
                 }
-                Err(reason) => format!("{first_pass}: {reason}"),
             }
+            None => first_pass.into(),
+        };
+        // Duplicated and interpolated frames show no capture of their own: no rim
+        // height or strip angle from them reaches the fits.
+        let repeated = repeats.repeated(REST_FRAMES);
+        drop(repeats);
+        for r in &repeated {
+            frames[r.index].z_rim_px = None;
+            frames[r.index].beta_raw = None;
         }
-        None => first_pass.into(),
-    };
-    // Duplicated and interpolated frames show no capture of their own: no rim
-    // height or strip angle from them reaches the fits.
-    let repeated = repeats.repeated(REST_FRAMES);
-    drop(repeats);
-    for r in &repeated {
-        frames[r.index].z_rim_px = None;
-        frames[r.index].beta_raw = None;
-    }
-    if !repeated.is_empty() {
-        let count = |kind| repeated.iter().filter(|r| r.kind == kind).count();
-        let list: Vec<String> = repeated.iter().map(|r| r.index.to_string()).collect();
-        warnings.push(format!(
-            "{} duplicated and {} interpolated frame(s) (frames {}) show no capture of \
+        if !repeated.is_empty() {
+            let count = |kind| repeated.iter().filter(|r| r.kind == kind).count();
+            let list: Vec<String> = repeated
+                .iter()
+                .map(|r| frames[r.index].index.to_string())
+                .collect();
+            warnings.push(format!(
+                "{} duplicated and {} interpolated frame(s) (frames {}) show no capture of \
              their own: left out of the fits",
-            count(footage::RepeatKind::Duplicated),
-            count(footage::RepeatKind::Interpolated),
-            list.join(", ")
-        ));
-    }
-    // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
-    // z_rim in metres once, after every correction of z_rim in px.
-    let scale = ScaleReport::new(&calibration.calibration, &params);
-    let metres_per_px = scale.metres_per_px();
-    if !scale.at_near_rim() {
-        warnings.push(format!("scale from the {}", scale.used));
-    }
-    for record in &mut frames {
-        record.z_rim_m = record.z_rim_px.map(|z| z * metres_per_px);
-    }
-    if no_edge == frames.len() {
-        return Err(AnalyseError::Clip {
-            path: clip.to_path_buf(),
-            reason: format!(
-                "no rim edge found on the centre line in any of the {} frames (γ = {:.1})",
-                frames.len(),
-                calibration.threshold.gamma
-            ),
-        });
-    }
-    if no_edge > 0 {
-        warnings.push(format!(
-            "no rim edge found in {no_edge} of {} frames",
-            frames.len()
-        ));
-    }
+                count(footage::RepeatKind::Duplicated),
+                count(footage::RepeatKind::Interpolated),
+                list.join(", ")
+            ));
+        }
+        // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
+        // z_rim in metres once, after every correction of z_rim in px.
+        let scale = ScaleReport::new(&calibration.calibration, &params);
+        let metres_per_px = scale.metres_per_px();
+        if !scale.at_near_rim() {
+            warnings.push(format!("scale from the {}", scale.used));
+        }
+        for record in &mut frames {
+            record.z_rim_m = record.z_rim_px.map(|z| z * metres_per_px);
+        }
+        if no_edge == frames.len() {
+            return Err(AnalyseError::Clip {
+                path: clip.to_path_buf(),
+                reason: format!(
+                    "no rim edge found on the centre line in any of the {} frames (γ = {:.1})",
+                    frames.len(),
+                    calibration.threshold.gamma
+                ),
+            });
+        }
+        if no_edge > 0 {
+            warnings.push(format!(
+                "no rim edge found in {no_edge} of {} frames",
+                frames.len()
+            ));
+        }
 
-    // Frame times: the container's timestamps on the capture clock, else index / fps.
-    let stamps: Vec<Option<f64>> = frames.iter().map(|f| f.container_time_s).collect();
-    let (t, frame_times) = footage::frame_times(&stamps, &mut fps);
-    drop(stamps);
-    for (record, &t) in frames.iter_mut().zip(&t) {
-        record.t_capture = t;
-    }
-    warnings.splice(0..0, fps.warnings.iter().cloned());
+        // Frame times: the container's timestamps on the capture clock, else index /
+        // fps; a span's from the timestamps of the whole clip (its index), so that
+        // they count from the clip's first frame.
+        let (t, frame_times) = match &plan_span.index {
+            Some(index) if first > 0 => {
+                let stamps: Vec<Option<f64>> =
+                    index.container_times_s.iter().copied().map(Some).collect();
+                let (mut t, timing) = footage::frame_times(&stamps, &mut fps);
+                (t.split_off(first), timing)
+            }
+            _ => {
+                let stamps: Vec<Option<f64>> = frames.iter().map(|f| f.container_time_s).collect();
+                footage::frame_times(&stamps, &mut fps)
+            }
+        };
+        for (record, &t) in frames.iter_mut().zip(&t) {
+            record.t_capture = t;
+        }
+        warnings.splice(0..0, fps.warnings.iter().cloned());
 
-    // Signal.
-    let z: Vec<f64> = frames
-        .iter()
-        .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
-        .collect();
-    let beta: Option<Vec<f64>> = strip_finder.as_ref().map(|_| {
-        frames
+        // Signal.
+        let z: Vec<f64> = frames
             .iter()
-            .map(|f| f.beta_raw.unwrap_or(f64::NAN))
-            .collect()
-    });
-    let window_s = config.window_s();
-    let signal_config = SignalConfig {
-        window_s,
-        // The rim is located to about 0.01 px on lossless frames (the edge, and
-        // the gap's darkness below 2 px), so a clean rest tail can have almost no
-        // spread: floor the noise at 0.02 px (motion from 0.1 px on), and ask a
-        // peak to stand 0.2 px above its surroundings.
-        noise_floor: 0.02 * metres_per_px,
-        min_prominence: 0.2 * metres_per_px,
-        ..SignalConfig::default()
-    };
-    let model = ThesisRim {
-        radius: params.radius,
-    };
-    let signal_err = |error| signal_error(clip, &fps, error);
-    let mut series =
-        signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;
-    for r in &repeated {
-        let (statistic, neighbours) = (r.statistic, r.neighbours);
-        series.flags.push(signal::FrameFlag {
-            index: r.index,
-            t: series.halt.shifted_t[r.index],
-            reason: match r.kind {
-                footage::RepeatKind::Duplicated => signal::SkipReason::DuplicatedFrame {
-                    step: statistic,
-                    neighbours,
-                },
-                footage::RepeatKind::Interpolated => signal::SkipReason::InterpolatedFrame {
-                    residual: statistic,
-                    neighbours,
-                },
-            },
+            .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
+            .collect();
+        let beta: Option<Vec<f64>> = strip_finder.as_ref().map(|_| {
+            frames
+                .iter()
+                .map(|f| f.beta_raw.unwrap_or(f64::NAN))
+                .collect()
         });
-    }
-    series.flags.sort_by_key(|f| f.index);
-    for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
-        record.t = *shifted;
-    }
+        let signal_config = SignalConfig {
+            window_s,
+            // The rim is located to about 0.01 px on lossless frames (the edge, and
+            // the gap's darkness below 2 px), so a clean rest tail can have almost no
+            // spread: floor the noise at 0.02 px (motion from 0.1 px on), and ask a
+            // peak to stand 0.2 px above its surroundings.
+            noise_floor: 0.02 * metres_per_px,
+            min_prominence: 0.2 * metres_per_px,
+            ..SignalConfig::default()
+        };
+        let model = ThesisRim {
+            radius: params.radius,
+        };
+        let signal_err = |error| signal_error(clip, &fps, error);
+        let mut series =
+            signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;
+        for r in &repeated {
+            let (statistic, neighbours) = (r.statistic, r.neighbours);
+            series.flags.push(signal::FrameFlag {
+                index: r.index,
+                t: series.halt.shifted_t[r.index],
+                reason: match r.kind {
+                    footage::RepeatKind::Duplicated => signal::SkipReason::DuplicatedFrame {
+                        step: statistic,
+                        neighbours,
+                    },
+                    footage::RepeatKind::Interpolated => signal::SkipReason::InterpolatedFrame {
+                        residual: statistic,
+                        neighbours,
+                    },
+                },
+            });
+        }
+        series.flags.sort_by_key(|f| f.index);
+        for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
+            record.t = *shifted;
+        }
+        Ok(MeasuredSpan {
+            frames,
+            series,
+            fps,
+            frame_times,
+            warnings,
+            highest,
+            rim,
+            rim_zero_row_px,
+            scale,
+            metres_per_px,
+            local_fit_periods: signal_config.state_window_periods,
+        })
+    };
+    let mut first = plan_span.first_span();
+    let mut attempts = 1;
+    let measured = loop {
+        let result = measure_span(first);
+        let earlier = match &result {
+            Ok(m) => plan_span.earlier_start(first, Some(m), window_s),
+            Err(AnalyseError::Signal { .. } | AnalyseError::Clip { .. }) => {
+                plan_span.earlier_start(first, None, window_s)
+            }
+            Err(_) => None,
+        };
+        match earlier {
+            Some(earlier) => {
+                first = earlier;
+                attempts += 1;
+            }
+            None => break result?,
+        }
+    };
+    let MeasuredSpan {
+        frames,
+        series,
+        fps,
+        frame_times,
+        mut warnings,
+        highest,
+        rim,
+        rim_zero_row_px,
+        scale,
+        metres_per_px,
+        ..
+    } = measured;
+    let decoded = plan_span.decoded(first, attempts, frames.len());
     let window = (-window_s, 0.0);
     let in_window = signal::flags_within(&series.flags, window.0, window.1);
     let skips_in_window = in_window.len();
@@ -958,6 +1332,7 @@ pub fn analyse_clip(
         fps,
         frame_times: Some(frame_times),
         frames: frames.len(),
+        decoded: Some(decoded),
         width,
         height,
         orientation: source.orientation(),

@@ -79,6 +79,11 @@ enum Command {
         /// Replace an output folder that holds another clip's analysis.
         #[arg(long)]
         force: bool,
+        /// Decode every frame. By default a video longer than 8 s is decoded
+        /// from a key frame a few seconds before its end, grown back until the
+        /// fits' motion and the rest tail are in (the plan records the span).
+        #[arg(long)]
+        whole: bool,
         #[command(flatten)]
         overlay: OverlayArgs,
     },
@@ -509,12 +514,18 @@ fn run(cli: Cli) -> Result<Status> {
             config,
             out,
             force,
+            whole,
             overlay,
         } => done(run_analyse(
             &clip,
             config.as_deref(),
             out,
             force,
+            if whole {
+                analyse::Decoding::Whole
+            } else {
+                analyse::Decoding::NearTheEnd
+            },
             overlay.spec(),
         )),
         Command::Study(args) => run_study(&args),
@@ -547,6 +558,7 @@ fn run_analyse(
     config: Option<&Path>,
     out: Option<PathBuf>,
     force: bool,
+    decoding: analyse::Decoding,
     overlay: Option<OverlaySpec>,
 ) -> Result<()> {
     let root = clip.parent().unwrap_or(Path::new("."));
@@ -566,7 +578,7 @@ fn run_analyse(
         );
     }
     let bar = progress_bar(0, "frames");
-    let experiment = analyse::analyse_clip(clip, &config, &|done, total| {
+    let experiment = analyse::analyse_clip_decoding(clip, &config, decoding, &|done, total| {
         if let Some(bar) = &bar {
             bar.set_length(total.unwrap_or(0) as u64);
             bar.set_position(done as u64);
@@ -603,6 +615,9 @@ fn run_analyse(
             .as_ref()
             .map_or("index / fps", |f| f.source.label())
     );
+    if let Some(decoded) = &experiment.plan.decoded {
+        println!("{}", decoded.summary());
+    }
     println!("report: {}", out.join("index.html").display());
     Ok(())
 }

@@ -38,6 +38,13 @@ fn f(v: &Value) -> f64 {
 fn dark_plate_clip_matches_its_ground_truth() {
     let truth = truth("side-dark-n050.truth.json");
     let e = analyse("side-dark-n050.mp4", "fps = 480\n[fit]\nhalt = \"free\"\n");
+    // A clip under 8 s is decoded whole (issue 14 §3), as before spans.
+    let decoded = e.plan.decoded.as_ref().unwrap();
+    assert!(
+        decoded.is_whole() && decoded.reason.contains("decoded whole"),
+        "{decoded:?}"
+    );
+    assert_eq!(decoded.clip_frames, e.frames.len());
     let cal = &e.plan.calibration.calibration;
     let tc = &truth["calibration"];
     // The renderer puts pixel centres at integers, vision at c + ½: a truth

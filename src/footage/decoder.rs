@@ -337,12 +337,58 @@ impl VideoDecoder {
         }
     }
 
+    /// Every frame's timestamp [s from the stream's start, playback clock] in
+    /// display order, and whether the frame is a key frame, read from the
+    /// container's packets without decoding them; `None` when a packet carries
+    /// no presentation timestamp. The stream is rewound to its first frame.
+    pub(super) fn packet_stamps(&mut self) -> Result<Option<Vec<(f64, bool)>>, FootageError> {
+        // SAFETY: the format context is open and owned by `self.input`.
+        let ret = unsafe {
+            ffi::av_seek_frame(
+                self.input.as_mut_ptr(),
+                self.stream as i32,
+                self.start,
+                ffi::AVSEEK_FLAG_BACKWARD,
+            )
+        };
+        if ret < 0 {
+            return Err(self.error(format!(
+                "cannot rewind to read the packets' timestamps: {}",
+                ff::Error::from(ret)
+            )));
+        }
+        let mut stamps = Vec::with_capacity(self.frames.unwrap_or(0));
+        let mut complete = true;
+        for (stream, packet) in self.input.packets() {
+            if stream.index() != self.stream {
+                continue;
+            }
+            match packet.pts() {
+                Some(pts) => {
+                    stamps.push(((pts - self.start) as f64 * self.time_base, packet.is_key()))
+                }
+                None => complete = false,
+            }
+        }
+        stamps.sort_by(|a, b| a.0.total_cmp(&b.0));
+        self.seek(0)?;
+        Ok(complete.then_some(stamps))
+    }
+
     /// Position the stream so that [`Self::next`] returns the frame at `index`
     /// (counted from 0 at the container's frame rate).
     pub(super) fn seek(&mut self, index: usize) -> Result<(), FootageError> {
         let fps = self.fps.unwrap_or(1.0);
-        let target = self.start + (index as f64 / fps / self.time_base).round() as i64;
-        // Half a frame early: frames whose timestamp rounds to `index` count.
+        self.seek_time(index as f64 / fps, &format!("frame {index}"))
+    }
+
+    /// Position the stream so that [`Self::next`] returns the first frame whose
+    /// timestamp is at or after `time_s` [s from the stream's start] less half a
+    /// frame; `what` names the target in an error.
+    pub(super) fn seek_time(&mut self, time_s: f64, what: &str) -> Result<(), FootageError> {
+        let fps = self.fps.unwrap_or(1.0);
+        let target = self.start + (time_s / self.time_base).round() as i64;
+        // Half a frame early: frames whose timestamp rounds to the target count.
         let tolerance = (0.5 / fps / self.time_base).floor() as i64;
         // SAFETY: the format context is open and owned by `self.input`.
         let ret = unsafe {
@@ -354,10 +400,7 @@ impl VideoDecoder {
             )
         };
         if ret < 0 {
-            return Err(self.error(format!(
-                "cannot seek to frame {index}: {}",
-                ff::Error::from(ret)
-            )));
+            return Err(self.error(format!("cannot seek to {what}: {}", ff::Error::from(ret))));
         }
         self.decoder.flush();
         self.eof_sent = false;

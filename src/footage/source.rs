@@ -25,6 +25,17 @@ pub struct Frame<'a> {
     pub view: FrameView<'a>,
 }
 
+/// A video's frames as its container lists them, read without decoding
+/// ([`FrameSource::stream_index`]).
+#[derive(Clone, Debug)]
+pub struct StreamIndex {
+    /// Every frame's container timestamp [s, playback clock] in display order:
+    /// entry `i` is frame `i` of the clip.
+    pub container_times_s: Vec<f64>,
+    /// The frames decoding can start from (key frames), ascending.
+    pub key_frames: Vec<usize>,
+}
+
 /// The frames of one clip, decoded one at a time.
 pub struct FrameSource {
     path: PathBuf,
@@ -188,6 +199,40 @@ impl FrameSource {
     pub fn seek(&mut self, index: usize) -> Result<(), FootageError> {
         if let Reader::Video(decoder) = &mut self.reader {
             decoder.seek(index)?;
+        }
+        self.next = index;
+        Ok(())
+    }
+
+    /// Every frame's container timestamp and the key frames, from the packets
+    /// (demuxing, no decoding), so that a span of the clip can be decoded with
+    /// each frame's number in the whole clip known; `None` for a frame folder or
+    /// a video whose packets lack timestamps. Rewinds to the first frame.
+    ///
+    /// # Errors
+    /// `Unreadable` when the container refuses the rewind.
+    pub fn stream_index(&mut self) -> Result<Option<StreamIndex>, FootageError> {
+        let Reader::Video(decoder) = &mut self.reader else {
+            return Ok(None);
+        };
+        let stamps = decoder.packet_stamps()?;
+        self.next = 0;
+        Ok(stamps.map(|stamps| StreamIndex {
+            container_times_s: stamps.iter().map(|s| s.0).collect(),
+            key_frames: (0..stamps.len()).filter(|&i| stamps[i].1).collect(),
+        }))
+    }
+
+    /// Skip to frame `index` of a video whose container time is `time_s` (from
+    /// [`Self::stream_index`]): the next frame returned is that frame, numbered
+    /// `index`. Seeking by time lands on the right frame in a variable-rate clip,
+    /// where [`Self::seek`]'s index / average fps would not.
+    ///
+    /// # Errors
+    /// `Unreadable` when the container refuses the seek.
+    pub fn seek_frame(&mut self, index: usize, time_s: f64) -> Result<(), FootageError> {
+        if let Reader::Video(decoder) = &mut self.reader {
+            decoder.seek_time(time_s, &format!("frame {index} ({time_s} s)"))?;
         }
         self.next = index;
         Ok(())

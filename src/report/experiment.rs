@@ -115,6 +115,9 @@ pub fn write_experiment(
     let at = |v: Option<&Vec<f64>>, i: usize| {
         v.and_then(|v| v.get(i).copied()).filter(|x| x.is_finite())
     };
+    // The series count frames from the first decoded one; the files give each
+    // frame's number in the clip.
+    let frame_number = |position: usize| e.frames.get(position).map_or(position, |f| f.index);
     let frame_rows: Vec<FrameRow> = e
         .frames
         .iter()
@@ -163,7 +166,7 @@ pub fn write_experiment(
         .states
         .iter()
         .map(|s| StateRow {
-            index: s.index,
+            index: frame_number(s.index),
             t_s: s.t,
             phi_rad: s.phi,
             sigma_phi_rad: s.sigma_phi,
@@ -181,7 +184,7 @@ pub fn write_experiment(
         .flags
         .iter()
         .map(|f| FlagRow {
-            index: f.index,
+            index: frame_number(f.index),
             t_s: f.t,
             reason: format!("{:?}", f.reason),
         })
@@ -342,6 +345,13 @@ fn experiment_page(
             format!("{} ({} × {} px)", plan.frames, plan.width, plan.height),
         ],
         vec![
+            "decoded".into(),
+            plan.decoded.as_ref().map_or_else(
+                || "the whole clip (not recorded)".into(),
+                crate::analyse::DecodedSpan::summary,
+            ),
+        ],
+        vec![
             "orientation".into(),
             format!(
                 "{} (the container's display matrix, applied to every frame)",
@@ -445,7 +455,10 @@ fn experiment_page(
         .iter()
         .map(|f| {
             vec![
-                f.index.to_string(),
+                e.frames
+                    .get(f.index)
+                    .map_or(f.index, |r| r.index)
+                    .to_string(),
                 format!("{:.5}", f.t),
                 format!("{:?}", f.reason),
             ]
