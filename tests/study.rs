@@ -183,9 +183,13 @@ fn published_tables_are_written() {
     }
 }
 
-/// The study page loads in headless Chromium with no console messages (the pages
-/// carry no scripts, so any message is an error). Skipped, with a message, when
-/// Chromium is not installed (`scripts/setup-deps --tests` installs it).
+/// The study pages load in headless Chromium with no console messages (the study
+/// pages carry no scripts; an experiment page's scripts log nothing, so any
+/// message is an error), and an experiment page's overlay video plays: after
+/// Chromium's virtual time has run, the page's script has recorded the
+/// `<video>`'s duration (`data-duration`, as long as overlay.json's frames at its rate)
+/// and no media error (`data-error`). Skipped, with a message, when Chromium is
+/// not installed (`scripts/setup-deps --tests` installs it).
 #[test]
 fn study_page_loads_in_headless_chromium_without_errors() {
     let Some(chromium) = ["chromium", "chromium-browser", "google-chrome"]
@@ -221,6 +225,8 @@ fn study_page_loads_in_headless_chromium_without_errors() {
                 "--disable-gpu",
                 "--enable-logging=stderr",
                 "--v=0",
+                // Lets the video's metadata load before the DOM is dumped.
+                "--virtual-time-budget=5000",
                 "--dump-dom",
                 &url,
             ])
@@ -234,6 +240,34 @@ fn study_page_loads_in_headless_chromium_without_errors() {
         let log = String::from_utf8_lossy(&out.stderr);
         let console: Vec<&str> = log.lines().filter(|l| l.contains("CONSOLE")).collect();
         assert!(console.is_empty(), "{page}: console messages: {console:#?}");
+        if page.contains("experiments") {
+            let video = dom
+                .split("<video")
+                .nth(1)
+                .and_then(|v| v.split('>').next())
+                .unwrap_or_else(|| panic!("{page}: no <video> element"));
+            assert!(
+                !video.contains("data-error"),
+                "{page}: media error: {video}"
+            );
+            let duration: f64 = video
+                .split("data-duration=\"")
+                .nth(1)
+                .and_then(|d| d.split('"').next())
+                .and_then(|d| d.parse().ok())
+                .unwrap_or_else(|| panic!("{page}: the video reports no duration: {video}"));
+            let index: Value = serde_json::from_str(
+                &std::fs::read_to_string(dir.path().join(page).with_file_name("overlay.json"))
+                    .unwrap(),
+            )
+            .unwrap();
+            let frames = index["frames"].as_array().unwrap().len() as f64;
+            let fps = index["playback_fps"].as_f64().unwrap();
+            assert!(
+                (duration - frames / fps).abs() < 1.5 / fps,
+                "{page}: duration {duration} s, overlay.json: {frames} frames at {fps} frames/s"
+            );
+        }
     }
 }
 

@@ -4,8 +4,9 @@
 //!
 //! Coordinates follow `vision`: pixel `y` of a frame covers rows [y, y + 1), so an
 //! edge at 10.0 lies between pixels 9 and 10. A window shows the frame rectangle
-//! from (`src_x`, `src_y`) enlarged `zoom` times at canvas (`dst_x`, `dst_y`): the
-//! frame point (x, y) lands at (dst_x + zoom (x − src_x), dst_y + zoom (y − src_y)).
+//! from (`src_x`, `src_y`) at canvas (`dst_x`, `dst_y`), scaled s = `zoom` /
+//! `shrink` times (enlarged by repeating pixels, or shrunk by averaging blocks):
+//! the frame point (x, y) lands at (dst_x + s (x − src_x), dst_y + s (y − src_y)).
 //! Lines along the rows and columns are anti-aliased by their area, so a line at a
 //! fractional row is drawn there, not at the nearest pixel.
 
@@ -29,14 +30,29 @@ pub struct Window {
     /// Where it starts on the canvas [canvas px].
     pub dst_x: u32,
     pub dst_y: u32,
-    /// Canvas pixels per frame pixel.
+    /// Canvas pixels per frame pixel along each axis (1 when shrunk).
     pub zoom: u32,
+    /// Frame pixels per canvas pixel along each axis, averaged (1 when enlarged):
+    /// the context views of large frames are shown at half size or less, so the
+    /// overlay video stays small to encode.
+    pub shrink: u32,
 }
 
 impl Window {
+    /// Canvas pixels per frame pixel: `zoom` / `shrink`.
+    pub fn scale(&self) -> f64 {
+        f64::from(self.zoom) / f64::from(self.shrink)
+    }
+
+    /// The window's size on the canvas [canvas px].
+    pub fn canvas_size(&self) -> (u32, u32) {
+        let size = |n: usize| (n as u32 / self.shrink) * self.zoom;
+        (size(self.width), size(self.height))
+    }
+
     /// Canvas point of the frame point (x, y) [frame px, `vision` convention].
     pub fn to_canvas(&self, x: f64, y: f64) -> (f64, f64) {
-        let z = f64::from(self.zoom);
+        let z = self.scale();
         (
             f64::from(self.dst_x) + z * (x - self.src_x as f64),
             f64::from(self.dst_y) + z * (y - self.src_y as f64),
@@ -45,7 +61,7 @@ impl Window {
 
     /// Frame point of the canvas point (x, y): the inverse of [`Self::to_canvas`].
     pub fn to_frame(&self, x: f64, y: f64) -> (f64, f64) {
-        let z = f64::from(self.zoom);
+        let z = self.scale();
         (
             self.src_x as f64 + (x - f64::from(self.dst_x)) / z,
             self.src_y as f64 + (y - f64::from(self.dst_y)) / z,
@@ -54,18 +70,23 @@ impl Window {
 
     /// The window's extent on the canvas: x0, y0, x1, y1 (exclusive).
     fn extent(&self) -> (f64, f64, f64, f64) {
-        let z = self.zoom as usize;
+        let (w, h) = self.canvas_size();
         (
             f64::from(self.dst_x),
             f64::from(self.dst_y),
-            f64::from(self.dst_x) + (z * self.width) as f64,
-            f64::from(self.dst_y) + (z * self.height) as f64,
+            f64::from(self.dst_x + w),
+            f64::from(self.dst_y + h),
         )
     }
 
     /// Copies the window's rectangle of `frame` onto the canvas, each pixel
-    /// repeated `zoom` × `zoom` times.
+    /// repeated `zoom` × `zoom` times, or each block of `shrink` × `shrink`
+    /// pixels averaged into one.
     pub fn paint(&self, frame: &FrameView, image: &mut RgbImage) {
+        if self.shrink > 1 {
+            self.paint_shrunk(frame, image);
+            return;
+        }
         let z = self.zoom as usize;
         let width = self.width.min(frame.width.saturating_sub(self.src_x));
         let height = self.height.min(frame.height.saturating_sub(self.src_y));
@@ -90,6 +111,47 @@ impl Window {
                 let row = dst_y + z * y + k;
                 let start = 3 * (row * canvas_width + dst_x);
                 buffer[start..start + line.len()].copy_from_slice(&line);
+            }
+        }
+    }
+
+    /// [`Self::paint`] for a shrunk window: the mean of each block, rounded.
+    fn paint_shrunk(&self, frame: &FrameView, image: &mut RgbImage) {
+        let s = self.shrink as usize;
+        let (w, h) = self.canvas_size();
+        let width = (w as usize).min(frame.width.saturating_sub(self.src_x) / s);
+        let height = (h as usize).min(frame.height.saturating_sub(self.src_y) / s);
+        let canvas_width = image.width() as usize;
+        let (dst_x, dst_y) = (self.dst_x as usize, self.dst_y as usize);
+        let order = match frame.order {
+            ChannelOrder::Bgr => [2, 1, 0],
+            ChannelOrder::Rgb => [0, 1, 2],
+        };
+        let buffer: &mut [u8] = image;
+        // Sums in the frame's channel order, each row of blocks at a time.
+        let mut sums = vec![0u32; 3 * width];
+        // The mean by a multiplication (a division per sample costs as much as
+        // the rest of the copy).
+        let inverse = 1.0 / (s * s) as f32;
+        for y in 0..height {
+            sums.fill(0);
+            for dy in 0..s {
+                let row = self.src_y + s * y + dy;
+                let src = &frame.row(row)[3 * self.src_x..3 * (self.src_x + s * width)];
+                for (sum, block) in sums.chunks_exact_mut(3).zip(src.chunks_exact(3 * s)) {
+                    for p in block.chunks_exact(3) {
+                        sum[0] += u32::from(p[0]);
+                        sum[1] += u32::from(p[1]);
+                        sum[2] += u32::from(p[2]);
+                    }
+                }
+            }
+            let start = 3 * ((dst_y + y) * canvas_width + dst_x);
+            let out = &mut buffer[start..start + 3 * width];
+            for (pixel, sum) in out.chunks_exact_mut(3).zip(sums.chunks_exact(3)) {
+                for (c, &k) in order.iter().enumerate() {
+                    pixel[c] = (sum[k] as f32 * inverse + 0.5) as u8;
+                }
             }
         }
     }
@@ -201,7 +263,7 @@ impl Window {
                 }
                 let (fx, fy) = (origin.0 as f64 + x as f64, origin.1 as f64 + y as f64);
                 let (cx, cy) = self.to_canvas(fx, fy);
-                let z = f64::from(self.zoom);
+                let z = self.scale();
                 let (ex0, ey0, ex1, ey1) = self.extent();
                 fill_box(
                     image,
@@ -280,6 +342,7 @@ mod tests {
             dst_x: 0,
             dst_y: 4,
             zoom: 4,
+            shrink: 1,
         };
         for y in [25.0, 25.13, 25.5, 31.87] {
             let mut image = RgbImage::new(80, 90);

@@ -55,6 +55,8 @@ const BACKGROUND: Rgb<u8> = Rgb([20, 20, 20]);
 const HEADER_PX: u32 = 62;
 /// Text size in the header [px].
 const TEXT_PX: u32 = 14;
+/// Widest context (side, plan) view on the canvas before it is shrunk [canvas px].
+const CONTEXT_PX: usize = 360;
 
 /// Which part of a clip the overlay shows, and how slowly.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -156,8 +158,16 @@ impl Layout {
         let x1 = clamp((c.x_r + 0.12 * diameter).ceil(), view_w).max(x0 + 1);
         let y0 = clamp((c.z_t - 0.35 * diameter).floor(), side_h - 1);
         let y1 = clamp((c.z_base + 0.12 * diameter + thickness).ceil(), side_h).max(y0 + 1);
-        let (side_w, side_rows) = (x1 - x0, y1 - y0);
-        let zoom = (360 / side_w as u32).clamp(1, 4);
+        // Side views wider than CONTEXT_PX are shrunk by a whole factor (their
+        // size trimmed to a multiple of it), narrower ones enlarged up to 4 ×.
+        let (zoom, shrink) = if x1 - x0 > CONTEXT_PX {
+            (1, (x1 - x0).div_ceil(CONTEXT_PX))
+        } else {
+            ((CONTEXT_PX / (x1 - x0)).clamp(1, 4) as u32, 1)
+        };
+        let trim = |n: usize| (n - n % shrink).max(shrink);
+        let (side_w, side_rows) = (trim(x1 - x0), trim(y1 - y0));
+        let shrink = shrink as u32;
         let side = Window {
             name: "side view",
             src_x: ox + x0,
@@ -167,19 +177,22 @@ impl Layout {
             dst_x: 0,
             dst_y: HEADER_PX,
             zoom,
+            shrink,
         };
+        let (left_w, side_h_canvas) = side.canvas_size();
         let plan_window = plan.split_row.map(|(row, _)| Window {
             name: "plan view",
             src_x: ox,
             src_y: oy + row,
-            width: view_w,
-            height: view_h - row,
+            width: trim(view_w),
+            height: trim(view_h - row),
             dst_x: 0,
-            dst_y: HEADER_PX + zoom * side_rows as u32,
+            dst_y: HEADER_PX + side_h_canvas,
             zoom,
+            shrink,
         });
-        // The centre band, 8 columns either side, from 5 px above the highest rim
-        // to 6 px below the rest edge.
+        // The centre band at full resolution, enlarged: 8 columns either side,
+        // from 5 px above the highest rim to 6 px below the rest edge.
         let zero = plan.rim_edge_row(0.0);
         let centre = c.x_centre().floor();
         let half = plan.band_half_width_px as f64 + 8.0;
@@ -187,27 +200,23 @@ impl Layout {
         let bx1 = clamp(centre + half + 1.0, view_w).max(bx0 + 1);
         let by0 = clamp((zero - z_max_px.max(4.0) - 5.0).floor(), side_h - 1);
         let by1 = clamp((zero + 6.0).ceil(), side_h).max(by0 + 1);
-        let band_zoom = ((zoom as usize * side_rows / (by1 - by0)) as u32).clamp(2, 16);
+        let band_zoom = (side_h_canvas / (by1 - by0) as u32).clamp(2, 16);
         let band = Window {
             name: "centre band, enlarged",
             src_x: ox + bx0,
             src_y: oy + by0,
             width: bx1 - bx0,
             height: by1 - by0,
-            dst_x: zoom * side_w as u32 + 4,
+            dst_x: left_w + 4,
             dst_y: HEADER_PX,
             zoom: band_zoom,
+            shrink: 1,
         };
         let even = |v: u32| v + v % 2;
-        let left_w = zoom * side_w as u32;
-        let plan_w = plan_window.map_or(0, |p| p.zoom * p.width as u32);
-        let width = even(
-            (left_w + 4 + band_zoom * band.width as u32)
-                .max(plan_w)
-                .max(480),
-        );
-        let left_h = zoom * side_rows as u32 + plan_window.map_or(0, |p| p.zoom * p.height as u32);
-        let height = even(HEADER_PX + left_h.max(band_zoom * band.height as u32));
+        let (band_w, band_h) = band.canvas_size();
+        let (plan_w, plan_h) = plan_window.map_or((0, 0), |p| p.canvas_size());
+        let width = even((left_w + 4 + band_w).max(plan_w).max(480));
+        let height = even(HEADER_PX + (side_h_canvas + plan_h).max(band_h));
         Self {
             width,
             height,

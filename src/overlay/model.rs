@@ -431,10 +431,7 @@ fn side_by_side(
     (ox, oy): (f64, f64),
 ) -> Result<RgbImage, String> {
     let side = layout.side;
-    let (w, h) = (
-        side.zoom * side.width as u32,
-        side.zoom * side.height as u32,
-    );
+    let (w, h) = side.canvas_size();
     let header = side.dst_y;
     let gap = 6;
     let title = 30;

@@ -315,6 +315,8 @@ fn experiment_page(
     let read_svg = |name: &str| std::fs::read_to_string(dir.join(name)).ok();
     let series_svg = read_svg("series.svg");
     let states_svg = read_svg("states.svg");
+    let frame_times: Vec<f64> = e.frames.iter().map(|f| f.t).collect();
+    let state_times: Vec<f64> = e.series.states.iter().map(|s| s.t).collect();
     let plan = &e.plan;
     let c = &plan.calibration.calibration;
     let fits: Vec<&EnergyFit> = std::iter::once(&e.peaks_fit)
@@ -491,8 +493,15 @@ fn experiment_page(
         h2 { "Window sensitivity (eq. 3.8 at peaks)" }
         (table(&["window", "n", "95 % CI", "points"], &window_rows, |_, _| false))
         h2 { "Series" }
-        @if let Some(svg) = &series_svg { (svg_figure(svg, "Rim height and, for two-view clips, the strip angle and its rate.")) }
-        @if let Some(svg) = &states_svg { (svg_figure(svg, "Per-frame φ, ψ, ψ̇ from local fits of the rim-height model.")) }
+        @if overlay.is_some() {
+            p class="note" { "Click a series plot at an instant inside the overlay video's span: the video below stops at the frame nearest it." }
+        }
+        @if let Some(svg) = &series_svg {
+            (frame_linked(svg, &frame_times, overlay, "Rim height and, for two-view clips, the strip angle and its rate."))
+        }
+        @if let Some(svg) = &states_svg {
+            (frame_linked(svg, &state_times, overlay, "Per-frame φ, ψ, ψ̇ from local fits of the rim-height model."))
+        }
         @if let Some(overlay) = overlay {
             (footage_section(e, overlay, dir))
         }
@@ -516,6 +525,28 @@ fn experiment_page(
     Ok(page(&title, body))
 }
 
+/// A series plot (SVG of [`time_panels`]) whose instants lead to the overlay
+/// video's frames: with an overlay, the figure carries its time axis
+/// (`data-t0`, `data-t1` at SVG x `data-x0`, `data-x1`) and a click seeks the
+/// video to the frame nearest the clicked instant ([`SHOW_FRAME_JS`]).
+fn frame_linked(
+    svg: &str,
+    t: &[f64],
+    overlay: Option<&OverlayIndex>,
+    caption: &str,
+) -> maud::Markup {
+    let (t0, t1, x0, x1) = super::plot::time_axis_px(t);
+    maud::html! {
+        @if overlay.is_some() {
+            div class="to-frame" data-t0=(t0) data-t1=(t1) data-x0=(x0) data-x1=(x1) {
+                (svg_figure(svg, caption))
+            }
+        } @else {
+            (svg_figure(svg, caption))
+        }
+    }
+}
+
 /// Seeks the overlay video to its frame `k` and pauses there; records the
 /// video's duration (`data-duration`) once it is known, or shows why it cannot
 /// play (`data-error`, the MediaError code, and a note to open the file itself).
@@ -525,6 +556,23 @@ function showFrame(k, fps) {
   v.pause();
   v.currentTime = (k + 0.5) / fps;
   v.scrollIntoView({block: 'center'});
+}
+function linkPlots(times, fps) {
+  const step = times.length > 1 ? (times[times.length - 1] - times[0]) / (times.length - 1) : 1;
+  for (const div of document.querySelectorAll('.to-frame')) {
+    const svg = div.querySelector('svg');
+    const d = div.dataset;
+    svg.style.cursor = 'crosshair';
+    svg.addEventListener('click', (ev) => {
+      const p = svg.createSVGPoint();
+      p.x = ev.clientX; p.y = ev.clientY;
+      const x = p.matrixTransform(svg.getScreenCTM().inverse()).x;
+      const t = +d.t0 + (x - d.x0) * (d.t1 - d.t0) / (d.x1 - d.x0);
+      let k = 0;
+      times.forEach((s, i) => { if (Math.abs(s - t) < Math.abs(times[k] - t)) k = i; });
+      if (Math.abs(times[k] - t) <= step) { showFrame(k, fps); }
+    });
+  }
 }
 (function () {
   const v = document.getElementById('overlay');
@@ -546,6 +594,10 @@ fn footage_section(e: &Experiment, overlay: &OverlayIndex, dir: &Path) -> maud::
         .as_ref()
         .and_then(|(name, _)| std::fs::read(dir.join(name)).ok());
     let fps = overlay.playback_fps;
+    // The clip instant (t − t_φ [s]) of each video frame, for the plots' links.
+    let frame_times =
+        serde_json::to_string(&overlay.frames.iter().map(|f| f.t).collect::<Vec<f64>>())
+            .unwrap_or_else(|_| "[]".into());
     let metres_per_px = e.plan.metres_per_px;
     let rest = e.series.halt.rest_level;
     let peak_rows: Vec<(usize, f64, f64, f64, Option<usize>)> = e
@@ -593,6 +645,7 @@ fn footage_section(e: &Experiment, overlay: &OverlayIndex, dir: &Path) -> maud::
             }
         }
         script { (maud::PreEscaped(SHOW_FRAME_JS)) }
+        script { (maud::PreEscaped(format!("linkPlots({}, {fps});", frame_times))) }
     }
 }
 

@@ -102,6 +102,16 @@ pub fn figure_size(n_panels: usize) -> (u32, u32) {
     (WIDTH, TITLE_H + n * PANEL_H + X_AXIS_H)
 }
 
+/// Where the time axis of a [`time_panels`] figure of times `t` lies: the times
+/// at the plot areas' left and right edges and their `x` in the SVG's pixels,
+/// `(t0, t1, x0, x1)`, for a page that maps a click on the figure to an instant.
+pub fn time_axis_px(t: &[f64]) -> (f64, f64, f64, f64) {
+    let (t0, t1) = time_range(t);
+    let left = LEFT_MARGIN + Y_LABEL_W;
+    // plotters maps the range onto the area's first to last pixel column.
+    (t0, t1, f64::from(left), f64::from(WIDTH - RIGHT_MARGIN - 1))
+}
+
 /// Writes `<stem>.svg` and `<stem>.png`: `panels` stacked vertically sharing the
 /// time axis `t` (labelled `time_label`), each curve drawn in blue with the samples
 /// inside any of `highlights` drawn in red on top, and — when there are highlights —
