@@ -600,7 +600,7 @@ mod tests {
         assert!(warning.contains("playback rate"), "{warning}");
         assert!(warning.contains("experiment config"), "{warning}");
         assert!(
-            info.to_string().contains("warning   stored fps 30"),
+            info.to_string().contains("warning    stored fps 30"),
             "{info}"
         );
     }
