@@ -21,7 +21,6 @@ use super::colour::VideoSignal;
 use super::decoder::VideoDecoder;
 use super::orientation::Orientation;
 use crate::signal::{mad_sigma, median};
-use ffmpeg_next as ff;
 
 /// Video containers that [`probe`] hands to OpenCV (lower case, no dot).
 pub const VIDEO_EXTENSIONS: &[&str] = &["mp4", "m4v", "mov", "avi", "mkv"];
@@ -211,7 +210,7 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
     let container_fps = (stored_fps.is_finite() && stored_fps > 0.0).then_some(stored_fps);
     // Size and orientation as `analyse` decodes them (FFmpeg's display matrix,
     // mirror flips included), so that the two commands agree.
-    let decoder = VideoDecoder::open(path)?;
+    let mut decoder = VideoDecoder::open(path)?;
     let (width, height) = decoder.size();
     let orientation = decoder.orientation();
     let signal = Some(decoder.signal().clone());
@@ -234,7 +233,7 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
             "the container stores no fps: give the capture fps in the experiment config".into(),
         ),
     }
-    let timestamps = TimestampSummary::read(path);
+    let timestamps = TimestampSummary::read(&mut decoder)?;
     if let (Some(stamps), Some(fps)) = (&timestamps, container_fps) {
         let by_stamps = 1.0 / stamps.median_interval_s;
         if (by_stamps / fps - 1.0).abs() > FPS_AGREEMENT {
@@ -272,7 +271,7 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
 const FPS_AGREEMENT: f64 = 0.005;
 
 /// The intervals between a video's per-frame container timestamps, read from its
-/// packets without decoding (playback clock).
+/// packets without decoding (`VideoDecoder::packet_stamps`, playback clock).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TimestampSummary {
     /// Median interval [s].
@@ -286,26 +285,18 @@ pub struct TimestampSummary {
 }
 
 impl TimestampSummary {
-    /// The summary of `path`'s video stream, `None` when a packet has no
-    /// timestamp or fewer than three have one.
-    fn read(path: &Path) -> Option<Self> {
-        let mut input = ff::format::input(path).ok()?;
-        let stream = input.streams().best(ff::media::Type::Video)?;
-        let (index, base) = (stream.index(), f64::from(stream.time_base()));
-        let mut times = Vec::new();
-        for (s, packet) in input.packets() {
-            if s.index() == index {
-                times.push(packet.pts()? as f64 * base);
-            }
-        }
-        // Packets come in decoding order; B-frames are shown in another.
-        times.sort_by(f64::total_cmp);
-        let intervals: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    /// The summary of an open video's packet timestamps, `None` when a packet has
+    /// none or fewer than three frames have one.
+    fn read(decoder: &mut VideoDecoder) -> Result<Option<Self>, FootageError> {
+        let Some(stamps) = decoder.packet_stamps()? else {
+            return Ok(None);
+        };
+        let intervals: Vec<f64> = stamps.windows(2).map(|w| w[1].0 - w[0].0).collect();
         if intervals.len() < 2 {
-            return None;
+            return Ok(None);
         }
         let median_interval_s = median(&intervals);
-        (median_interval_s > 0.0).then(|| Self {
+        Ok((median_interval_s > 0.0).then(|| Self {
             median_interval_s,
             interval_spread_s: mad_sigma(&intervals, median_interval_s),
             max_interval_s: intervals.iter().copied().fold(0.0, f64::max),
@@ -313,7 +304,7 @@ impl TimestampSummary {
                 .iter()
                 .filter(|&&d| d > 1.5 * median_interval_s)
                 .count(),
-        })
+        }))
     }
 }
 
