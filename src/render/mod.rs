@@ -1703,6 +1703,22 @@ mod tests {
         f64::NAN
     }
 
+    /// The plate line on a rendered centre column `col`: the first (dark plate) or
+    /// second (light plate) edge going up from well below the disk, as for z_rim.
+    fn rendered_plate_line(f: &dyn Fn(i64) -> f64, cal: &Calibration, plate: Plate) -> f64 {
+        let edges = crossings(
+            &|r| f(i64::from(r)),
+            (cal.z_base + 30.0) as u32,
+            cal.z_t as u32,
+            130.0,
+        );
+        let base_row = match plate {
+            Plate::Dark => edges[0].0,
+            Plate::Light => edges[1].0,
+        };
+        edge_1d(f, i64::from(base_row))
+    }
+
     /// The pixel pair with the largest step within ±`window` of `coarse`.
     fn steepest(f: &dyn Fn(i64) -> f64, coarse: f64, window: i64) -> i64 {
         let c = coarse.floor() as i64;
@@ -1805,19 +1821,7 @@ mod tests {
             let img = r.render_frame(r.frame_count() - 1);
             let x = cal.x_centre as u32;
             let col = |row: i64| intensity(&img, x, row as u32);
-            // Plate line: the first (dark plate) or second (light plate) edge going up
-            // the centre column from well below the disk, as for z_rim.
-            let edges = crossings(
-                &|r| col(i64::from(r)),
-                (cal.z_base + 30.0) as u32,
-                cal.z_t as u32,
-                130.0,
-            );
-            let base_row = match plate {
-                Plate::Dark => edges[0].0,
-                Plate::Light => edges[1].0,
-            };
-            let z_base = edge_1d(&col, i64::from(base_row));
+            let z_base = rendered_plate_line(&col, &cal, plate);
             // Near top rim: the camera-facing side (bright) meets the top face (dimmer);
             // the steepest step within 4 px of the expected row.
             let z_t = edge_1d(&col, steepest(&col, cal.z_t, 4));
@@ -2012,17 +2016,7 @@ mod tests {
             // The pinhole is on the disk's symmetry plane: the centre column is cx.
             assert!((cal.x_centre - f64::from(x)).abs() < 1e-9);
             let col = |row: i64| intensity(&img, x, row as u32);
-            let edges = crossings(
-                &|r| col(i64::from(r)),
-                (cal.z_base + 30.0) as u32,
-                cal.z_t as u32,
-                130.0,
-            );
-            let base_row = match plate {
-                Plate::Dark => edges[0].0,
-                Plate::Light => edges[1].0,
-            };
-            let z_base = edge_1d(&col, i64::from(base_row));
+            let z_base = rendered_plate_line(&col, &cal, plate);
             let z_t = edge_1d(&col, steepest(&col, cal.z_t, 3));
             let y = (0.5 * (cal.z_base + cal.z_t)).round() as u32;
             let row = |xx: i64| intensity(&img, xx as u32, y);
