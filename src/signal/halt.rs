@@ -76,8 +76,9 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 /// 3. t_φ is the last frame of motion, the last rise before the first span of
 ///    `rest_tail_s` with none (module docs); the noise is then re-measured over
 ///    every frame after t_φ, the threshold raised to [`BAND_WIDENING`] × the deepest
-///    reading below the rest level there (noise: the rim is never below its rest),
-///    and t_φ found again, until it settles.
+///    reading below the rest level there (noise: the rim is never below its rest)
+///    and × the highest reading more than a rest span after t_φ (noise: a flat disk
+///    does not rise again), and t_φ found again, until it settles.
 /// 4. t_φ then follows the final descent: each next frame that lies lower than the
 ///    one before and more than σ above the rest level is still motion.
 ///
@@ -166,7 +167,19 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         let rest: Vec<usize> = samples.iter().copied().filter(|&i| i > index).collect();
         (level, noise) = rest_statistics(z_rim, &rest, config.noise_floor);
         let below = BAND_WIDENING * rest.iter().map(|&i| level - z_rim[i]).fold(0.0, f64::max);
-        threshold = (config.motion_sigmas * noise).max(band).max(below);
+        // A frame more than a rest span after t_φ is rest by the definition of t_φ
+        // (a disk lying flat does not rise again), so its rise, a lone excursion
+        // above the threshold included, is noise too.
+        let lone = BAND_WIDENING
+            * rest
+                .iter()
+                .filter(|&&i| t[i] - t[index] >= config.rest_tail_s)
+                .map(|&i| z_rim[i] - level)
+                .fold(0.0, f64::max);
+        threshold = (config.motion_sigmas * noise)
+            .max(band)
+            .max(below)
+            .max(lone);
         let next = last_moving(level, threshold).unwrap_or(index);
         if next == index {
             break;

@@ -202,6 +202,32 @@ fn the_final_descent_belongs_to_the_motion() {
     assert_eq!(halt.index, last + 1);
 }
 
+/// A lone excursion more than a rest span after the halt (an H.264 refresh frame on
+/// o08 of the open footage, 0.19 px at frame 639) is noise, and so is a lower one two
+/// frames after the last peak (0.13 px at frame 589, which set t_φ 2.8 frames late).
+#[test]
+fn a_late_lone_excursion_sizes_the_noise_near_the_halt() {
+    let (t, z, _) = clip(NOISE, 1);
+    let config = SignalConfig::default();
+    let before = halt_time(&t, &z, &config).expect("halt");
+    let last = before.index;
+    let level = before.rest_level;
+    let rest_span = (config.rest_tail_s / (t[1] - t[0])).ceil() as usize;
+    let mut spikes = z.clone();
+    for i in last + 1..last + 4 {
+        spikes[i] = level;
+    }
+    spikes[last + 2] = level + 1.1 * before.threshold;
+    assert!(last + 2 * rest_span < z.len(), "the clip rests long enough");
+    // Without a later, higher excursion the rise two frames on is motion.
+    let halt = halt_time(&t, &spikes, &config).expect("halt");
+    assert_eq!(halt.index, last + 2);
+    spikes[last + rest_span + 10] = level + 1.5 * before.threshold;
+    let halt = halt_time(&t, &spikes, &config).expect("halt");
+    assert_eq!(halt.index, last);
+    assert!(halt.threshold > 1.5 * 1.5 * before.threshold * 0.99);
+}
+
 /// How far a peak time may be from the truth: a tenth of a frame by the local fit
 /// (observed < 0.05) while ψ̇ changes slowly; half a frame by the parabola (the last,
 /// tiny peak, 5 frames a turn), or in the last 0.03 s, where ψ̇ ∝ τ^{−1/4} changes by
