@@ -720,14 +720,42 @@ fn an_abrupt_strip_stop_is_not_a_skip() {
             config.strip_step_floor,
         )
     };
-    // Tested across the stop, the kink is taken for a skip.
-    assert!(
-        steps(f64::INFINITY)
-            .iter()
-            .any(|f| f.index.abs_diff(300) <= 2),
-        "the kink is a step to the two-window test"
-    );
+    // Tested across the stop, the kink is not a whole frame's turn either.
+    assert_eq!(steps(f64::INFINITY), Vec::new());
     assert_eq!(steps(t_stop), Vec::new());
+}
+
+/// A renumbered dropped frame moves the strip on by one frame's turn; a step of half
+/// a turn (o06 of the open footage: 0.54 turns, 7 spreads, no frame dropped) is
+/// something else, and a step of two turns is two frames dropped together.
+#[test]
+fn a_strip_step_is_a_skip_only_in_whole_frame_turns() {
+    let t: Vec<f64> = (0..300).map(|i| i as f64 * FRAME).collect();
+    let rate = 3.0;
+    let mut rng = SplitMix64::new(6);
+    let noise: Vec<f64> = t.iter().map(|_| BETA_NOISE * rng.gaussian()).collect();
+    let config = SignalConfig::default();
+    let flagged = |turns: f64| {
+        let beta: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| rate * x + if i >= 150 { turns * rate * FRAME } else { 0.0 } + noise[i])
+            .collect();
+        strip_angle_steps(
+            &t,
+            &beta,
+            f64::INFINITY,
+            config.strip_step_sigmas,
+            config.strip_step_floor,
+        )
+        .iter()
+        .map(|f| f.index)
+        .collect::<Vec<usize>>()
+    };
+    assert_eq!(flagged(0.0), Vec::<usize>::new());
+    assert_eq!(flagged(0.5), Vec::<usize>::new());
+    assert_eq!(flagged(1.0), vec![150]);
+    assert_eq!(flagged(2.0), vec![150]);
 }
 
 #[test]
