@@ -427,7 +427,8 @@ impl ExperimentPlan {
 /// The side view's two scales and what they say about the camera.
 ///
 /// The diameter 2R/(x_r − x_l) gives the scale at the disk's centre; the thickness
-/// 2H/(z_base − z_t) (eq. 3.10, z_t the near top rim) the scale at the near rim,
+/// 2H/(z_b − z_t) (eq. 3.10, z_t the near top rim, z_b the near bottom rim's row on
+/// the plate) the scale at the near rim,
 /// where z_rim is read. Through a pinhole the near rim is larger by the
 /// perspective factor f = (distance to the centre)/(distance to the near rim), so
 /// the distance from the camera to the near rim is about R/(f − 1) (exact for a
@@ -436,8 +437,16 @@ impl ExperimentPlan {
 pub struct ScaleReport {
     /// 2R/(x_r − x_l) [m/px].
     pub diameter_metres_per_px: f64,
-    /// 2H/(z_base − z_t) [m/px] (eq. 3.10 with ERRATA).
+    /// 2H/(z_b − z_t) [m/px] (eq. 3.10 with ERRATA).
     pub thickness_metres_per_px: f64,
+    /// z_b [px]: the row where the near bottom rim meets the plate. The calibration's
+    /// z_base, the edge of the side at rest, unless the mirror-edge model found the
+    /// rim rounded: then the plate line where the rim meets its mirror image (on the
+    /// open footage z_base lies 0.8–2.3 px above the true rim, the plate line within
+    /// 0.5 px of it, and eq. 3.10's scale was 1.0–1.4 % large). `None` in results
+    /// written before it was recorded (then z_base).
+    #[serde(default)]
+    pub bottom_rim_row_px: Option<f64>,
     /// diameter ÷ thickness scale: 1 for a distant (orthographic) camera.
     pub perspective_factor: f64,
     /// R/(f − 1) [m] when f > 1: the camera's distance from the near rim.
@@ -455,17 +464,18 @@ pub struct ScaleReport {
 const PERSPECTIVE_FACTOR_RANGE: (f64, f64) = (0.97, 1.5);
 
 impl ScaleReport {
-    /// The scale to use from the calibration and the disk's size.
-    fn new(cal: &vision::Calibration, disk: &DiskParams) -> Self {
+    /// The scale to use from the calibration, the near bottom rim's row on the
+    /// plate `bottom_rim_row` (z_b) and the disk's size.
+    fn new(cal: &vision::Calibration, bottom_rim_row: f64, disk: &DiskParams) -> Self {
         let diameter = 2.0 * disk.radius / (cal.x_r - cal.x_l);
-        let thickness = cal.metres_per_px(disk.half_thickness);
+        let thickness = 2.0 * disk.half_thickness / (bottom_rim_row - cal.z_t);
         let factor = diameter / thickness;
         let (lo, hi) = PERSPECTIVE_FACTOR_RANGE;
         let used = if (lo..=hi).contains(&factor) {
             "thickness (eq. 3.10, at the near rim)".to_string()
         } else {
             format!(
-                "diameter: the thickness scale 2H/(z_base − z_t) = {thickness:.4e} m/px gives a \
+                "diameter: the thickness scale 2H/(z_b − z_t) = {thickness:.4e} m/px gives a \
                  perspective factor {factor:.3}, outside {lo}–{hi} (the near top rim z_t was not \
                  told from the top face's far rim, or the disk parameters do not match the disk \
                  filmed); φ is then too small by about the perspective factor"
@@ -474,6 +484,7 @@ impl ScaleReport {
         ScaleReport {
             diameter_metres_per_px: diameter,
             thickness_metres_per_px: thickness,
+            bottom_rim_row_px: Some(bottom_rim_row),
             perspective_factor: factor,
             camera_distance_m: (factor > 1.0 && factor <= hi).then(|| disk.radius / (factor - 1.0)),
             used,
@@ -688,7 +699,8 @@ fn calibrate_detecting_plate(
         };
         match vision::calibrate_at_rest(rest, first_index, &config, given) {
             Ok(report) => {
-                let factor = ScaleReport::new(&report.calibration, disk).perspective_factor;
+                let cal = &report.calibration;
+                let factor = ScaleReport::new(cal, cal.z_base, disk).perspective_factor;
                 if (lo..=hi).contains(&factor) {
                     tried.push(format!(
                         "{}: perspective factor {factor:.3}",
@@ -1046,6 +1058,8 @@ pub fn analyse_clip_decoding(
             Plate::Light => "edge (vision::rim): the second edge from the bottom on a light plate",
         };
         let mut rim_zero_row_px = cal.z_base;
+        // z_b of eq. 3.10: the plate line under a rounded rim (ScaleReport).
+        let mut bottom_rim_row = cal.z_base;
         let rim = match &rest_window {
             Some((rest_window, edge0)) => {
                 let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
@@ -1061,14 +1075,15 @@ pub fn analyse_clip_decoding(
                     let description = format!(
                         "mirror-edge model (vision::mirror_edge): the rim's profile learned from \
                          the frames with an open gap; edge at rest {:.2} px, the zero of z_rim; \
-                         fitted plate line {:.2} px (reported, not used), reflectivity {:.2}; \
-                         rest fit RMS {:.1} % of the disk's level",
+                         plate line {:.2} px, where the rounded rim meets its mirror image \
+                         (z_b of eq. 3.10's scale), reflectivity {:.2}; rest fit RMS {:.1} % \
+                         of the disk's level",
                         model.rest_edge,
                         model.plate_row,
                         model.reflectivity,
                         100.0 * model.rest_rms
                     );
-                    (description, model.rest_edge)
+                    (description, model.rest_edge, Some(model.plate_row))
                 }),
                 Plate::Light => {
                     vision::remeasure_light_rim(&mut heights, &windows, cal.z_base, rest_window)
@@ -1083,16 +1098,17 @@ pub fn analyse_clip_decoding(
                                 model.rest_edge,
                                 model.kept_first_pass
                             );
-                            (description, model.rest_edge)
+                            (description, model.rest_edge, None)
                         })
                 }
             };
                 match refit {
-                    Ok((description, rest_edge)) => {
+                    Ok((description, rest_edge, plate_row)) => {
                         for (record, z) in frames.iter_mut().zip(heights) {
                             record.z_rim_px = z;
                         }
                         rim_zero_row_px = rest_edge;
+                        bottom_rim_row = plate_row.unwrap_or(bottom_rim_row);
                         description
                     }
                     Err(reason) => format!("{first_pass}: {reason}"),
@@ -1124,7 +1140,7 @@ pub fn analyse_clip_decoding(
         }
         // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
         // z_rim in metres once, after every correction of z_rim in px.
-        let scale = ScaleReport::new(&calibration.calibration, &params);
+        let scale = ScaleReport::new(&calibration.calibration, bottom_rim_row, &params);
         let metres_per_px = scale.metres_per_px();
         if !scale.at_near_rim() {
             warnings.push(format!("scale from the {}", scale.used));
