@@ -40,9 +40,10 @@
 //! 2. **The rest frames** give ρ, y_p and the edge at rest e_rest: the least
 //!    squares fit of the model to their mean profile over the rows down to
 //!    [`REST_ROWS_BELOW_PX`] below their edge. y_p is where the rim meets its
-//!    mirror image; it is reported, not used: on the open footage it lies within
-//!    1 px of the true rim, on our own renders 0.15 px above it, so the plate line
-//!    z_base (and eq. 3.10's scale) stays the calibration's edge at rest.
+//!    mirror image: on the open footage within 0.5 px of the true rim, where the
+//!    edge at rest lies 0.8–2.3 px above it. It is the bottom of the disk's
+//!    thickness in eq. 3.10's scale (`analyse::ScaleReport`); z_rim's zero stays
+//!    the edge at rest, the same edge definition as every lifted frame's.
 //! 3. **Every frame** is fitted for e (and g) with ρ and y_p known, and
 //!    z_rim = e_rest − e: one edge definition, the same at rest and lifted, near
 //!    touching or not.
