@@ -401,7 +401,7 @@ fn draw_span(
                 .series
                 .flags
                 .iter()
-                .filter(|f| f.index == position)
+                .filter(|f| f.index == e.frames[position].index)
                 .collect(),
         };
         let image = draw_frame(e, layout, view, &marks, strip_finder.as_mut(), slow_down).map_err(
