@@ -112,7 +112,7 @@ impl std::fmt::Display for TimeSection {
         write!(
             f,
             "frames {}–{}: t = {:.4}–{:.4} s captured, {:.4}–{:.4} s in the container, \
-             {:.4} ms a frame ({:.3} fps) played {:.3}× slowed",
+             {:.4} ms a frame ({:.3} fps), {}",
             self.first_frame,
             self.last_frame,
             self.start_s,
@@ -121,7 +121,11 @@ impl std::fmt::Display for TimeSection {
             self.container_end_s,
             1e3 * self.container_interval_s,
             1.0 / self.container_interval_s,
-            self.slowdown
+            if self.slowdown == 1.0 {
+                "real time".to_string()
+            } else {
+                format!("slowed {:.3}×", self.slowdown)
+            }
         )
     }
 }
