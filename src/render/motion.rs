@@ -698,6 +698,33 @@ mod tests {
         }
     }
 
+    #[test]
+    fn jittered_capture_times_lie_on_the_tick_clock_within_the_jitter() {
+        let jittered = Timing {
+            jitter: Some(CaptureJitter {
+                fraction: 0.1,
+                seed: 3,
+            }),
+            ..timing()
+        };
+        let times = jittered.times();
+        assert_eq!(times, jittered.times(), "the same seed, the same times");
+        assert_eq!(times.len(), timing().frame_count());
+        let ticks_per_s = 480.0 * f64::from(TICKS_PER_FRAME);
+        let mut moved = 0;
+        for (k, t) in times.iter().enumerate() {
+            let tick = (t + 0.5) * ticks_per_s;
+            assert!((tick - tick.round()).abs() < 1e-6, "frame {k}: {tick}");
+            // Within half the jitter's width (0.05 of a frame) of k / fps.
+            let offset = tick / f64::from(TICKS_PER_FRAME) - k as f64;
+            assert!(offset.abs() <= 0.05 + 1e-9, "frame {k}: {offset}");
+            moved += usize::from(offset.abs() > 0.01);
+        }
+        assert_eq!(times[0], -0.5, "the first frame at clip time 0");
+        // Uniform offsets: 80 % of frames lie over 0.01 of a frame off.
+        assert!(moved > times.len() * 7 / 10, "{moved} of {}", times.len());
+    }
+
     /// Eq. (3.8) evaluated on the prescribed φ, ψ̇ reproduces E = A_e (t_halt − t)^n,
     /// and ψ̇, θ̇ satisfy stationary rolling (eqs. 3.7 and 4.40).
     #[test]
