@@ -2504,4 +2504,56 @@ mod tests {
         check(&|s| s.effects.flicker_50hz_amplitude = 1.2, "50 Hz");
         check(&|s| s.effects.shot_noise = f64::NAN, "grey levels");
     }
+
+    /// A slowed section stretches the container's clock over the frame intervals
+    /// that start inside it, and only there; a dropped frame leaves its interval
+    /// in the timestamps. Overlapping or empty sections are refused.
+    #[test]
+    fn a_slowed_section_stretches_the_container_clock_over_its_span() {
+        let m = motion(480.0, 0.1, 0.05);
+        let mut spec = small_spec(Plate::Dark, false);
+        spec.slowed_sections = vec![SlowedSection {
+            start_s: 0.025,
+            end_s: 0.05,
+            factor: 16.0,
+        }];
+        spec.dropped = vec![60];
+        let r = Renderer::new(&spec, &m).expect("renderer");
+        let truth = r.truth();
+        assert!(truth.stamped);
+        let frame_s = 1.0 / 480.0;
+        for w in truth.frames.windows(2) {
+            let (a, b) = (&w[0], &w[1]);
+            // Captures 12..24 start inside 0.025–0.05 s.
+            let slowed = (12..24).contains(&a.index);
+            let expected = (b.index - a.index) as f64 * frame_s * if slowed { 16.0 } else { 1.0 };
+            let interval = b.container_time_s.unwrap() - a.container_time_s.unwrap();
+            assert!((interval - expected).abs() < 1e-12, "capture {}", a.index);
+        }
+        assert!(
+            Renderer::new(&small_spec(Plate::Dark, false), &m)
+                .expect("plain")
+                .truth()
+                .frames
+                .iter()
+                .all(|f| f.container_time_s.is_none())
+        );
+        for (sections, why) in [
+            (vec![(0.02, 0.01, 8.0)], "end after it starts"),
+            (vec![(0.0, 0.03, 0.5)], "factor"),
+            (vec![(0.0, 0.03, 8.0), (0.02, 0.04, 8.0)], "overlap"),
+            (vec![(1.0, 2.0, 8.0)], "starts after the clip"),
+        ] {
+            spec.slowed_sections = sections
+                .into_iter()
+                .map(|(start_s, end_s, factor)| SlowedSection {
+                    start_s,
+                    end_s,
+                    factor,
+                })
+                .collect();
+            let err = Renderer::new(&spec, &m).err().expect("refused").to_string();
+            assert!(err.contains(why), "{err}");
+        }
+    }
 }
