@@ -574,7 +574,7 @@ pub struct GroundTruth {
     /// Whether an MP4 is stamped frame by frame, each frame's timestamp in
     /// [`FrameTruth::container_time_s`] on a clock of [`TICKS_PER_FRAME`] ticks a
     /// frame (with a jitter or a slowed section; dropped frames then leave a gap).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub stamped: bool,
     /// One entry per written frame, in output order.
     pub frames: Vec<FrameTruth>,
