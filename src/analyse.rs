@@ -345,8 +345,8 @@ pub enum AnalyseError {
     /// interval (a slowed section's start or end).
     #[error(
         "{}: the {span} (t = {start_s:.4}–{end_s:.4} s from the first frame, capture clock) \
-         crosses a change of the frame rate; trim the clip or set a window inside one \
-         section. Sections: {sections}",
+         crosses a change of the frame rate: trim the clip, or shorten `window_s` in the \
+         config's [fit] table, so that it lies inside one section. Sections: {sections}",
         path.display()
     )]
     AcrossSections {

@@ -647,6 +647,18 @@ fn run_analyse(
     if let Some(decoded) = &experiment.plan.decoded {
         println!("{}", decoded.summary());
     }
+    if let Some(timing) = experiment
+        .plan
+        .frame_times
+        .as_ref()
+        .filter(|t| t.sections.len() > 1)
+    {
+        println!(
+            "frame times in {} sections of constant interval: {}",
+            timing.sections.len(),
+            timing.sections_text()
+        );
+    }
     println!("report: {}", out.join("index.html").display());
     Ok(())
 }
