@@ -27,12 +27,15 @@
 //!   out), and its intervals are divided by it: capture time is continuous across
 //!   sections.
 //!
-//! A clip stored at one rate is one section. An analysis needs its fit window (and
-//! its rest tail) inside one section ([`FrameTiming::section_holding`]): a rate
-//! that changes within the window would time it by a boundary found only to within
-//! the running median's few frames. With no capture fps given (the container's
-//! average rate, [`FpsSource::ContainerFps`]), the fastest section is taken to be
-//! real time.
+//! A clip stored at one rate is one section. An analysis needs its fit window, and
+//! its rest tail, each inside one section ([`FrameTiming::within_one_section`]): a
+//! rate that changes within the window would time it by a boundary found only to
+//! within the running median's few frames. With no capture fps given (the
+//! container's average rate, [`FpsSource::ContainerFps`]), the fastest section is
+//! taken to be real time. A phone that keeps only every n-th capture in its
+//! real-time ramps, stored at the same interval as its slowed frames, leaves no
+//! trace in the timestamps: this model cannot tell such ramps from the slowed
+//! section.
 //!
 //! [`frame_times`] turns the timestamps the [`super::FrameSource`] lent out into
 //! times and a [`FrameTiming`] for the plan (where the times came from, the
