@@ -136,16 +136,17 @@ struct SpanPlan {
 }
 
 impl SpanPlan {
-    /// Read the index of `source` (the packets' timestamps) unless `decoding` is
-    /// [`Decoding::Whole`], the clip is a frame folder or at most
-    /// [`WHOLE_CLIP_UP_TO_S`] long, or the index does not list the `expected`
-    /// frames.
+    /// Plan from the clip's `index` (the packets' timestamps, `None` for a frame
+    /// folder or a video whose packets lack them): the whole clip when
+    /// `decoding` is [`Decoding::Whole`], without an index, when the clip is at
+    /// most [`WHOLE_CLIP_UP_TO_S`] long, or when the index does not list the
+    /// `expected` frames.
     fn new(
-        source: &mut FrameSource,
+        index: Option<footage::StreamIndex>,
         decoding: Decoding,
         expected: usize,
         fps: &footage::CaptureFps,
-    ) -> Result<Self, FootageError> {
+    ) -> Self {
         let whole = |reason: String| SpanPlan {
             index: None,
             times: Vec::new(),
@@ -153,33 +154,31 @@ impl SpanPlan {
             whole_reason: reason,
         };
         if decoding == Decoding::Whole {
-            return Ok(whole("--whole".into()));
+            return whole("--whole".into());
         }
-        let Some(index) = source.stream_index()? else {
-            return Ok(whole(
-                "a frame folder, or a video whose packets carry no timestamps".into(),
-            ));
+        let Some(index) = index else {
+            return whole("a frame folder, or a video whose packets carry no timestamps".into());
         };
         let listed = index.container_times_s.len();
         if listed != expected {
-            return Ok(whole(format!(
+            return whole(format!(
                 "the container's packets list {listed} frames, its frame count {expected}"
-            )));
+            ));
         }
         let stamps: Vec<Option<f64>> = index.container_times_s.iter().copied().map(Some).collect();
         let (times, _) = footage::frame_times(&stamps, &mut fps.clone());
         let duration = times.last().copied().unwrap_or(0.0);
         if duration <= WHOLE_CLIP_UP_TO_S {
-            return Ok(whole(format!(
+            return whole(format!(
                 "a {duration:.2} s clip (clips up to {WHOLE_CLIP_UP_TO_S} s are decoded whole)"
-            )));
+            ));
         }
-        Ok(SpanPlan {
+        SpanPlan {
             index: Some(index),
             times,
             clip_frames: expected,
             whole_reason: String::new(),
-        })
+        }
     }
 
     /// The key frame at or before the last frame at capture time `t` [s] (0
@@ -322,6 +321,8 @@ struct MeasuredSpan {
     metres_per_px: f64,
     /// Width of the local fits' window [turns of the rim].
     local_fit_periods: f64,
+    /// The rest tail's length [s] (SignalConfig::rest_tail_s).
+    rest_tail_s: f64,
 }
 
 /// Why a clip could not be analysed. Every message names the clip; vision errors
@@ -340,6 +341,24 @@ pub enum AnalyseError {
     Fit { path: PathBuf, error: FitError },
     #[error("{}: {reason}", path.display())]
     Clip { path: PathBuf, reason: String },
+    /// The fit window or the rest tail crosses a change of the container's frame
+    /// interval (a slowed section's start or end).
+    #[error(
+        "{}: the {span} (t = {start_s:.4}–{end_s:.4} s from the first frame, capture clock) \
+         crosses a change of the frame rate: trim the clip, or shorten `window_s` in the \
+         config's [fit] table, so that it lies inside one section. Sections: {sections}",
+        path.display()
+    )]
+    AcrossSections {
+        path: PathBuf,
+        /// "fit window" or "rest tail".
+        span: &'static str,
+        /// The span's capture times from the clip's first frame [s].
+        start_s: f64,
+        end_s: f64,
+        /// The clip's sections, as [`FrameTiming::sections_text`] lists them.
+        sections: String,
+    },
 }
 
 /// Everything an analysis decided before measuring: the resolved plan, recorded
@@ -353,8 +372,8 @@ pub struct ExperimentPlan {
     pub config: ExperimentConfig,
     pub fps: CaptureFps,
     /// Where the frame times came from (container pts or index / fps), with the
-    /// median and spread of the frame interval; `None` in results written before
-    /// it was recorded.
+    /// sections of constant frame interval and the median and spread of the
+    /// interval; `None` in results written before it was recorded.
     #[serde(default)]
     pub frame_times: Option<FrameTiming>,
     /// Frames measured: the decoded span's.
@@ -558,6 +577,9 @@ pub struct EnergyFit {
 pub struct Experiment {
     pub plan: ExperimentPlan,
     pub frames: Vec<FrameRecord>,
+    /// The signal analysis of `frames`: its flags carry the clip's frame numbers
+    /// ([`FrameRecord::index`], as flags.csv), its peaks, states and halt
+    /// positions in `frames`.
     pub series: StateSeries,
     /// The headline fit: eq. 3.8 at the peaks (the thesis's method).
     pub peaks_fit: EnergyFit,
@@ -793,7 +815,17 @@ pub fn analyse_clip_decoding(
             reason: format!("only {expected} frames: too short to analyse"),
         });
     }
-    source.seek(expected - REST_FRAMES)?;
+    // The container's index (packet timestamps, read without decoding): the rest
+    // frames and a span near the end are sought by their listed times, which land
+    // on the frame asked for in a variable-rate clip, where index / average fps
+    // would not.
+    let index = source.stream_index()?;
+    match &index {
+        Some(index) if index.container_times_s.len() == expected => {
+            source.seek_frame(expected - REST_FRAMES, index)?
+        }
+        _ => source.seek(expected - REST_FRAMES)?,
+    }
     let mut rest = Vec::new();
     while let Some(frame) = source.next_frame()? {
         rest.push(OwnedFrame::copy(frame.index, &frame.view));
@@ -944,7 +976,7 @@ pub fn analyse_clip_decoding(
     // Which frames pass 2 decodes: the whole clip, or a span at its end found
     // from the container's index (see `SpanPlan`).
     let window_s = config.window_s();
-    let plan_span = SpanPlan::new(&mut source, decoding, expected, &fps)?;
+    let plan_span = SpanPlan::new(index, decoding, expected, &fps);
 
     // Pass 2: the span's frames, streamed. A side view reads only the band of
     // columns about the centre line, so only that band is converted to colour.
@@ -954,7 +986,7 @@ pub fn analyse_clip_decoding(
         let mut warnings = Vec::new();
         let mut fps = fps.clone();
         match &plan_span.index {
-            Some(index) if first > 0 => source.seek_frame(first, index.container_times_s[first])?,
+            Some(index) if first > 0 => source.seek_frame(first, index)?,
             _ => source.seek(0)?,
         }
         if split.is_none() {
@@ -1230,6 +1262,10 @@ pub fn analyse_clip_decoding(
             });
         }
         series.flags.sort_by_key(|f| f.index);
+        // Flags carry the clip's frame numbers (a span's positions are not).
+        for flag in &mut series.flags {
+            flag.index = frames[flag.index].index;
+        }
         for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
             record.t = *shifted;
         }
@@ -1245,6 +1281,7 @@ pub fn analyse_clip_decoding(
             scale,
             metres_per_px,
             local_fit_periods: signal_config.state_window_periods,
+            rest_tail_s: signal_config.rest_tail_s,
         })
     };
     let mut first = plan_span.first_span();
@@ -1277,9 +1314,29 @@ pub fn analyse_clip_decoding(
         rim_zero_row_px,
         scale,
         metres_per_px,
+        rest_tail_s,
         ..
     } = measured;
     let decoded = plan_span.decoded(first, attempts, frames.len());
+    // The fit window and the rest tail must each lie in one section of constant
+    // frame interval (footage::timing): a slowed section's boundary inside them
+    // is known only to within a few frames.
+    let t_phi = series.halt.t_phi;
+    let clip_end = frames.last().map_or(t_phi, |f| f.t_capture);
+    for (span, start_s, end_s) in [
+        ("fit window", t_phi - window_s, t_phi),
+        ("rest tail", clip_end - rest_tail_s, clip_end),
+    ] {
+        if !frame_times.within_one_section(start_s, end_s) {
+            return Err(AnalyseError::AcrossSections {
+                path: clip.to_path_buf(),
+                span,
+                start_s,
+                end_s,
+                sections: frame_times.sections_text(),
+            });
+        }
+    }
     let window = (-window_s, 0.0);
     let in_window = signal::flags_within(&series.flags, window.0, window.1);
     let skips_in_window = in_window.len();

@@ -93,6 +93,7 @@ pub fn render_demo_footage(root: &Path, clips: &[DemoClip]) -> Result<Vec<PathBu
                 fps: 480.0,
                 halt_time: 0.6,
                 after_halt: 0.15,
+                jitter: None,
             };
             let post_flat = PostFlatSpin {
                 beta_dot0: -2.8,

@@ -18,9 +18,9 @@ use eulerdisk::model::simulate::{
 use eulerdisk::model::tuning::tune_eta;
 use eulerdisk::overlay::{OverlaySpec, write_model_overlay};
 use eulerdisk::render::{
-    DEFAULT_CRF, Effects, HdrTransfer, Nutation, Plate, PostFlatSpin, PowerLaw, RenderSpec,
-    Renderer, SampleStorage, Scenery, Timing, add_nutation, power_law_motion, trajectory_motion,
-    write_clip,
+    CaptureJitter, DEFAULT_CRF, Effects, HdrTransfer, Nutation, Plate, PostFlatSpin, PowerLaw,
+    RenderSpec, Renderer, SampleStorage, Scenery, SlowedSection, Timing, add_nutation,
+    power_law_motion, trajectory_motion, write_clip,
 };
 use eulerdisk::report::OutputLock;
 use eulerdisk::report::compare::{comparison_dir, write_comparison};
@@ -163,6 +163,24 @@ fn parse_span(text: &str) -> Result<(f64, f64), String> {
     } else {
         Err(format!("`{text}`: FROM must be before TO"))
     }
+}
+
+/// `START:END:FACTOR`: a slowed section's clip times [s] and slow-down (checked
+/// further by the renderer).
+fn parse_slowed_section(text: &str) -> Result<SlowedSection, String> {
+    let parts: Vec<&str> = text.split(':').collect();
+    let [start, end, factor] = parts.as_slice() else {
+        return Err(format!(
+            "`{text}`: give START:END:FACTOR, clip times in seconds and the slow-down, \
+             e.g. 0.1:0.3:16"
+        ));
+    };
+    let number = |s: &str| s.trim().parse::<f64>().map_err(|e| format!("`{s}`: {e}"));
+    Ok(SlowedSection {
+        start_s: number(start)?,
+        end_s: number(end)?,
+        factor: number(factor)?,
+    })
 }
 
 #[derive(Args)]
@@ -409,6 +427,17 @@ struct RenderArgs {
     /// as a front camera does; the frames are stored mirrored.
     #[arg(long)]
     mirror_tag: bool,
+    /// Store a span of capture time slowed for playback in the MP4, as a phone's
+    /// slow-motion section between real-time ramps: START:END:FACTOR, clip times
+    /// [s] and the slow-down (16: 480 fps played at 30), e.g. 0.1:0.3:16;
+    /// repeatable. The truth gives every frame's container time.
+    #[arg(long, value_name = "START:END:FACTOR", value_parser = parse_slowed_section)]
+    slow_section: Vec<SlowedSection>,
+    /// Capture frames at times jittered about k/fps by up to ±FRACTION/2 of a frame
+    /// (seeded by --seed), as a phone's variable frame rate, and stamp them so in
+    /// the MP4 [0–0.5]; the truth gives every frame's capture and container time.
+    #[arg(long, value_name = "FRACTION")]
+    vfr_jitter: Option<f64>,
     /// Frame rate [frames/s] (thesis: 480).
     #[arg(long, default_value_t = 480.0)]
     fps: f64,
@@ -617,6 +646,18 @@ fn run_analyse(
     );
     if let Some(decoded) = &experiment.plan.decoded {
         println!("{}", decoded.summary());
+    }
+    if let Some(timing) = experiment
+        .plan
+        .frame_times
+        .as_ref()
+        .filter(|t| t.sections.len() > 1)
+    {
+        println!(
+            "frame times in {} sections of constant interval: {}",
+            timing.sections.len(),
+            timing.sections_text()
+        );
     }
     println!("report: {}", out.join("index.html").display());
     Ok(())
@@ -831,6 +872,9 @@ fn run_render(args: &RenderArgs) -> Result<()> {
     if args.simulate && args.nutation > 0.0 {
         bail!("--nutation applies to a prescribed power law, not to --simulate");
     }
+    if args.simulate && args.vfr_jitter.is_some() {
+        bail!("--vfr-jitter applies to a prescribed power law, not to --simulate");
+    }
     let params = args.preset.params();
     let motion = if args.simulate {
         let eta = match (args.eta, args.model) {
@@ -865,6 +909,10 @@ fn run_render(args: &RenderArgs) -> Result<()> {
             fps: args.fps,
             halt_time: args.halt,
             after_halt: args.after_halt,
+            jitter: args.vfr_jitter.map(|fraction| CaptureJitter {
+                fraction,
+                seed: args.seed,
+            }),
         };
         let spin = PostFlatSpin {
             beta_dot0: args.beta_dot_flat,
@@ -930,6 +978,7 @@ fn run_render(args: &RenderArgs) -> Result<()> {
     };
     spec.duplicated = args.duplicate.clone();
     spec.interpolated = args.interpolate.clone();
+    spec.slowed_sections = args.slow_section.clone();
     spec.display_orientation = Orientation::new(args.rotation_tag, args.mirror_tag)
         .map_err(|reason| anyhow::anyhow!("--rotation-tag: {reason}"))?;
     let renderer = Renderer::new(&spec, &motion)?;

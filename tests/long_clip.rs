@@ -8,11 +8,14 @@ use std::path::Path;
 
 use eulerdisk::analyse::{Decoding, analyse_clip_decoding};
 use eulerdisk::config::ExperimentConfig;
+use eulerdisk::report::experiment::write_experiment;
+use eulerdisk::signal::SkipReason;
 use serde_json::Value;
 
 /// A 12.5 s clip (n = 0.5, halt at 9 s, 3.5 s of post-flat spin and rest after
-/// it, x264's key frame every 250 frames) analysed near its end and whole. The
-/// first span, the last 4 s, holds only 0.5 s of motion, so it must grow back.
+/// it, x264's key frame every 250 frames, capture 4200 (8.75 s) a duplicate of
+/// the one before) analysed near its end and whole. The first span, the last
+/// 4 s, holds only 0.5 s of motion, so it must grow back.
 #[test]
 fn a_span_near_the_end_measures_as_the_whole_clip() {
     let dir = tempfile::tempdir().unwrap();
@@ -26,6 +29,8 @@ fn a_span_near_the_end_measures_as_the_whole_clip() {
             "9",
             "--after-halt",
             "3.5",
+            "--duplicate",
+            "4200",
             "--size",
             "240x180",
             "-o",
@@ -72,6 +77,38 @@ fn a_span_near_the_end_measures_as_the_whole_clip() {
         assert!((f.t - w.t).abs() < 1e-9, "frame {}", f.index);
         assert_eq!(f.container_time_s, w.container_time_s);
     }
+    // Flags carry the clip's frame numbers, in result.json as in flags.csv: the
+    // duplicate is frame 4200 in the span (position 4200 − first) and whole.
+    let duplicates = |e: &eulerdisk::analyse::Experiment| -> Vec<usize> {
+        e.series
+            .flags
+            .iter()
+            .filter(|f| matches!(f.reason, SkipReason::DuplicatedFrame { .. }))
+            .map(|f| f.index)
+            .collect()
+    };
+    assert_eq!(duplicates(&span), vec![4200], "{:?}", span.series.flags);
+    assert_eq!(duplicates(&whole), vec![4200], "{:?}", whole.series.flags);
+    assert!(span.frames[4200 - decoded.first_frame].z_rim_px.is_none());
+    let report = dir.path().join("report");
+    write_experiment(&report, &span, None).unwrap();
+    let result: Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("result.json")).unwrap())
+            .unwrap();
+    let flags_json: Vec<u64> = result["series"]["flags"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["index"].as_u64().unwrap())
+        .collect();
+    let flags_csv: Vec<u64> = std::fs::read_to_string(report.join("flags.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|line| line.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert!(flags_json.contains(&4200), "{flags_json:?}");
+    assert_eq!(flags_json, flags_csv);
     let (t_span, t_whole) = (span.series.halt.t_phi, whole.series.halt.t_phi);
     assert!((t_span - t_whole).abs() < 1e-9, "{t_span} {t_whole}");
     assert!(

@@ -10,12 +10,13 @@ use eulerdisk::analyse::{Experiment, analyse_clip};
 use eulerdisk::config::ExperimentConfig;
 use eulerdisk::footage::{self, Orientation};
 
-/// `eulerdisk render` of a small side-view clip (n = 0.5, halt at 0.5 s, dark
-/// plate) with `extra` options, into `dir/name`.
+/// `eulerdisk render` of a small side-view clip (n = 0.5, halt at 0.5 s unless
+/// `extra` sets `--halt`, dark plate) with `extra` options, into `dir/name`.
 fn render(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
-    let mut args = vec![
-        "render", "--n", "0.5", "--halt", "0.5", "--size", "480x320", "-o", name,
-    ];
+    let mut args = vec!["render", "--n", "0.5", "--size", "480x320", "-o", name];
+    if !extra.contains(&"--halt") {
+        args.extend_from_slice(&["--halt", "0.5"]);
+    }
     args.extend_from_slice(extra);
     let out = util::eulerdisk(dir, &args);
     assert!(
@@ -215,4 +216,260 @@ fn ten_bit_and_full_range_clips_measure_as_eight_bit_limited() {
         let dz = max_difference(&z_rim(&reference), &z_rim(&e));
         assert!(dz < 0.05, "{name}: z_rim differs by {dz} px");
     }
+}
+
+/// A clip's ground truth, `<stem>.truth.json` beside it.
+fn truth(clip: &Path) -> serde_json::Value {
+    let path = clip.with_file_name(format!(
+        "{}.truth.json",
+        clip.file_stem().unwrap().to_string_lossy()
+    ));
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Every written frame's MP4 timestamp as the truth gives it [s].
+fn truth_container_times(truth: &serde_json::Value) -> Vec<f64> {
+    truth["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["container_time_s"].as_f64().unwrap())
+        .collect()
+}
+
+/// §2: a slow-motion section (capture 0.05–0.2 s stored 16× slowed, as a phone
+/// stores 480 fps for playback at 30 between real-time ramps) away from the fit
+/// window is found from the timestamps alone, timed by its own slow-down, and
+/// the clip measures as the same frames stored at one rate: the same capture
+/// times, t_φ and n. `info` lists the three sections.
+#[test]
+fn a_slowed_section_away_from_the_window_measures_as_the_plain_clip() {
+    let dir = tempfile::tempdir().unwrap();
+    // Halt at 0.8 s: the 0.5 s window starts at 0.3 s. crf 0 (lossless) so that
+    // the two clips hold the same pixels and differ in their timestamps only.
+    let long = ["--halt", "0.8", "--crf", "0"];
+    let plain = analyse(&render(dir.path(), "plain.mp4", &long));
+    let mut extra = long.to_vec();
+    extra.extend_from_slice(&["--slow-section", "0.05:0.2:16"]);
+    let clip = render(dir.path(), "slowed.mp4", &extra);
+
+    // The truth: captures 24..96 (clip times 0.05–0.2 s at 480 fps) are 1/30 s
+    // apart in the container, the others 1/480 s.
+    let written = truth_container_times(&truth(&clip));
+    for (k, w) in written.windows(2).enumerate() {
+        let stored = if (24..96).contains(&k) { 30.0 } else { 480.0 };
+        assert!((w[1] - w[0] - 1.0 / stored).abs() < 1e-9, "interval {k}");
+    }
+
+    let info = footage::probe(&clip).unwrap();
+    let stamps = info.timestamps.as_ref().unwrap();
+    let bounds: Vec<(usize, usize)> = stamps
+        .sections
+        .iter()
+        .map(|s| (s.first_frame, s.last_frame))
+        .collect();
+    assert_eq!(bounds, vec![(0, 24), (24, 96), (96, 456)]);
+    assert!(info.to_string().contains("3 sections of constant interval"));
+
+    // With the capture fps configured, and with none (the fastest section is
+    // taken as real time): the same sections and times.
+    let none = ExperimentConfig::parse("", Path::new("test.toml")).unwrap();
+    let unconfigured = analyse_clip(&clip, &none, &|_, _| {}).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(unconfigured.plan.fps.fps, 480.0);
+    for slowed in [analyse(&clip), unconfigured] {
+        let timing = slowed.plan.frame_times.as_ref().unwrap();
+        let found: Vec<(usize, usize, f64)> = timing
+            .sections
+            .iter()
+            .map(|s| (s.first_frame, s.last_frame, s.slowdown))
+            .collect();
+        assert_eq!(found.len(), 3, "{found:?}");
+        for ((first, last, slowdown), (bounds, truth)) in
+            found
+                .into_iter()
+                .zip([((0, 24), 1.0), ((24, 96), 16.0), ((96, 456), 1.0)])
+        {
+            assert_eq!((first, last), bounds);
+            assert!((slowdown - truth).abs() < 1e-9, "{slowdown}");
+        }
+        for (a, b) in slowed.frames.iter().zip(&plain.frames) {
+            assert!(
+                (a.t_capture - b.t_capture).abs() < 1e-9,
+                "frame {}",
+                a.index
+            );
+            assert!(
+                (a.container_time_s.unwrap() - written[a.index]).abs() < 1e-9,
+                "frame {}",
+                a.index
+            );
+        }
+        let dt = (slowed.series.halt.t_phi - plain.series.halt.t_phi).abs();
+        assert!(dt < 1e-9, "t_φ differs by {dt} s");
+        // The same pixels (lossless), so the same rim heights.
+        let dz = max_difference(&z_rim(&slowed), &z_rim(&plain));
+        assert!(dz < 1e-9, "z_rim differs by {dz} px");
+        // The same exponent: within 0.002, as in tests/trust.rs, where times that
+        // differ by 4e-15 s move one peak's refinement (measured 1.7e-4 here).
+        let dn = (slowed.peaks_fit.fit.n - plain.peaks_fit.fit.n).abs();
+        assert!(dn < 0.002, "n differs by {dn}");
+    }
+    // The plain clip's own n against the prescribed 0.5.
+    assert!((plain.peaks_fit.fit.n - 0.5).abs() < 0.01);
+}
+
+/// §2: a slowed section (0.5–0.7 s, 8×) across the fit window (the last 0.5 s
+/// before the halt at 0.8 s) is refused, and the message lists the sections'
+/// frames, capture and container times and rates.
+#[test]
+fn a_slowed_section_across_the_window_is_refused_with_the_sections() {
+    use eulerdisk::analyse::AnalyseError;
+    let dir = tempfile::tempdir().unwrap();
+    let clip = render(
+        dir.path(),
+        "crossing.mp4",
+        &["--halt", "0.8", "--slow-section", "0.5:0.7:8"],
+    );
+    let config = ExperimentConfig::parse("fps = 480\n", Path::new("test.toml")).unwrap();
+    let err = analyse_clip(&clip, &config, &|_, _| {}).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            AnalyseError::AcrossSections {
+                span: "fit window",
+                ..
+            }
+        ),
+        "{err}"
+    );
+    let message = err.to_string();
+    for part in [
+        "crossing.mp4",
+        "fit window",
+        "frames 0–240: t = 0.0000–0.5000 s captured",
+        "frames 240–336: t = 0.5000–0.7000 s captured, 0.5000–2.1000 s in the container, \
+         16.6667 ms a frame (60.000 fps), slowed 8.000×",
+        "frames 336–456: t = 0.7000–0.9500 s captured",
+    ] {
+        assert!(message.contains(part), "`{part}` not in: {message}");
+    }
+}
+
+/// §2/§5: `render --vfr-jitter` captures frames at jittered times (±5 % of a
+/// frame here) and stamps them so; the same command writes the same bytes.
+/// `analyse` times every frame by its timestamp (the truth's capture time, to
+/// the container's 1/480000 s clock), `info` and the plan report the intervals'
+/// spread, and the fit recovers n as on the unjittered clip.
+#[test]
+fn jittered_timestamps_are_the_frames_capture_times() {
+    let dir = tempfile::tempdir().unwrap();
+    let clip = render(dir.path(), "jittered.mp4", &["--vfr-jitter", "0.1"]);
+    let bytes = std::fs::read(&clip).unwrap();
+    let again = render(dir.path(), "again.mp4", &["--vfr-jitter", "0.1"]);
+    assert!(
+        bytes == std::fs::read(&again).unwrap(),
+        "same command, same bytes"
+    );
+    let truth = truth(&clip);
+    let halt = truth["halt_time"].as_f64().unwrap();
+    let written = truth_container_times(&truth);
+    let captured: Vec<f64> = truth["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["t"].as_f64().unwrap() + halt)
+        .collect();
+    // Jittered capture, stored at the capture clock: the container time is the
+    // capture time.
+    for (c, t) in written.iter().zip(&captured) {
+        assert!((c - t).abs() < 1e-12, "{c} {t}");
+    }
+    let intervals: Vec<f64> = captured.windows(2).map(|w| w[1] - w[0]).collect();
+    let longest = intervals.iter().copied().fold(0.0, f64::max);
+    let shortest = intervals.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(longest > 1.04 / 480.0 && shortest < 0.96 / 480.0);
+
+    let tick = 1.0 / 480_000.0;
+    let jittered = analyse(&clip);
+    let timing = jittered.plan.frame_times.as_ref().unwrap();
+    assert_eq!(timing.sections.len(), 1);
+    assert_eq!(timing.slowdown, 1.0);
+    for (f, (c, t)) in jittered.frames.iter().zip(written.iter().zip(&captured)) {
+        assert!(
+            (f.container_time_s.unwrap() - c).abs() < 0.5 * tick,
+            "{}",
+            f.index
+        );
+        assert!((f.t_capture - t).abs() < 0.5 * tick, "frame {}", f.index);
+    }
+    // The spread reported is the written intervals' (1.4826 × MAD), as `info`
+    // reads it from the packets.
+    let median = |v: &[f64]| {
+        let mut v = v.to_vec();
+        v.sort_by(f64::total_cmp);
+        0.5 * (v[(v.len() - 1) / 2] + v[v.len() / 2])
+    };
+    let m = median(&intervals);
+    let deviations: Vec<f64> = intervals.iter().map(|d| (d - m).abs()).collect();
+    let spread = 1.4826 * median(&deviations);
+    assert!(spread > 0.02 / 480.0, "{spread}");
+    assert!(
+        (timing.interval_spread_s - spread).abs() < tick,
+        "{timing:?}"
+    );
+    let info = footage::probe(&clip).unwrap();
+    let stamps = info.timestamps.unwrap();
+    assert!((stamps.interval_spread_s - spread).abs() < tick);
+    assert_eq!(stamps.sections.len(), 1);
+
+    // As good a fit as the unjittered clip's: n within 0.01 of the prescribed 0.5
+    // for both (0.506 and 0.500 measured), the truth inside the 95 % interval.
+    let plain = analyse(&render(dir.path(), "plain.mp4", &[]));
+    for e in [&jittered, &plain] {
+        let fit = &e.peaks_fit.fit;
+        assert!((fit.n - 0.5).abs() < 0.01, "n = {}", fit.n);
+        assert!(fit.ci95_n.0 < 0.5 && 0.5 < fit.ci95_n.1, "{:?}", fit.ci95_n);
+    }
+    // The halt: the last frame of motion, two frames before the true halt on
+    // both (0.495825 s jittered, 0.495833 s plain), so within two frames and the
+    // jitter's 0.05 frame.
+    for e in [&jittered, &plain] {
+        let dt = (e.series.halt.t_phi - halt).abs();
+        assert!(dt < 2.05 / 480.0, "t_φ {}", e.series.halt.t_phi);
+    }
+}
+
+/// §2 (the rest frames' seek): in a clip whose frame interval changes, a frame
+/// sought by the time the container's packets list for it is that frame, where
+/// frame number / average fps lands elsewhere.
+#[test]
+fn frames_are_sought_by_their_listed_times_in_a_variable_rate_clip() {
+    let dir = tempfile::tempdir().unwrap();
+    let clip = render(
+        dir.path(),
+        "slowed.mp4",
+        &["--halt", "0.8", "--slow-section", "0.05:0.2:16"],
+    );
+    let mut source = footage::FrameSource::open(&clip).unwrap();
+    let index = source.stream_index().unwrap().unwrap();
+    let last = index.container_times_s.len() - 1;
+    for k in [last - 4, 30, 100, 0, last] {
+        source.seek_frame(k, &index).unwrap();
+        let frame = source.next_frame().unwrap().unwrap();
+        assert_eq!(frame.index, k);
+        let t = frame.container_time_s.unwrap();
+        assert!(
+            (t - index.container_times_s[k]).abs() < 1e-9,
+            "frame {k}: {t}"
+        );
+    }
+    // By number / average fps, the rest frames' first lands elsewhere.
+    source.seek(last - 4).unwrap();
+    let t = source
+        .next_frame()
+        .unwrap()
+        .unwrap()
+        .container_time_s
+        .unwrap();
+    assert!((t - index.container_times_s[last - 4]).abs() > 1e-3, "{t}");
 }

@@ -194,6 +194,7 @@ fn render(scene: &SceneSpec, dir: &Path) -> (std::path::PathBuf, GroundTruth) {
         fps: FPS,
         halt_time: 0.65,
         after_halt: 0.15,
+        jitter: None,
     };
     let spin = PostFlatSpin {
         beta_dot0: -2.8,

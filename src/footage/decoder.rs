@@ -379,17 +379,22 @@ impl VideoDecoder {
     /// (counted from 0 at the container's frame rate).
     pub(super) fn seek(&mut self, index: usize) -> Result<(), FootageError> {
         let fps = self.fps.unwrap_or(1.0);
-        self.seek_time(index as f64 / fps, &format!("frame {index}"))
+        // Half a frame early: frames whose timestamp rounds to the target count.
+        self.seek_time(index as f64 / fps, 0.5 / fps, &format!("frame {index}"))
     }
 
     /// Position the stream so that [`Self::next`] returns the first frame whose
-    /// timestamp is at or after `time_s` [s from the stream's start] less half a
-    /// frame; `what` names the target in an error.
-    pub(super) fn seek_time(&mut self, time_s: f64, what: &str) -> Result<(), FootageError> {
+    /// timestamp is at or after `time_s` [s from the stream's start] less
+    /// `early_s` [s]; `what` names the target in an error.
+    pub(super) fn seek_time(
+        &mut self,
+        time_s: f64,
+        early_s: f64,
+        what: &str,
+    ) -> Result<(), FootageError> {
         let fps = self.fps.unwrap_or(1.0);
         let target = self.start + (time_s / self.time_base).round() as i64;
-        // Half a frame early: frames whose timestamp rounds to the target count.
-        let tolerance = (0.5 / fps / self.time_base).floor() as i64;
+        let tolerance = (early_s / self.time_base).floor().min(i64::MAX as f64) as i64;
         // SAFETY: the format context is open and owned by `self.input`.
         let ret = unsafe {
             ffi::av_seek_frame(

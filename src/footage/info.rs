@@ -20,6 +20,7 @@ use super::capture_rate::{ContainerCaptureRate, container_capture_rate};
 use super::colour::VideoSignal;
 use super::decoder::VideoDecoder;
 use super::orientation::Orientation;
+use super::timing::{TimeSection, time_sections};
 use crate::signal::{mad_sigma, median};
 
 /// Video containers that [`probe`] hands to OpenCV (lower case, no dot).
@@ -233,8 +234,15 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
             "the container stores no fps: give the capture fps in the experiment config".into(),
         ),
     }
-    let timestamps = TimestampSummary::read(&mut decoder)?;
-    if let (Some(stamps), Some(fps)) = (&timestamps, container_fps) {
+    let timestamps = TimestampSummary::read(&mut decoder, capture_rate.as_ref().map(|r| r.fps))?;
+    if let Some(stamps) = timestamps.as_ref().filter(|s| s.sections.len() > 1) {
+        warnings.push(format!(
+            "the frame interval changes inside the clip ({} sections, a slow-motion \
+             section's start or end): `analyse` times each section by its own slow-down \
+             and needs the fit window and the rest tail each inside one section",
+            stamps.sections.len()
+        ));
+    } else if let (Some(stamps), Some(fps)) = (&timestamps, container_fps) {
         let by_stamps = 1.0 / stamps.median_interval_s;
         if (by_stamps / fps - 1.0).abs() > FPS_AGREEMENT {
             warnings.push(format!(
@@ -280,30 +288,56 @@ pub struct TimestampSummary {
     pub interval_spread_s: f64,
     /// Longest interval [s].
     pub max_interval_s: f64,
-    /// Intervals longer than 1.5 × the median: frames missing there.
+    /// Intervals longer than 1.5 × their section's median: frames missing there.
     pub gaps: usize,
+    /// The sections of constant interval ([`time_sections`]), mapped to capture
+    /// time at the container's capture rate when it stores one, else with the
+    /// fastest section taken as real time.
+    #[serde(default)]
+    pub sections: Vec<TimeSection>,
 }
 
 impl TimestampSummary {
     /// The summary of an open video's packet timestamps, `None` when a packet has
-    /// none or fewer than three frames have one.
-    fn read(decoder: &mut VideoDecoder) -> Result<Option<Self>, FootageError> {
+    /// none or fewer than three frames have one; `capture_fps` maps the sections
+    /// to capture time (`None`: the fastest section's rate).
+    fn read(
+        decoder: &mut VideoDecoder,
+        capture_fps: Option<f64>,
+    ) -> Result<Option<Self>, FootageError> {
         let Some(stamps) = decoder.packet_stamps()? else {
             return Ok(None);
         };
-        let intervals: Vec<f64> = stamps.windows(2).map(|w| w[1].0 - w[0].0).collect();
+        let times: Vec<f64> = stamps.iter().map(|s| s.0).collect();
+        let intervals: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
         if intervals.len() < 2 {
             return Ok(None);
         }
         let median_interval_s = median(&intervals);
-        Ok((median_interval_s > 0.0).then(|| Self {
+        if median_interval_s <= 0.0 || intervals.iter().any(|&d| d <= 0.0) {
+            return Ok(None);
+        }
+        let fastest = time_sections(&times, 1.0)
+            .iter()
+            .map(|s| s.container_interval_s)
+            .fold(f64::INFINITY, f64::min);
+        let sections = time_sections(&times, capture_fps.unwrap_or(1.0 / fastest));
+        let gaps = sections
+            .iter()
+            .map(|s| {
+                let own = median(&intervals[s.first_frame..s.last_frame]);
+                intervals[s.first_frame..s.last_frame]
+                    .iter()
+                    .filter(|&&d| d > 1.5 * own)
+                    .count()
+            })
+            .sum();
+        Ok(Some(Self {
             median_interval_s,
             interval_spread_s: mad_sigma(&intervals, median_interval_s),
             max_interval_s: intervals.iter().copied().fold(0.0, f64::max),
-            gaps: intervals
-                .iter()
-                .filter(|&&d| d > 1.5 * median_interval_s)
-                .count(),
+            gaps,
+            sections,
         }))
     }
 }
@@ -318,7 +352,18 @@ impl fmt::Display for TimestampSummary {
             number(1e3 * self.interval_spread_s),
             number(1e3 * self.max_interval_s),
             self.gaps
-        )
+        )?;
+        if self.sections.len() > 1 {
+            write!(
+                f,
+                "; {} sections of constant interval:",
+                self.sections.len()
+            )?;
+            for section in &self.sections {
+                write!(f, "\n{:<11}{section}", "")?;
+            }
+        }
+        Ok(())
     }
 }
 

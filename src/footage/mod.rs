@@ -6,7 +6,7 @@
 //! of PNG/TIFF/JPEG frames (read by the `image` crate, in natural name order).
 //! This stage owns everything about frames as they come off the disk: metadata,
 //! the capture fps and where it came from, frame times (the container's
-//! timestamps mapped to capture time, [`frame_times`]), the display matrix a phone
+//! timestamps mapped to capture time section by section, [`frame_times`]), the display matrix a phone
 //! tags its frames with ([`Orientation`]: frames are lent out as displayed), the
 //! samples' bit depth, range, matrix and transfer function ([`VideoSignal`]:
 //! frames are converted to one 8-bit brightness scale), duplicated and
@@ -43,4 +43,4 @@ pub use info::{
 pub use orientation::{Orientation, PixelMap};
 pub use repeats::{RepeatGauge, RepeatKind, RepeatedFrame};
 pub use source::{Frame, FrameSource, StreamIndex};
-pub use timing::{FrameTiming, TimeSource, frame_times};
+pub use timing::{FrameTiming, TimeSection, TimeSource, frame_times, time_sections};

@@ -223,16 +223,36 @@ impl FrameSource {
         }))
     }
 
-    /// Skip to frame `index` of a video whose container time is `time_s` (from
-    /// [`Self::stream_index`]): the next frame returned is that frame, numbered
-    /// `index`. Seeking by time lands on the right frame in a variable-rate clip,
-    /// where [`Self::seek`]'s index / average fps would not.
+    /// Skip to frame `index` of a video as `stream` (its [`Self::stream_index`])
+    /// lists it: the next frame returned is that frame, numbered `index`. Seeking
+    /// to the listed timestamp, less half the interval before it, lands on the
+    /// right frame in a variable-rate clip (jitter, a slowed section), where
+    /// [`Self::seek`]'s index / average fps would not.
     ///
     /// # Errors
-    /// `Unreadable` when the container refuses the seek.
-    pub fn seek_frame(&mut self, index: usize, time_s: f64) -> Result<(), FootageError> {
+    /// `Unreadable` when the container refuses the seek or `stream` lists no
+    /// frame `index`.
+    pub fn seek_frame(&mut self, index: usize, stream: &StreamIndex) -> Result<(), FootageError> {
         if let Reader::Video(decoder) = &mut self.reader {
-            decoder.seek_time(time_s, &format!("frame {index} ({time_s} s)"))?;
+            let times = &stream.container_times_s;
+            let Some(&time_s) = times.get(index) else {
+                return Err(FootageError::unreadable(
+                    &self.path,
+                    format!(
+                        "cannot seek to frame {index}: the container lists {}",
+                        times.len()
+                    ),
+                ));
+            };
+            let interval = match index {
+                0 => times.get(1).map_or(f64::INFINITY, |t| t - time_s),
+                _ => time_s - times[index - 1],
+            };
+            decoder.seek_time(
+                time_s,
+                0.5 * interval,
+                &format!("frame {index} ({time_s} s)"),
+            )?;
         }
         self.next = index;
         Ok(())

@@ -401,7 +401,7 @@ fn draw_span(
                 .series
                 .flags
                 .iter()
-                .filter(|f| f.index == position)
+                .filter(|f| f.index == e.frames[position].index)
                 .collect(),
         };
         let image = draw_frame(e, layout, view, &marks, strip_finder.as_mut(), slow_down).map_err(
@@ -452,9 +452,14 @@ pub(super) fn decode_positions(
         .reduce(|a, b| a.start.min(b.start)..a.end.max(b.end));
     source.convert_only_columns(columns)?;
     let matcher = FrameMatcher::new(e, first, last);
-    // A seek lands by time on a nearby frame: start a few frames early, and from
-    // the beginning if it still landed late.
-    source.seek(e.frames[first].index.saturating_sub(8))?;
+    // A seek lands by time on a nearby frame: start a few frames early (by the
+    // time the container lists for that frame, else by number / average fps),
+    // and from the beginning if it still landed late.
+    let early = e.frames[first].index.saturating_sub(8);
+    match source.stream_index()? {
+        Some(index) if early < index.container_times_s.len() => source.seek_frame(early, &index)?,
+        _ => source.seek(early)?,
+    }
     let mut landed = false;
     while let Some(frame) = source.next_frame()? {
         let position = match matcher.locate(e, frame.index, frame.container_time_s)? {

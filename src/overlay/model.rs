@@ -337,7 +337,13 @@ fn silhouette_top(e: &Experiment, layout: &Layout) -> Result<f64, OverlayError> 
     let c = &plan.calibration.calibration;
     let (ox, oy) = plan.side_view_origin();
     let mut source = FrameSource::open(&plan.clip)?;
-    source.seek(e.frames.len().saturating_sub(1))?;
+    // The clip's last frame (a decoded span's frames are numbered in the clip),
+    // sought by its listed time where the container lists one.
+    let last = e.frames.last().map_or(0, |f| f.index);
+    match source.stream_index()? {
+        Some(index) if last < index.container_times_s.len() => source.seek_frame(last, &index)?,
+        _ => source.seek(last)?,
+    }
     let mut top = c.z_t;
     if let Some(frame) = source.next_frame()? {
         let band = |y: usize, view: &FrameView| -> f64 {

@@ -150,8 +150,8 @@ use serde::{Deserialize, Serialize};
 use crate::footage::Orientation;
 use crate::model::params::DiskParams;
 pub use motion::{
-    DiskState, Motion, MotionSource, Nutation, PostFlatSpin, PowerLaw, Timing, add_nutation,
-    power_law_motion, trajectory_motion,
+    CaptureJitter, DiskState, Motion, MotionSource, Nutation, PostFlatSpin, PowerLaw,
+    TICKS_PER_FRAME, Timing, add_nutation, power_law_motion, trajectory_motion,
 };
 pub use scene::Plate;
 use scene::{
@@ -342,6 +342,26 @@ pub struct RenderSpec {
     /// previous and next written frames.
     #[serde(default)]
     pub interpolated: Vec<usize>,
+    /// Spans of capture time an MP4 stores slowed for playback, as a phone's
+    /// slow-motion section between real-time ramps (issue 14 §2).
+    #[serde(default)]
+    pub slowed_sections: Vec<SlowedSection>,
+}
+
+/// A span of capture time stored slowed: each frame interval that starts in
+/// [`start_s`, `end_s`) of clip time advances the container's clock `factor` ×
+/// as far as the capture clock.
+///
+/// [`start_s`]: SlowedSection::start_s
+/// [`end_s`]: SlowedSection::end_s
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SlowedSection {
+    /// Clip time where the slowing starts [s, capture clock, first frame at 0].
+    pub start_s: f64,
+    /// Clip time where it ends [s].
+    pub end_s: f64,
+    /// Container seconds per capture second, > 1 (16: 480 fps played at 30).
+    pub factor: f64,
 }
 
 impl RenderSpec {
@@ -366,6 +386,7 @@ impl RenderSpec {
             storage: SampleStorage::default(),
             duplicated: Vec::new(),
             interpolated: Vec::new(),
+            slowed_sections: Vec::new(),
         }
     }
 }
@@ -422,6 +443,11 @@ pub struct FrameTruth {
     /// Light gain of the frame (mains flicker, [`Effects::light_gain`]).
     #[serde(default = "unit_gain")]
     pub light_gain: f64,
+    /// The MP4 timestamp of this frame [s, playback clock, first frame at 0] when
+    /// the clip is stamped frame by frame ([`GroundTruth::stamped`]); otherwise
+    /// absent, and an MP4 stamps written frame k at k / fps.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub container_time_s: Option<f64>,
 }
 
 fn unit_gain() -> f64 {
@@ -538,8 +564,48 @@ pub struct GroundTruth {
     /// written frames.
     #[serde(default)]
     pub interpolated: Vec<usize>,
+    /// Capture times jittered about k/fps (a variable frame rate); `frames` hold
+    /// the jittered times.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vfr_jitter: Option<CaptureJitter>,
+    /// Spans stored slowed for playback.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub slowed_sections: Vec<SlowedSection>,
+    /// Whether an MP4 is stamped frame by frame, each frame's timestamp in
+    /// [`FrameTruth::container_time_s`] on a clock of [`TICKS_PER_FRAME`] ticks a
+    /// frame (with a jitter or a slowed section; dropped frames then leave a gap).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub stamped: bool,
     /// One entry per written frame, in output order.
     pub frames: Vec<FrameTruth>,
+}
+
+/// Every capture's container timestamp in ticks of 1 / (fps · [`TICKS_PER_FRAME`])
+/// s from the first: the capture clock (whole ticks, jittered or not), each
+/// interval starting inside a slowed section stretched by its factor.
+fn container_ticks(motion: &Motion, slowed: &[SlowedSection]) -> Vec<i64> {
+    let timing = &motion.timing;
+    let per_s = timing.fps * f64::from(TICKS_PER_FRAME);
+    // Capture times in whole ticks (k / fps less the halt plus the halt is not
+    // always k / fps in floating point).
+    let capture: Vec<i64> = motion
+        .states
+        .iter()
+        .map(|s| ((s.t + timing.halt_time) * per_s).round() as i64)
+        .collect();
+    let mut ticks = Vec::with_capacity(capture.len());
+    let mut at = 0i64;
+    ticks.push(at);
+    for w in capture.windows(2) {
+        let start = w[0] as f64 / per_s;
+        let factor = slowed
+            .iter()
+            .find(|s| (s.start_s..s.end_s).contains(&start))
+            .map_or(1.0, |s| s.factor);
+        at += ((w[1] - w[0]) as f64 * factor).round() as i64;
+        ticks.push(at);
+    }
+    ticks
 }
 
 /// Capture indices sorted, each once.
@@ -736,6 +802,9 @@ impl Renderer {
                 storage: spec.storage,
                 duplicated: sorted(&spec.duplicated),
                 interpolated: sorted(&spec.interpolated),
+                vfr_jitter: motion.timing.jitter,
+                slowed_sections: spec.slowed_sections.clone(),
+                stamped: motion.timing.jitter.is_some() || !spec.slowed_sections.is_empty(),
                 frames: Vec::new(),
             },
             written,
@@ -751,6 +820,13 @@ impl Renderer {
             .map(|(file_index, &index)| renderer.frame_truth(file_index, index))
             .collect();
         renderer.truth.frames = frames;
+        if renderer.truth.stamped {
+            let stamps = container_ticks(motion, &spec.slowed_sections);
+            let tick_s = 1.0 / (motion.timing.fps * f64::from(TICKS_PER_FRAME));
+            for frame in &mut renderer.truth.frames {
+                frame.container_time_s = Some(stamps[frame.index] as f64 * tick_s);
+            }
+        }
         Ok(renderer)
     }
 
@@ -849,6 +925,7 @@ impl Renderer {
                 .spec
                 .effects
                 .light_gain(index as f64 / self.motion.timing.fps),
+            container_time_s: None,
         }
     }
 
@@ -1561,6 +1638,40 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
     if motion.states.len() <= spec.dropped.len() {
         return fail("every frame would be dropped".into());
     }
+    let clip_s = motion.timing.halt_time + motion.timing.after_halt;
+    let mut sections = spec.slowed_sections.clone();
+    sections.sort_by(|a, b| a.start_s.total_cmp(&b.start_s));
+    for (k, section) in sections.iter().enumerate() {
+        let SlowedSection {
+            start_s,
+            end_s,
+            factor,
+        } = *section;
+        if !(start_s.is_finite() && end_s.is_finite() && 0.0 <= start_s && start_s < end_s) {
+            return fail(format!(
+                "a slowed section must start at or after 0 s and end after it starts, got \
+                 {start_s}–{end_s} s"
+            ));
+        }
+        if start_s >= clip_s {
+            return fail(format!(
+                "the slowed section {start_s}–{end_s} s starts after the clip's {clip_s} s"
+            ));
+        }
+        if !(factor.is_finite() && factor > 1.0 && factor <= MAX_SLOWING) {
+            return fail(format!(
+                "a slowed section's factor must lie in (1, {MAX_SLOWING}], got {factor}"
+            ));
+        }
+        if let Some(next) = sections.get(k + 1)
+            && next.start_s < end_s
+        {
+            return fail(format!(
+                "the slowed sections {start_s}–{end_s} s and {}–{} s overlap",
+                next.start_s, next.end_s
+            ));
+        }
+    }
     let written: Vec<usize> = (0..motion.states.len())
         .filter(|k| !spec.dropped.contains(k))
         .collect();
@@ -1605,6 +1716,9 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
 /// Distances of a pinhole side camera from the near rim that render accepts [m]
 /// (phones are held at 0.2–0.5 m; beyond 10 m a pinhole is orthographic to 0.4 %).
 pub const CAMERA_DISTANCE_RANGE_M: (f64, f64) = (0.1, 10.0);
+
+/// The most a slowed section is slowed: 960 fps played at 1 fps.
+pub const MAX_SLOWING: f64 = 960.0;
 
 /// Most poses one frame's exposure averages.
 pub const MAX_EXPOSURE_SAMPLES: usize = 16;
@@ -1652,6 +1766,7 @@ mod tests {
             fps,
             halt_time: halt,
             after_halt: after,
+            jitter: None,
         };
         let spin = PostFlatSpin {
             beta_dot0: -2.8,
@@ -2388,5 +2503,57 @@ mod tests {
         check(&|s| s.effects.exposure_s = 0.01, " s");
         check(&|s| s.effects.flicker_50hz_amplitude = 1.2, "50 Hz");
         check(&|s| s.effects.shot_noise = f64::NAN, "grey levels");
+    }
+
+    /// A slowed section stretches the container's clock over the frame intervals
+    /// that start inside it, and only there; a dropped frame leaves its interval
+    /// in the timestamps. Overlapping or empty sections are refused.
+    #[test]
+    fn a_slowed_section_stretches_the_container_clock_over_its_span() {
+        let m = motion(480.0, 0.1, 0.05);
+        let mut spec = small_spec(Plate::Dark, false);
+        spec.slowed_sections = vec![SlowedSection {
+            start_s: 0.025,
+            end_s: 0.05,
+            factor: 16.0,
+        }];
+        spec.dropped = vec![60];
+        let r = Renderer::new(&spec, &m).expect("renderer");
+        let truth = r.truth();
+        assert!(truth.stamped);
+        let frame_s = 1.0 / 480.0;
+        for w in truth.frames.windows(2) {
+            let (a, b) = (&w[0], &w[1]);
+            // Captures 12..24 start inside 0.025–0.05 s.
+            let slowed = (12..24).contains(&a.index);
+            let expected = (b.index - a.index) as f64 * frame_s * if slowed { 16.0 } else { 1.0 };
+            let interval = b.container_time_s.unwrap() - a.container_time_s.unwrap();
+            assert!((interval - expected).abs() < 1e-12, "capture {}", a.index);
+        }
+        assert!(
+            Renderer::new(&small_spec(Plate::Dark, false), &m)
+                .expect("plain")
+                .truth()
+                .frames
+                .iter()
+                .all(|f| f.container_time_s.is_none())
+        );
+        for (sections, why) in [
+            (vec![(0.02, 0.01, 8.0)], "end after it starts"),
+            (vec![(0.0, 0.03, 0.5)], "factor"),
+            (vec![(0.0, 0.03, 8.0), (0.02, 0.04, 8.0)], "overlap"),
+            (vec![(1.0, 2.0, 8.0)], "starts after the clip"),
+        ] {
+            spec.slowed_sections = sections
+                .into_iter()
+                .map(|(start_s, end_s, factor)| SlowedSection {
+                    start_s,
+                    end_s,
+                    factor,
+                })
+                .collect();
+            let err = Renderer::new(&spec, &m).err().expect("refused").to_string();
+            assert!(err.contains(why), "{err}");
+        }
     }
 }

@@ -61,6 +61,27 @@ pub struct Timing {
     /// Duration filmed after the halt [s]: the post-flat spin and the rest frames
     /// that calibration uses.
     pub after_halt: f64,
+    /// Capture times jittered about k/fps, as a phone's variable frame rate
+    /// (`None`: exactly k/fps).
+    #[serde(default)]
+    pub jitter: Option<CaptureJitter>,
+}
+
+/// Ticks per nominal frame interval of the clock that jittered capture times lie
+/// on, and that the MP4 timestamps of a clip stamped frame by frame count in
+/// (`render --vfr-jitter`, `--slow-section`): a capture time is a whole number of
+/// ticks, so the container holds it exactly.
+pub const TICKS_PER_FRAME: u32 = 1000;
+
+/// A variable frame rate: capture k at (k + a·(u_k − ½))/fps, u_k uniform in
+/// [0, 1) from a SplitMix64 stream of the seed (frame 0 unjittered), rounded to
+/// the [`TICKS_PER_FRAME`] clock. Intervals vary by up to ±a of 1/fps.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CaptureJitter {
+    /// The jitter's full width a [frame intervals], in [0, 0.5].
+    pub fraction: f64,
+    /// Seed of the jitter's stream.
+    pub seed: u64,
 }
 
 impl Timing {
@@ -71,8 +92,20 @@ impl Timing {
 
     /// Capture times relative to the halt, one per captured frame [s].
     pub fn times(&self) -> Vec<f64> {
+        let Some(jitter) = self.jitter else {
+            return (0..self.frame_count())
+                .map(|k| k as f64 / self.fps - self.halt_time)
+                .collect();
+        };
+        let mut rng = crate::rng::SplitMix64::new(jitter.seed);
+        let ticks = f64::from(TICKS_PER_FRAME);
         (0..self.frame_count())
-            .map(|k| k as f64 / self.fps - self.halt_time)
+            .map(|k| {
+                let u = rng.uniform() - 0.5;
+                let offset = if k == 0 { 0.0 } else { jitter.fraction * u };
+                let tick = (k as f64 * ticks + (offset * ticks).round()) / ticks;
+                tick / self.fps - self.halt_time
+            })
             .collect()
     }
 
@@ -82,12 +115,19 @@ impl Timing {
             && self.halt_time.is_finite()
             && self.halt_time >= 0.0
             && self.after_halt.is_finite()
-            && self.after_halt >= 0.0;
+            && self.after_halt >= 0.0
+            && self
+                .jitter
+                .is_none_or(|j| j.fraction.is_finite() && (0.0..=0.5).contains(&j.fraction));
         if !ok {
             return Err(RenderError::invalid(format!(
-                "timing needs fps > 0 and non-negative halt time and after-halt duration, got \
-                 fps = {}, halt = {} s, after halt = {} s",
-                self.fps, self.halt_time, self.after_halt
+                "timing needs fps > 0, non-negative halt time and after-halt duration and a \
+                 jitter in [0, 0.5] of a frame, got fps = {}, halt = {} s, after halt = {} s, \
+                 jitter {:?}",
+                self.fps,
+                self.halt_time,
+                self.after_halt,
+                self.jitter.map(|j| j.fraction)
             )));
         }
         let frames = self.fps * (self.halt_time + self.after_halt);
@@ -565,6 +605,7 @@ pub fn trajectory_motion(
         fps,
         halt_time: last.t,
         after_halt,
+        jitter: None,
     };
     timing.validate()?;
     // Centre of mass by the trapezoidal rule, then shifted to rest at the origin.
@@ -646,6 +687,7 @@ mod tests {
             fps: 480.0,
             halt_time: 0.5,
             after_halt: 0.1,
+            jitter: None,
         }
     }
 
@@ -654,6 +696,33 @@ mod tests {
             beta_dot0: -2.8,
             mu: 0.134,
         }
+    }
+
+    #[test]
+    fn jittered_capture_times_lie_on_the_tick_clock_within_the_jitter() {
+        let jittered = Timing {
+            jitter: Some(CaptureJitter {
+                fraction: 0.1,
+                seed: 3,
+            }),
+            ..timing()
+        };
+        let times = jittered.times();
+        assert_eq!(times, jittered.times(), "the same seed, the same times");
+        assert_eq!(times.len(), timing().frame_count());
+        let ticks_per_s = 480.0 * f64::from(TICKS_PER_FRAME);
+        let mut moved = 0;
+        for (k, t) in times.iter().enumerate() {
+            let tick = (t + 0.5) * ticks_per_s;
+            assert!((tick - tick.round()).abs() < 1e-6, "frame {k}: {tick}");
+            // Within half the jitter's width (0.05 of a frame) of k / fps.
+            let offset = tick / f64::from(TICKS_PER_FRAME) - k as f64;
+            assert!(offset.abs() <= 0.05 + 1e-9, "frame {k}: {offset}");
+            moved += usize::from(offset.abs() > 0.01);
+        }
+        assert_eq!(times[0], -0.5, "the first frame at clip time 0");
+        // Uniform offsets: 80 % of frames lie over 0.01 of a frame off.
+        assert!(moved > times.len() * 7 / 10, "{moved} of {}", times.len());
     }
 
     /// Eq. (3.8) evaluated on the prescribed φ, ψ̇ reproduces E = A_e (t_halt − t)^n,
@@ -699,6 +768,7 @@ mod tests {
             fps: 20_000.0,
             halt_time: 0.3,
             after_halt: 0.0,
+            jitter: None,
         };
         let motion = power_law_motion(&params, &PowerLaw::thesis(0.5), &fine, spin()).expect("m");
         let s = &motion.states;
@@ -724,6 +794,7 @@ mod tests {
             fps: 20_000.0,
             halt_time: 0.05,
             after_halt: 0.01,
+            jitter: None,
         };
         for n in [0.45, 2.0 / 3.0] {
             let motion =

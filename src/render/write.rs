@@ -1,7 +1,9 @@
 //! Writing a rendered clip: an H.264 MP4 through FFmpeg's libavcodec (libx264 at a
 //! chosen crf, one encoder thread, so the bytes are reproducible) or a folder of PNG
 //! frames `frame_000001.png …`, plus the ground truth as `<clip stem>.truth.json`
-//! beside it.
+//! beside it. An MP4 stamps written frame k at k / fps, or, for a jittered capture
+//! or a slowed section, each frame at the container time its truth gives, on a
+//! clock of [`TICKS_PER_FRAME`] ticks a frame.
 //!
 //! Both are written under a temporary name in the destination folder and renamed into
 //! place when complete, so an interrupted run never leaves a clip that looks finished.
@@ -14,7 +16,7 @@ use ff::software::scaling;
 use ffmpeg_next as ff;
 use rayon::prelude::*;
 
-use super::{RenderError, Renderer};
+use super::{RenderError, Renderer, TICKS_PER_FRAME};
 use crate::footage::Orientation;
 use crate::report::write_json;
 
@@ -141,6 +143,14 @@ pub fn write_clip(renderer: &Renderer, path: &Path, crf: u8) -> Result<WrittenCl
                     .into(),
             ));
         }
+        ClipFormat::PngFolder if renderer.truth().stamped => {
+            return Err(fail(
+                path,
+                "per-frame timestamps (a jitter, a slowed section) are written into an MP4 \
+                 only: give a path ending in .mp4"
+                    .into(),
+            ));
+        }
         ClipFormat::PngFolder if !renderer.truth().display_orientation.is_identity() => {
             return Err(fail(
                 path,
@@ -202,15 +212,27 @@ fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String
         storage: truth.storage,
         orientation: truth.display_orientation,
     };
-    let mut writer = H264Writer::create(path, truth.width, truth.height, truth.fps, settings)?;
+    let ticks_per_frame = if truth.stamped { TICKS_PER_FRAME } else { 1 };
+    let mut writer = H264Writer::create_with_clock(
+        path,
+        truth.width,
+        truth.height,
+        truth.fps,
+        ticks_per_frame,
+        settings,
+    )?;
+    let tick_s = 1.0 / (truth.fps * f64::from(ticks_per_frame));
     let n = renderer.frame_count();
     for start in (0..n).step_by(BATCH) {
         let images: Vec<_> = (start..(start + BATCH).min(n))
             .into_par_iter()
             .map(|i| renderer.render_frame(i))
             .collect();
-        for image in &images {
-            writer.push(image)?;
+        for (i, image) in (start..).zip(&images) {
+            match truth.frames[i].container_time_s {
+                Some(t) => writer.push_at(image, (t / tick_s).round() as i64)?,
+                None => writer.push(image)?,
+            }
         }
     }
     writer.finish()?;
@@ -273,6 +295,8 @@ pub struct H264Writer {
     orientation: Orientation,
     stored: (usize, usize),
     frames: i64,
+    /// Timestamp ticks per frame at the nominal fps (1 unless stamped one by one).
+    ticks_per_frame: i64,
 }
 
 fn av(what: &'static str) -> impl Fn(ff::Error) -> String {
@@ -294,6 +318,23 @@ impl H264Writer {
         width: u32,
         height: u32,
         fps: f64,
+        settings: H264Settings,
+    ) -> Result<Self, String> {
+        Self::create_with_clock(path, width, height, fps, 1, settings)
+    }
+
+    /// [`Self::create`] with timestamps counted in ticks of 1 / (fps ·
+    /// `ticks_per_frame`) s, for frames stamped one by one ([`Self::push_at`]: a
+    /// variable frame rate, a slowed section).
+    ///
+    /// # Errors
+    /// As [`Self::create`].
+    pub fn create_with_clock(
+        path: &Path,
+        width: u32,
+        height: u32,
+        fps: f64,
+        ticks_per_frame: u32,
         settings: H264Settings,
     ) -> Result<Self, String> {
         let storage = settings.storage;
@@ -322,7 +363,11 @@ impl H264Writer {
             .flags()
             .contains(ff::format::Flags::GLOBAL_HEADER);
         let rate = ff::Rational::from(fps);
-        let time_base = rate.invert();
+        let ticks = i32::try_from(ticks_per_frame)
+            .ok()
+            .and_then(|t| rate.numerator().checked_mul(t))
+            .ok_or_else(|| format!("{ticks_per_frame} ticks a frame at {fps} fps overflow"))?;
+        let time_base = ff::Rational::new(rate.denominator(), ticks);
         let mut encoder = ff::codec::context::Context::new_with_codec(codec)
             .encoder()
             .video()
@@ -433,14 +478,24 @@ impl H264Writer {
             orientation,
             stored,
             frames: 0,
+            ticks_per_frame: i64::from(ticks_per_frame),
         })
     }
 
-    /// Encodes the next frame.
+    /// Encodes the next frame, stamped a nominal frame interval after the last.
     ///
     /// # Errors
     /// A frame of another size than the clip's, or FFmpeg failing to encode or write.
     pub fn push(&mut self, image: &image::RgbImage) -> Result<(), String> {
+        self.push_at(image, self.frames * self.ticks_per_frame)
+    }
+
+    /// Encodes the next frame with timestamp `pts` [ticks of the clock set at
+    /// [`Self::create_with_clock`], increasing frame by frame].
+    ///
+    /// # Errors
+    /// As [`Self::push`].
+    pub fn push_at(&mut self, image: &image::RgbImage, pts: i64) -> Result<(), String> {
         if image.dimensions() != (self.width, self.height) {
             let (w, h) = image.dimensions();
             return Err(format!(
@@ -473,7 +528,7 @@ impl H264Writer {
         self.scaler
             .run(&self.rgb, &mut self.yuv)
             .map_err(av("libswscale"))?;
-        self.yuv.set_pts(Some(self.frames));
+        self.yuv.set_pts(Some(pts));
         self.frames += 1;
         self.encoder
             .send_frame(&self.yuv)
@@ -485,9 +540,10 @@ impl H264Writer {
     fn drain(&mut self) -> Result<(), String> {
         while self.encoder.receive_packet(&mut self.packet).is_ok() {
             self.packet.set_stream(0);
-            // One frame each: without a duration the MP4's edit list ends at the
-            // last frame's start and decoders drop that frame.
-            self.packet.set_duration(1);
+            // One nominal frame each: without a duration the MP4's edit list ends
+            // at the last frame's start and decoders drop that frame (the muxer
+            // takes the others' durations from the next frame's timestamp).
+            self.packet.set_duration(self.ticks_per_frame);
             self.packet
                 .rescale_ts(self.time_base, self.stream_time_base);
             self.packet

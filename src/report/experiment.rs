@@ -115,8 +115,9 @@ pub fn write_experiment(
     let at = |v: Option<&Vec<f64>>, i: usize| {
         v.and_then(|v| v.get(i).copied()).filter(|x| x.is_finite())
     };
-    // The series count frames from the first decoded one; the files give each
-    // frame's number in the clip.
+    // The peaks and states count frames from the first decoded one (the flags
+    // carry clip frame numbers already); the files give each frame's number in
+    // the clip.
     let frame_number = |position: usize| e.frames.get(position).map_or(position, |f| f.index);
     let frame_rows: Vec<FrameRow> = e
         .frames
@@ -184,7 +185,7 @@ pub fn write_experiment(
         .flags
         .iter()
         .map(|f| FlagRow {
-            index: frame_number(f.index),
+            index: f.index,
             t_s: f.t,
             reason: format!("{:?}", f.reason),
         })
@@ -376,9 +377,14 @@ fn experiment_page(
             plan.frame_times.as_ref().map_or_else(
                 || "not recorded".into(),
                 |f| {
+                    let sections = if f.sections.len() > 1 {
+                        format!("; sections: {}", f.sections_text())
+                    } else {
+                        String::new()
+                    };
                     format!(
                         "{}: {}; frame interval median {:.4} ms, spread {:.4} ms \
-                         (1.4826 × MAD), {:.4}–{:.4} ms",
+                         (1.4826 × MAD), {:.4}–{:.4} ms{sections}",
                         f.source.label(),
                         f.detail,
                         1e3 * f.median_interval_s,
@@ -457,10 +463,7 @@ fn experiment_page(
         .iter()
         .map(|f| {
             vec![
-                e.frames
-                    .get(f.index)
-                    .map_or(f.index, |r| r.index)
-                    .to_string(),
+                f.index.to_string(),
                 format!("{:.5}", f.t),
                 format!("{:?}", f.reason),
             ]
