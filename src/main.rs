@@ -322,6 +322,11 @@ struct RenderArgs {
     /// Paper's (the disk's side and top face) grey level [0–255].
     #[arg(long, default_value_t = 238.0, value_name = "GREY")]
     paper_grey: f64,
+    /// Radius of the rounding of the disk's rims [mm] (shaded, as on a real disk
+    /// whose side fades into the plate over its last fraction of a millimetre);
+    /// 0 = sharp.
+    #[arg(long, default_value_t = 0.0, value_name = "MM")]
+    edge_radius: f64,
     /// Plate texture: RMS relative albedo variation of a seeded grain [0–1]; 0 = plain.
     #[arg(long, default_value_t = 0.0, value_name = "CONTRAST")]
     texture: f64,
@@ -945,6 +950,7 @@ fn run_render(args: &RenderArgs) -> Result<()> {
     spec.metres_per_px = args.scale;
     spec.elevation_deg = args.elevation;
     spec.camera_distance_m = args.camera_distance;
+    spec.edge_radius = 1e-3 * args.edge_radius;
     spec.scenery = Scenery {
         paper_grey: args.paper_grey,
         plate_grey: args.plate_grey,

@@ -323,6 +323,10 @@ pub struct RenderSpec {
     pub scenery: Scenery,
     /// Width of the red strip [m].
     pub strip_width: f64,
+    /// Radius of the rounding of the disk's two rims [m] ([`DiskShape::edge_radius`]);
+    /// 0: sharp.
+    #[serde(default)]
+    pub edge_radius: f64,
     /// Camera artefacts.
     pub effects: Effects,
     /// Capture indices (0-based) of frames missing from the output.
@@ -380,6 +384,7 @@ impl RenderSpec {
             camera_distance_m: None,
             scenery: Scenery::default(),
             strip_width: 0.005,
+            edge_radius: 0.0,
             effects: Effects::default(),
             dropped: Vec::new(),
             display_orientation: Orientation::IDENTITY,
@@ -725,6 +730,7 @@ impl Renderer {
                 half_thickness: h,
                 beta0: motion.beta0,
                 strip_half_width: 0.5 * spec.strip_width,
+                edge_radius: spec.edge_radius,
             },
             look: Look::with_scenery(spec.plate, &spec.scenery, spec.effects.seed),
             plate_back: 0.15,
@@ -1537,6 +1543,15 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
         return fail(format!(
             "the strip width must lie in (0, R), got {} m",
             spec.strip_width
+        ));
+    }
+    if !(spec.edge_radius.is_finite()
+        && spec.edge_radius >= 0.0
+        && spec.edge_radius <= motion.params.half_thickness)
+    {
+        return fail(format!(
+            "the rims' rounding radius must lie in [0, H] = [0, {} m], got {} m",
+            motion.params.half_thickness, spec.edge_radius
         ));
     }
     let sc = &spec.scenery;
@@ -2499,6 +2514,7 @@ mod tests {
         check(&|s| s.camera_distance_m = Some(0.05), " m");
         check(&|s| s.scenery.reflectivity = Some(0.95), "[0, 0.9]");
         check(&|s| s.scenery.reflection_blur_px = -1.0, "px");
+        check(&|s| s.edge_radius = 0.01, "rounding radius");
         check(&|s| s.scenery.plate_grey = Some(300.0), "255");
         check(&|s| s.effects.exposure_s = 0.01, " s");
         check(&|s| s.effects.flicker_50hz_amplitude = 1.2, "50 Hz");

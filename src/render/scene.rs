@@ -130,6 +130,14 @@ pub struct DiskShape {
     pub beta0: f64,
     /// Half-width of the strip [m].
     pub strip_half_width: f64,
+    /// Radius of the rounding of both rims [m]; 0: sharp. The rounding is drawn in
+    /// the shading: over the last `edge_radius` of the side and of each face the
+    /// normal turns as a quarter circle's of that radius does, seen along the face
+    /// (sin α = depth into the band / radius), from the face's to the other face's
+    /// (a real disk's rim, and the open footage's, whose bottom 1–2.6 px fade from
+    /// the side's level). The outline stays the cylinder's: the true rim, where
+    /// z_rim is measured, is the corner.
+    pub edge_radius: f64,
 }
 
 /// A family of parallel rays (one orthographic view, the shadow rays or the mirrored
@@ -167,6 +175,10 @@ pub struct DiskHit {
     pub surface: Surface,
     /// Outward normal at the entry point, world frame.
     pub normal: [f64; 3],
+    /// Fraction of the ambient light (the room above) that reaches the point: 1,
+    /// but on a rounded rim turned down, 1 + n_z (it sees the plate instead, and
+    /// none of the room facing straight down).
+    pub sky: f32,
 }
 
 impl DiskShape {
@@ -201,11 +213,49 @@ impl DiskShape {
             let rho = (p[0] * p[0] + p[1] * p[1]).sqrt().max(1e-300);
             (Surface::Side, [p[0] / rho, p[1] / rho, 0.0])
         };
+        let (normal_body, rounded) = self.rounded_normal(cap, p, normal_body);
+        let normal = pose.dir_to_world(normal_body);
         Some(DiskHit {
             t: t_in,
             surface,
-            normal: pose.dir_to_world(normal_body),
+            normal,
+            sky: if rounded {
+                (1.0 + normal[2].min(0.0)) as f32
+            } else {
+                1.0
+            },
         })
+    }
+
+    /// The normal at body-frame point `p` of a face (`cap`) or of the side, turned
+    /// towards the other face within [`DiskShape::edge_radius`] of a rim, by α with
+    /// sin α = the depth into that band over its width (90° at the corner), and
+    /// whether it was turned.
+    fn rounded_normal(&self, cap: bool, p: [f64; 3], face: [f64; 3]) -> ([f64; 3], bool) {
+        let r = self.edge_radius;
+        if r <= 0.0 {
+            return (face, false);
+        }
+        let rho = (p[0] * p[0] + p[1] * p[1]).sqrt().max(1e-300);
+        let radial = [p[0] / rho, p[1] / rho, 0.0];
+        let axial = [0.0, 0.0, p[2].signum()];
+        // The depth into the band, and the direction the normal turns towards.
+        let (depth, towards) = if cap {
+            (rho - (self.radius - r), radial)
+        } else {
+            (p[2].abs() - (self.half_thickness - r), axial)
+        };
+        if depth <= 0.0 {
+            return (face, false);
+        }
+        let sin = (depth / r).min(1.0);
+        let cos = (1.0 - sin * sin).sqrt();
+        let turned = normalise([
+            cos * face[0] + sin * towards[0],
+            cos * face[1] + sin * towards[1],
+            cos * face[2] + sin * towards[2],
+        ]);
+        (turned, true)
     }
 
     /// Whether a ray of the family meets the disk at all (shadow rays).
@@ -413,7 +463,7 @@ impl Look {
             Surface::Bottom => return self.bottom,
         };
         let diffuse = dot(hit.normal, self.fill_light).max(0.0) as f32;
-        let shade = self.ambient + (1.0 - self.ambient) * diffuse;
+        let shade = self.ambient * hit.sky + (1.0 - self.ambient) * diffuse;
         [base[0] * shade, base[1] * shade, base[2] * shade]
     }
 }

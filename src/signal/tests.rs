@@ -214,9 +214,7 @@ fn a_late_lone_excursion_sizes_the_noise_near_the_halt() {
     let level = before.rest_level;
     let rest_span = (config.rest_tail_s / (t[1] - t[0])).ceil() as usize;
     let mut spikes = z.clone();
-    for i in last + 1..last + 4 {
-        spikes[i] = level;
-    }
+    spikes[last + 1..last + 4].fill(level);
     spikes[last + 2] = level + 1.1 * before.threshold;
     assert!(last + 2 * rest_span < z.len(), "the clip rests long enough");
     // Without a later, higher excursion the rise two frames on is motion.
