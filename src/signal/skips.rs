@@ -170,7 +170,8 @@ const CONSISTENT_SIGMAS: f64 = 4.0;
 ///
 /// A boundary is flagged when its step stands `sigmas` errors e from zero and lies
 /// within [`CONSISTENT_SIGMAS`] errors of a whole number m ≥ 1 of frame turns (e
-/// combined with m × the turn's own error). e is the larger of the robust spread of
+/// combined with m × the turn's own error), a turn itself standing that many errors
+/// from zero (on a still strip any step is some number of turns). e is the larger of the robust spread of
 /// the steps over the clip (at least `floor` [rad]) and the step's own standard
 /// error from the two fits' residuals (a jump of β̇ inside a window, which the
 /// quadratics cannot follow, raises the residual and the error with it, and hides a
@@ -226,10 +227,13 @@ pub fn strip_angle_steps(
     let steps: Vec<f64> = boundaries.iter().map(|b| b.1).collect();
     let sigma = mad_sigma(&steps, 0.0).max(floor);
     // A dropped frame moves the strip on by whole frames' turns: the step must be
-    // m ≥ 1 of them within CONSISTENT_SIGMAS errors of both.
+    // m ≥ 1 of them within CONSISTENT_SIGMAS errors of both, and a turn must stand
+    // that many errors from zero (else any step is some number of them).
     let whole_turns = |step: f64, turn: f64, error: f64, turn_se: f64| {
         let m = (step / turn).round();
-        m >= 1.0 && (step - m * turn).abs() <= CONSISTENT_SIGMAS * error.hypot(m * turn_se)
+        turn.abs() > CONSISTENT_SIGMAS * error
+            && m >= 1.0
+            && (step - m * turn).abs() <= CONSISTENT_SIGMAS * error.hypot(m * turn_se)
     };
     let mut candidates: Vec<(usize, f64, f64)> = boundaries
         .iter()

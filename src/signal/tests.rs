@@ -752,6 +752,18 @@ fn a_strip_step_is_a_skip_only_in_whole_frame_turns() {
     };
     assert_eq!(flagged(0.0), Vec::<usize>::new());
     assert_eq!(flagged(0.5), Vec::<usize>::new());
+    // A still strip: a step there is no number of frame turns.
+    let still: Vec<f64> = (0..t.len())
+        .map(|i| 0.3 + if i >= 150 { 0.01 } else { 0.0 } + noise[i])
+        .collect();
+    let steps = strip_angle_steps(
+        &t,
+        &still,
+        f64::INFINITY,
+        config.strip_step_sigmas,
+        config.strip_step_floor,
+    );
+    assert_eq!(steps, Vec::new());
     assert_eq!(flagged(1.0), vec![150]);
     assert_eq!(flagged(2.0), vec![150]);
 }
