@@ -487,7 +487,7 @@ impl ScaleReport {
     /// plate `bottom_rim_row` (z_b) and the disk's size.
     fn new(cal: &vision::Calibration, bottom_rim_row: f64, disk: &DiskParams) -> Self {
         let diameter = 2.0 * disk.radius / (cal.x_r - cal.x_l);
-        let thickness = 2.0 * disk.half_thickness / (bottom_rim_row - cal.z_t);
+        let thickness = cal.metres_per_px(disk.half_thickness, bottom_rim_row);
         let factor = diameter / thickness;
         let (lo, hi) = PERSPECTIVE_FACTOR_RANGE;
         let used = if (lo..=hi).contains(&factor) {

@@ -100,10 +100,12 @@ impl Calibration {
         self.z_base - self.z_t
     }
 
-    /// Scale δ = 2H / (z_base − z_t), m/px: thesis eq. 3.10 as corrected in
-    /// ERRATA, with H the disk's half-thickness in metres.
-    pub fn metres_per_px(&self, half_thickness_m: f64) -> f64 {
-        2.0 * half_thickness_m / self.disk_height_px()
+    /// Scale δ = 2H / (z_b − z_t), m/px: thesis eq. 3.10 as corrected in
+    /// ERRATA, with H the disk's half-thickness in metres and z_b the row where the
+    /// near bottom rim meets the plate, `bottom_rim_row` (z_base for a sharp rim;
+    /// see `analyse::ScaleReport` for a rounded one).
+    pub fn metres_per_px(&self, half_thickness_m: f64, bottom_rim_row: f64) -> f64 {
+        2.0 * half_thickness_m / (bottom_rim_row - self.z_t)
     }
 
     /// Checks that the points describe a disk inside a `width × height` frame.
@@ -784,7 +786,8 @@ mod tests {
         assert_eq!(report.sources, [PointSource::Detected; 4]);
         assert_eq!(report.frame, 900);
         // Eq. 3.10 (corrected): δ = 2H/(z_base − z_t).
-        let delta = report.calibration.metres_per_px(0.00635);
+        let cal = &report.calibration;
+        let delta = cal.metres_per_px(0.00635, cal.z_base);
         // z_t and z_base each within 0.1 px of truth: 0.2 px in 40.35 px, 0.5 %.
         let truth = 0.0127 / s.thickness;
         assert!(
