@@ -578,12 +578,18 @@ fn run_analyse(
         );
     }
     let bar = progress_bar(0, "frames");
-    let experiment = analyse::analyse_clip_decoding(clip, &config, decoding, &|done, total| {
-        if let Some(bar) = &bar {
-            bar.set_length(total.unwrap_or(0) as u64);
-            bar.set_position(done as u64);
-        }
-    })?;
+    let experiment = analyse::analyse_clip_keeping(
+        clip,
+        &config,
+        decoding,
+        overlay.as_ref(),
+        &|done, total| {
+            if let Some(bar) = &bar {
+                bar.set_length(total.unwrap_or(0) as u64);
+                bar.set_position(done as u64);
+            }
+        },
+    )?;
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
