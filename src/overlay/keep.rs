@@ -478,3 +478,66 @@ impl FrameKeeper {
         (!self.off && !self.kept.frames.is_empty()).then_some(self.kept)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::analyse::{Decoding, analyse_clip_keeping};
+    use crate::config::ExperimentConfig;
+
+    /// On the committed H.264 fixture, `analyse` keeps every frame of the default
+    /// span, and a kept frame paints the canvas as the decoded frame does
+    /// (libswscale's conversion of the same samples): within 3 levels where the
+    /// side view is shrunk (its block means are taken before the conversion, not
+    /// after) and 2 in the full-resolution band.
+    #[test]
+    #[ignore = "fails at this revision: the side view differs from the decoded frame's by up to \
+                88 levels at some pixels (mean 1.7 levels in the encoded videos); not yet \
+                explained"]
+    fn kept_frames_cover_the_span_and_paint_as_decoded() {
+        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/side-dark-n050.mp4");
+        let config: ExperimentConfig = toml::from_str("fps = 480").unwrap();
+        let spec = OverlaySpec::default();
+        let e =
+            analyse_clip_keeping(&clip, &config, Decoding::Whole, Some(&spec), &|_, _| {}).unwrap();
+        let kept = e.kept.as_ref().expect("frames kept");
+        let span: Vec<usize> = (0..e.frames.len())
+            .filter(|&k| (spec.span_s.0..=spec.span_s.1).contains(&e.frames[k].t))
+            .collect();
+        let z_max = span
+            .iter()
+            .filter_map(|&k| e.frames[k].z_rim_px)
+            .fold(0.0, f64::max);
+        let layout = Layout::new(&e.plan, z_max);
+        let (first, last) = (span[0], span[span.len() - 1]);
+        let frames = kept.span((first, last), &layout).expect("the span kept");
+        assert_eq!(frames.len(), span.len());
+
+        let position = first + span.len() / 2;
+        let mut source = FrameSource::open(&clip).unwrap();
+        let mut decoded = None;
+        while let Some(frame) = source.next_frame().unwrap() {
+            if frame.index == e.frames[position].index {
+                decoded = Some(layout.paint(&source.whole_frame().unwrap()));
+                break;
+            }
+        }
+        let decoded = decoded.expect("frame decoded");
+        let painted = kept.paint(frames[position - first], &layout);
+        for (window, tolerance) in [(&layout.side, 3), (&layout.band, 2)] {
+            let (w, h) = window.canvas_size();
+            let mut worst = 0;
+            for y in window.dst_y..window.dst_y + h {
+                for x in window.dst_x..window.dst_x + w {
+                    let (a, b) = (decoded.get_pixel(x, y), painted.get_pixel(x, y));
+                    for c in 0..3 {
+                        worst = worst.max(a[c].abs_diff(b[c]));
+                    }
+                }
+            }
+            assert!(worst <= tolerance, "{}: {worst} levels apart", window.name);
+        }
+    }
+}
