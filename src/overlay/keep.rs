@@ -14,8 +14,8 @@
 //! before ([`super::measured`]).
 //!
 //! **What of each frame.** The side window at the overlay's own reduction (the
-//! mean of `shrink` × `shrink` luma samples; chroma taken at the centre of each
-//! 2 × 2 block of the result), and the centre band's columns at full
+//! mean of `shrink` × `shrink` luma samples, and of the chroma samples those
+//! pixels take, [`ChromaMap`]), and the centre band's columns at full
 //! resolution over the side window's rows, as 8-bit YUV copied from the decoder
 //! before any colour conversion; a frame folder's RGB block means. Colour is
 //! converted only for the frames drawn. A 720×1280 clip at 480 fps keeps about
@@ -72,6 +72,8 @@ struct YuvMatrix {
     g_cb: [i32; 256],
     g_cr: [i32; 256],
     b_cb: [i32; 256],
+    /// See [`Self::greys`].
+    greys: (u8, u8),
 }
 
 impl YuvMatrix {
@@ -98,7 +100,22 @@ impl YuvMatrix {
             g_cb: fixed(&|v| -2.0 * kb * (1.0 - kb) / kg * (v - 128.0) * c_scale),
             g_cr: fixed(&|v| -2.0 * kr * (1.0 - kr) / kg * (v - 128.0) * c_scale),
             b_cb: fixed(&|v| 2.0 * (1.0 - kb) * (v - 128.0) * c_scale),
+            greys: if signal.full_range {
+                (0, 255)
+            } else {
+                (16, 235)
+            },
         }
+    }
+
+    /// The luma samples that convert to greys within 0–255 (16–235 at limited
+    /// range): the decoder clamps each pixel's colour, so a shrunk picture, whose
+    /// samples are averaged before they are converted, clamps them first (x264's
+    /// ringing puts luma below 16 beside a white edge on black; averaged
+    /// unclamped, a block of 113, 113, 2, 2 came out 8 levels darker than the
+    /// decoded pixels' mean).
+    fn greys(&self) -> (u8, u8) {
+        self.greys
     }
 
     /// 8-bit full-range RGB of one sample.
@@ -114,8 +131,99 @@ impl YuvMatrix {
     }
 }
 
-/// One kept picture of a [`Region`]: YUV (Y at the picture's size, U and V at
-/// half of it, rounded up) or RGB.
+/// The frame's chroma samples that one axis (columns or rows) of a [`Region`]'s
+/// picture takes, and where each picture pixel finds its own among those kept.
+///
+/// The decoder's conversion (libswscale, as OpenCV) gives every frame pixel the
+/// chroma sample of the 2 × 2 block that holds it (frame column x takes chroma
+/// column ⌊x / 2⌋), and a shrunk window is the mean of the converted colours of
+/// each `shrink` × `shrink` block ([`Window::paint`]). The conversion is affine
+/// (clamping aside), so a kept picture gives the same colours when each kept
+/// chroma sample is the mean of the chroma samples its pixels take, weighted by
+/// how many of them take each: unshrunk, the frame's chroma samples under the
+/// region as they are (shared by two picture pixels); shrunk, one mean per
+/// picture pixel. Chroma shared by the picture's own 2 × 2 blocks instead (this
+/// module's first version) halved the chroma's resolution again and moved it by
+/// a pixel on odd offsets: 88 levels off at the red strip's edges.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct ChromaAxis {
+    /// Per kept chroma sample: (first frame chroma index, weights of it and the
+    /// ones after it); the weights add up to the region's shrink.
+    taps: Vec<(usize, Vec<u32>)>,
+    /// Per picture pixel: its kept chroma sample.
+    at: Vec<usize>,
+}
+
+impl ChromaAxis {
+    /// The axis of a region starting at frame pixel `start`, `n` picture pixels
+    /// long, each `shrink` frame pixels.
+    fn new(start: usize, n: usize, shrink: usize) -> Self {
+        if shrink == 1 {
+            let first = start / 2;
+            let last = (start + n.max(1) - 1) / 2;
+            return Self {
+                taps: (first..=last).map(|c| (c, vec![1])).collect(),
+                at: (0..n).map(|i| (start + i) / 2 - first).collect(),
+            };
+        }
+        let taps = (0..n)
+            .map(|i| {
+                let (x0, x1) = (start + shrink * i, start + shrink * (i + 1));
+                let first = x0 / 2;
+                let weights = (first..=(x1 - 1) / 2)
+                    .map(|c| (x1.min(2 * c + 2) - x0.max(2 * c)) as u32)
+                    .collect();
+                (first, weights)
+            })
+            .collect();
+        Self {
+            taps,
+            at: (0..n).collect(),
+        }
+    }
+
+    /// Kept chroma samples along the axis.
+    fn len(&self) -> usize {
+        self.taps.len()
+    }
+
+    /// The sum of one kept sample's weights (the same for every sample).
+    fn weight(&self) -> u32 {
+        self.taps.first().map_or(1, |(_, w)| w.iter().sum())
+    }
+
+    /// Each kept sample is one frame sample, in order: the kept chroma is a
+    /// plain crop of the planes.
+    fn is_crop(&self) -> bool {
+        self.taps.windows(2).all(|pair| pair[1].0 == pair[0].0 + 1)
+            && self.taps.iter().all(|(_, w)| w.len() == 1)
+    }
+}
+
+/// Where a [`Region`]'s chroma comes from: its columns' and rows' [`ChromaAxis`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct ChromaMap {
+    columns: ChromaAxis,
+    rows: ChromaAxis,
+}
+
+impl ChromaMap {
+    fn of(r: &Region) -> Self {
+        let (w, h) = r.size();
+        Self {
+            columns: ChromaAxis::new(r.x, w, r.shrink),
+            rows: ChromaAxis::new(r.y, h, r.shrink),
+        }
+    }
+
+    /// Bytes of one kept chroma plane.
+    fn plane_bytes(&self) -> usize {
+        self.columns.len() * self.rows.len()
+    }
+}
+
+/// One kept picture of a [`Region`]: YUV (Y at the picture's size, U and V as
+/// its [`ChromaMap`] says) or RGB.
 #[derive(Debug, Clone, Default)]
 struct Picture {
     y: Vec<u8>,
@@ -125,8 +233,9 @@ struct Picture {
 }
 
 impl Picture {
-    /// Keeps `region` of a frame's YUV samples.
-    fn keep_yuv(&mut self, yuv: &Yuv420, r: &Region) {
+    /// Keeps `region` of a frame's YUV samples, its chroma as `chroma` says,
+    /// shrunk luma clamped to `black..=white` first ([`YuvMatrix::greys`]).
+    fn keep_yuv(&mut self, yuv: &Yuv420, r: &Region, chroma: &ChromaMap, (black, white): (u8, u8)) {
         let (w, h) = r.size();
         let s = r.shrink;
         let (luma, stride) = yuv.planes[0];
@@ -147,7 +256,7 @@ impl Picture {
                     &luma[row + stride..row + stride + 2 * w],
                 );
                 for ((sum, &a), &b) in column_sums.iter_mut().zip(a).zip(b) {
-                    *sum = u16::from(a) + u16::from(b);
+                    *sum = u16::from(a.clamp(black, white)) + u16::from(b.clamp(black, white));
                 }
                 self.y.extend(
                     column_sums
@@ -165,24 +274,42 @@ impl Picture {
                     let row = (r.y + s * j + dy) * stride + r.x;
                     let samples = &luma[row..row + s * w];
                     for (sum, block) in sums.iter_mut().zip(samples.chunks_exact(s)) {
-                        *sum += block.iter().map(|&v| u32::from(v)).sum::<u32>();
+                        *sum += block
+                            .iter()
+                            .map(|&v| u32::from(v.clamp(black, white)))
+                            .sum::<u32>();
                     }
                 }
                 self.y
                     .extend(sums.iter().map(|&sum| ((sum + rounding) / area) as u8));
             }
         }
-        // Chroma at the centre of each 2 × 2 block of the picture.
-        let (cw, ch) = (w.div_ceil(2), h.div_ceil(2));
-        let (chroma_w, chroma_h) = (yuv.width.div_ceil(2), yuv.height.div_ceil(2));
+        let (columns, rows) = (&chroma.columns, &chroma.rows);
+        let crop = columns.is_crop() && rows.is_crop();
+        let area = columns.weight() * rows.weight();
         for (plane, out) in [(yuv.planes[1], &mut self.u), (yuv.planes[2], &mut self.v)] {
             let (samples, stride) = plane;
             out.clear();
-            out.reserve(cw * ch);
-            for j in 0..ch {
-                let row = ((r.y + s * (2 * j + 1)) / 2).min(chroma_h - 1);
-                let line = &samples[row * stride..];
-                out.extend((0..cw).map(|i| line[((r.x + s * (2 * i + 1)) / 2).min(chroma_w - 1)]));
+            out.reserve(chroma.plane_bytes());
+            if crop {
+                let c0 = columns.taps[0].0;
+                for &(row, _) in &rows.taps {
+                    let at = row * stride + c0;
+                    out.extend_from_slice(&samples[at..at + columns.len()]);
+                }
+                continue;
+            }
+            for (r0, row_weights) in &rows.taps {
+                out.extend(columns.taps.iter().map(|(c0, column_weights)| {
+                    let mut sum = 0;
+                    for (dr, &wr) in row_weights.iter().enumerate() {
+                        let line = &samples[(r0 + dr) * stride + c0..];
+                        for (&wc, &c) in column_weights.iter().zip(line) {
+                            sum += wr * wc * u32::from(c);
+                        }
+                    }
+                    ((sum + area / 2) / area) as u8
+                }));
             }
         }
     }
@@ -215,17 +342,18 @@ impl Picture {
         }
     }
 
-    /// The picture in RGB, 3 bytes a pixel, `width` a row.
-    fn to_rgb(&self, width: usize, matrix: Option<&YuvMatrix>) -> Vec<u8> {
-        let Some(m) = matrix else {
+    /// The picture in RGB, 3 bytes a pixel, `width` a row; `matrix` and `chroma`
+    /// for YUV pictures.
+    fn to_rgb(&self, width: usize, yuv: Option<(&YuvMatrix, &ChromaMap)>) -> Vec<u8> {
+        let Some((m, chroma)) = yuv else {
             return self.rgb.clone();
         };
-        let cw = width.div_ceil(2);
+        let cw = chroma.columns.len();
         let mut rgb = Vec::with_capacity(3 * self.y.len());
-        for (j, row) in self.y.chunks_exact(width).enumerate() {
-            for (i, &y) in row.iter().enumerate() {
-                let c = (j / 2) * cw + i / 2;
-                rgb.extend_from_slice(&m.rgb(y, self.u[c], self.v[c]));
+        for (row, &j) in self.y.chunks_exact(width).zip(&chroma.rows.at) {
+            let (u, v) = (&self.u[j * cw..(j + 1) * cw], &self.v[j * cw..(j + 1) * cw]);
+            for (&y, &i) in row.iter().zip(&chroma.columns.at) {
+                rgb.extend_from_slice(&m.rgb(y, u[i], v[i]));
             }
         }
         rgb
@@ -250,6 +378,9 @@ pub struct KeptFrames {
     band: Region,
     /// `None`: RGB pictures (a frame folder).
     matrix: Option<YuvMatrix>,
+    /// Where the side and band pictures' chroma comes from (YUV pictures).
+    side_chroma: ChromaMap,
+    band_chroma: ChromaMap,
     frames: VecDeque<KeptFrame>,
 }
 
@@ -307,7 +438,9 @@ impl KeptFrames {
     pub(crate) fn paint(&self, frame: &KeptFrame, layout: &Layout) -> RgbImage {
         let mut image = RgbImage::from_pixel(layout.width, layout.height, BACKGROUND);
         let (w, h) = self.side.size();
-        let side = frame.side.to_rgb(w, self.matrix.as_ref());
+        let side = frame
+            .side
+            .to_rgb(w, self.matrix.as_ref().map(|m| (m, &self.side_chroma)));
         let view = rgb_view(&side, w, h);
         Window {
             src_x: 0,
@@ -319,7 +452,9 @@ impl KeptFrames {
         }
         .paint(&view, &mut image);
         let (w, h) = self.band.size();
-        let band = frame.band.to_rgb(w, self.matrix.as_ref());
+        let band = frame
+            .band
+            .to_rgb(w, self.matrix.as_ref().map(|m| (m, &self.band_chroma)));
         let view = rgb_view(&band, w, h);
         Window {
             src_x: layout.band.src_x - self.band.x,
@@ -399,9 +534,10 @@ impl FrameKeeper {
         let before = frames(-spec.span_s.0 + MARGIN_S);
         let after = frames(spec.span_s.1 + MARGIN_S);
         let capacity = before + after + 1;
+        let (side_chroma, band_chroma) = (ChromaMap::of(&side), ChromaMap::of(&band));
         let pixels = side.size().0 * side.size().1 + band.size().0 * band.size().1;
         let bytes_per_frame = if matrix.is_some() {
-            3 * pixels / 2
+            pixels + 2 * (side_chroma.plane_bytes() + band_chroma.plane_bytes())
         } else {
             3 * pixels
         };
@@ -413,6 +549,8 @@ impl FrameKeeper {
                 side,
                 band,
                 matrix,
+                side_chroma,
+                band_chroma,
                 frames: VecDeque::with_capacity(capacity),
             },
             before,
@@ -460,8 +598,14 @@ impl FrameKeeper {
                     self.off = true;
                     return Ok(());
                 };
-                frame.side.keep_yuv(&yuv, &self.kept.side);
-                frame.band.keep_yuv(&yuv, &self.kept.band);
+                let kept = &self.kept;
+                let greys = kept.matrix.as_ref().map_or((0, 255), YuvMatrix::greys);
+                frame
+                    .side
+                    .keep_yuv(&yuv, &kept.side, &kept.side_chroma, greys);
+                frame
+                    .band
+                    .keep_yuv(&yuv, &kept.band, &kept.band_chroma, greys);
             }
             None => {
                 let view = source.whole_frame()?;
@@ -487,15 +631,75 @@ mod tests {
     use crate::analyse::{Decoding, analyse_clip_keeping};
     use crate::config::ExperimentConfig;
 
-    /// On the committed H.264 fixture, `analyse` keeps every frame of the default
-    /// span, and a kept frame paints the canvas as the decoded frame does
-    /// (libswscale's conversion of the same samples): within 3 levels where the
-    /// side view is shrunk (its block means are taken before the conversion, not
-    /// after) and 2 in the full-resolution band.
+    /// A kept chroma sample is the mean of the chroma samples its picture
+    /// pixels take from the frame (frame pixel (x, y) takes sample (⌊x/2⌋,
+    /// ⌊y/2⌋)), on odd and even offsets, unshrunk and shrunk by 2 and 3: within
+    /// the rounding of that mean to a level.
     #[test]
-    #[ignore = "fails at this revision: the side view differs from the decoded frame's by up to \
-                88 levels at some pixels (mean 1.7 levels in the encoded videos); not yet \
-                explained"]
+    fn kept_chroma_is_the_mean_of_what_the_pixels_take() {
+        let (fw, fh) = (41usize, 29usize);
+        let (cw, ch) = (fw.div_ceil(2), fh.div_ceil(2));
+        // Chroma that changes from every sample to the next (a 2 × 2 decimation
+        // or a shift by one sample is tens of levels off).
+        let plane: Vec<u8> = (0..cw * ch)
+            .map(|k| ((k * 97 + k / cw * 31) % 251) as u8)
+            .collect();
+        let luma = vec![128u8; fw * fh];
+        let yuv = Yuv420 {
+            width: fw,
+            height: fh,
+            planes: [(&luma, fw), (&plane, cw), (&plane, cw)],
+        };
+        for (x, y, shrink) in [
+            (3, 5, 1),
+            (4, 2, 1),
+            (3, 5, 2),
+            (4, 2, 2),
+            (1, 3, 3),
+            (6, 0, 3),
+        ] {
+            let r = Region {
+                x,
+                y,
+                width: 30,
+                height: 18,
+                shrink,
+            };
+            let map = ChromaMap::of(&r);
+            let mut picture = Picture::default();
+            picture.keep_yuv(&yuv, &r, &map, (0, 255));
+            let (w, h) = r.size();
+            for j in 0..h {
+                for i in 0..w {
+                    let mut sum = 0.0;
+                    for fy in y + shrink * j..y + shrink * (j + 1) {
+                        for fx in x + shrink * i..x + shrink * (i + 1) {
+                            sum += f64::from(plane[fy / 2 * cw + fx / 2]);
+                        }
+                    }
+                    let mean = sum / (shrink * shrink) as f64;
+                    let kept = picture.u[map.rows.at[j] * map.columns.len() + map.columns.at[i]];
+                    // Rounded to the nearest level.
+                    assert!(
+                        (f64::from(kept) - mean).abs() <= 0.5,
+                        "offset ({x}, {y}), shrink {shrink}, pixel ({i}, {j}): kept {kept}, \
+                         the pixels' mean {mean}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// On the committed H.264 fixture, `analyse` keeps every frame of the default
+    /// span, and every kept frame paints the canvas as the decoded frame does
+    /// (libswscale's conversion of the same samples, each pixel's colour clamped
+    /// to 0–255, then block means): within 2 levels (libswscale's fixed-point
+    /// conversion against this module's, and the kept means' rounding), plus,
+    /// where the side view is shrunk, what clamping each pixel rather than the
+    /// block's mean can move a channel: the mean over the block's pixels of how
+    /// far the channel lies outside 0–255. That happens where x264's ringing puts
+    /// a pixel of the red strip's edge beyond the gamut (a few in a thousand).
+    #[test]
     fn kept_frames_cover_the_span_and_paint_as_decoded() {
         let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/side-dark-n050.mp4");
         let config: ExperimentConfig = toml::from_str("fps = 480").unwrap();
@@ -503,6 +707,7 @@ mod tests {
         let e =
             analyse_clip_keeping(&clip, &config, Decoding::Whole, Some(&spec), &|_, _| {}).unwrap();
         let kept = e.kept.as_ref().expect("frames kept");
+        let m = kept.matrix.as_ref().expect("YUV kept");
         let span: Vec<usize> = (0..e.frames.len())
             .filter(|&k| (spec.span_s.0..=spec.span_s.1).contains(&e.frames[k].t))
             .collect();
@@ -515,29 +720,97 @@ mod tests {
         let frames = kept.span((first, last), &layout).expect("the span kept");
         assert_eq!(frames.len(), span.len());
 
-        let position = first + span.len() / 2;
+        // A channel of a frame pixel before clamping, from its samples as kept
+        // (luma clamped to the greys' range) and as decoded.
+        let channels = |yuv: &Yuv420, x: usize, y: usize, clamp_luma: bool| -> [f64; 3] {
+            let at = |k: usize, x: usize, y: usize| {
+                let (samples, stride) = yuv.planes[k];
+                samples[y * stride + x]
+            };
+            let (black, white) = if clamp_luma { m.greys() } else { (0, 255) };
+            let luma = m.y[usize::from(at(0, x, y).clamp(black, white))];
+            let (u, v) = (
+                usize::from(at(1, x / 2, y / 2)),
+                usize::from(at(2, x / 2, y / 2)),
+            );
+            [
+                luma + m.r_cr[v],
+                luma + m.g_cb[u] + m.g_cr[v],
+                luma + m.b_cb[u],
+            ]
+            .map(|c| f64::from(c) / 65536.0)
+        };
         let mut source = FrameSource::open(&clip).unwrap();
-        let mut decoded = None;
-        while let Some(frame) = source.next_frame().unwrap() {
-            if frame.index == e.frames[position].index {
-                decoded = Some(layout.paint(&source.whole_frame().unwrap()));
-                break;
-            }
-        }
-        let decoded = decoded.expect("frame decoded");
-        let painted = kept.paint(frames[position - first], &layout);
-        for (window, tolerance) in [(&layout.side, 3), (&layout.band, 2)] {
-            let (w, h) = window.canvas_size();
-            let mut worst = 0;
-            for y in window.dst_y..window.dst_y + h {
-                for x in window.dst_x..window.dst_x + w {
-                    let (a, b) = (decoded.get_pixel(x, y), painted.get_pixel(x, y));
-                    for c in 0..3 {
-                        worst = worst.max(a[c].abs_diff(b[c]));
+        let (mut compared, mut pixels, mut clamped) = (0, 0, 0);
+        while let Some(index) = source.next_frame().unwrap().map(|f| f.index) {
+            let Some(position) = (first..=last).find(|&k| e.frames[k].index == index) else {
+                continue;
+            };
+            let decoded = layout.paint(&source.whole_frame().unwrap());
+            let yuv = source.yuv420().expect("8-bit 4:2:0");
+            let painted = kept.paint(frames[position - first], &layout);
+            for window in [&layout.side, &layout.band] {
+                let (w, h) = window.canvas_size();
+                let (s, z) = (window.shrink as usize, window.zoom as usize);
+                for y in window.dst_y..window.dst_y + h {
+                    for x in window.dst_x..window.dst_x + w {
+                        let (i, j) = (
+                            (x - window.dst_x) as usize / z,
+                            (y - window.dst_y) as usize / z,
+                        );
+                        let (fx, fy) = (window.src_x + s * i, window.src_y + s * j);
+                        // The block's pixels converted exactly, clamped, and
+                        // their mean; and how far from it clamping the mean
+                        // instead can land.
+                        let (mut exact, mut bound) = ([0.0; 3], [0.0; 3]);
+                        for by in fy..fy + s {
+                            for bx in fx..fx + s {
+                                let pixel = channels(&yuv, bx, by, false);
+                                let as_kept = channels(&yuv, bx, by, s > 1);
+                                for c in 0..3 {
+                                    let clamped = pixel[c].clamp(0.0, 255.0);
+                                    exact[c] += clamped / (s * s) as f64;
+                                    bound[c] += (clamped - as_kept[c]).abs() / (s * s) as f64;
+                                }
+                            }
+                        }
+                        let (a, b) = (decoded.get_pixel(x, y), painted.get_pixel(x, y));
+                        for c in 0..3 {
+                            // The kept picture's rounding: its luma mean's (0.5 level
+                            // of Y, 0.58 of RGB, shrunk only) and the colour's (0.5).
+                            let rounding = if s > 1 { 1.1 } else { 0.5 };
+                            let kept = f64::from(b[c]);
+                            assert!(
+                                (kept - exact[c]).abs() <= rounding + bound[c],
+                                "{}, frame {index}, canvas ({x}, {y}), channel {c}: kept \
+                                 {b:?}, exactly {exact:?}, clamping moves it {:.1} at most",
+                                window.name,
+                                bound[c]
+                            );
+                            // libswscale's x86 conversion of the decoded frame is up
+                            // to 2.9 levels off the exact one on this clip (G of the
+                            // red strip; 2.0 in R and B), and its mean is rounded.
+                            assert!(
+                                (kept - f64::from(a[c])).abs() <= rounding + 3.4 + bound[c],
+                                "{}, frame {index}, canvas ({x}, {y}), channel {c}: decoded \
+                                 {a:?}, kept {b:?}, clamping moves it {:.1} at most",
+                                window.name,
+                                bound[c]
+                            );
+                        }
+                        pixels += 1;
+                        clamped += usize::from(bound.iter().any(|&b| b > 0.5));
                     }
                 }
             }
-            assert!(worst <= tolerance, "{}: {worst} levels apart", window.name);
+            compared += 1;
         }
+        assert_eq!(compared, span.len());
+        // The allowance for clamping covers few pixels: the rest are held to the
+        // roundings.
+        assert!(
+            clamped * 100 <= pixels,
+            "{clamped} of {pixels} pixels clamped"
+        );
     }
 }
