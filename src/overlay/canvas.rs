@@ -10,8 +10,12 @@
 //! Lines along the rows and columns are anti-aliased by their area, so a line at a
 //! fractional row is drawn there, not at the nearest pixel.
 
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::sync::OnceLock;
+
+use ab_glyph::{Font, FontRef, GlyphId, PxScaleFont, ScaleFont};
 use image::{Rgb, RgbImage};
-use plotters::prelude::*;
 use serde::Serialize;
 
 use crate::footage::{ChannelOrder, FrameView};
@@ -300,29 +304,103 @@ fn fill_box(image: &mut RgbImage, (x0, x1): (f64, f64), (y0, y1): (f64, f64), co
     }
 }
 
+/// One character of the embedded font at one size, rasterised as plotters
+/// rasterises it: coverage over its pixel bounds, placed `y_shift` rows below
+/// the line's top, then `advance` px to the next.
+struct Glyph {
+    id: GlyphId,
+    width: usize,
+    /// Coverage 0–1, row-major.
+    coverage: Vec<f32>,
+    y_shift: i32,
+    advance: f32,
+}
+
+impl Glyph {
+    fn new(font: &PxScaleFont<&FontRef<'static>>, c: char, size: u32) -> Self {
+        let id = font.glyph_id(c);
+        let (mut width, mut coverage, mut y_shift) = (0, Vec::new(), 0);
+        if let Some(outline) = font.outline_glyph(font.scaled_glyph(c)) {
+            let bounds = outline.px_bounds();
+            y_shift = (size as f32 / 2.0 + bounds.min.y) as i32;
+            width = bounds.width() as usize;
+            coverage = vec![0.0; width * bounds.height() as usize];
+            outline.draw(|x, y, c| coverage[y as usize * width + x as usize] = c);
+        }
+        Self {
+            id,
+            width,
+            coverage,
+            y_shift,
+            advance: font.h_advance(id),
+        }
+    }
+}
+
+/// The embedded font (the report's, DejaVu Sans).
+fn font() -> Result<&'static FontRef<'static>, String> {
+    static FONT: OnceLock<Option<FontRef<'static>>> = OnceLock::new();
+    FONT.get_or_init(|| FontRef::try_from_slice(crate::report::plot::FONT_BYTES).ok())
+        .as_ref()
+        .ok_or_else(|| "the embedded font DejaVuSans.ttf could not be loaded".into())
+}
+
+thread_local! {
+    /// Glyphs rasterised so far on this thread, by (size, character): the
+    /// overlays write three header lines on every frame, and rasterising their
+    /// outlines each time cost 5 % of `analyse` (issue 15 §3).
+    static GLYPHS: RefCell<HashMap<(u32, char), Glyph>> = RefCell::new(HashMap::new());
+}
+
 /// Writes lines of text, each in its colour, from canvas point (x, y) down, in
-/// the report's embedded font at `size` px.
+/// the report's embedded font at `size` px, placed and anti-aliased as plotters
+/// draws text (kerning, whole-pixel glyph positions), each glyph rasterised once
+/// per thread ([`GLYPHS`]).
 ///
 /// # Errors
-/// The font cannot be loaded or plotters fails to draw.
+/// The font cannot be loaded.
 pub fn text_lines(
     image: &mut RgbImage,
     (x, y): (i32, i32),
     size: u32,
     lines: &[(String, Rgb<u8>)],
 ) -> Result<(), String> {
-    crate::report::plot::ensure_font()?;
-    let (w, h) = image.dimensions();
-    let root = BitMapBackend::with_buffer(image.as_mut(), (w, h)).into_drawing_area();
+    let font = font()?.as_scaled(size as f32);
     let step = (f64::from(size) * 1.3).round() as i32;
-    for (k, (line, colour)) in lines.iter().enumerate() {
-        let style = ("sans-serif", f64::from(size))
-            .into_font()
-            .color(&RGBColor(colour[0], colour[1], colour[2]));
-        root.draw(&Text::new(line.as_str(), (x, y + step * k as i32), style))
-            .map_err(|e| e.to_string())?;
-    }
-    root.present().map_err(|e| e.to_string())
+    let (w, h) = (image.width() as i32, image.height() as i32);
+    GLYPHS.with_borrow_mut(|glyphs| {
+        for (k, (line, colour)) in lines.iter().enumerate() {
+            let top = y + step * k as i32;
+            let mut x_shift = 0f32;
+            let mut previous = None;
+            for c in line.chars() {
+                let glyph = glyphs
+                    .entry((size, c))
+                    .or_insert_with(|| Glyph::new(&font, c, size));
+                if let Some(previous) = previous {
+                    x_shift += font.kern(previous, glyph.id);
+                }
+                previous = Some(glyph.id);
+                let (gx, gy) = (x + x_shift as i32, top + glyph.y_shift);
+                for (dy, row) in glyph.coverage.chunks_exact(glyph.width.max(1)).enumerate() {
+                    let py = gy + dy as i32;
+                    for (dx, &a) in row.iter().enumerate() {
+                        let px = gx + dx as i32;
+                        if a <= 0.0 || px < 0 || py < 0 || px >= w || py >= h {
+                            continue;
+                        }
+                        let a = f64::from(a.min(1.0));
+                        let pixel = image.get_pixel_mut(px as u32, py as u32);
+                        for (p, q) in pixel.0.iter_mut().zip(colour.0) {
+                            *p = (f64::from(*p) * (1.0 - a) + f64::from(q) * a).round() as u8;
+                        }
+                    }
+                }
+                x_shift += glyph.advance;
+            }
+        }
+    });
+    Ok(())
 }
 
 #[cfg(test)]

@@ -26,6 +26,7 @@
 //! their overlays decode the span again.
 
 use std::collections::VecDeque;
+use std::ops::Range;
 
 use image::RgbImage;
 
@@ -342,21 +343,36 @@ impl Picture {
         }
     }
 
-    /// The picture in RGB, 3 bytes a pixel, `width` a row; `matrix` and `chroma`
-    /// for YUV pictures.
-    fn to_rgb(&self, width: usize, yuv: Option<(&YuvMatrix, &ChromaMap)>) -> Vec<u8> {
+    /// The picture's pixels `columns` × `rows` in RGB, 3 bytes a pixel, row
+    /// after row, into `out`; the picture is `width` pixels a row, and `yuv` its
+    /// matrix and chroma when it is YUV.
+    fn to_rgb(
+        &self,
+        width: usize,
+        yuv: Option<(&YuvMatrix, &ChromaMap)>,
+        (columns, rows): (Range<usize>, Range<usize>),
+        out: &mut Vec<u8>,
+    ) {
+        out.clear();
+        out.resize(3 * columns.len() * rows.len(), 0);
+        let lines = out.chunks_exact_mut(3 * columns.len());
         let Some((m, chroma)) = yuv else {
-            return self.rgb.clone();
+            for (line, j) in lines.zip(rows) {
+                let start = 3 * (j * width + columns.start);
+                line.copy_from_slice(&self.rgb[start..start + line.len()]);
+            }
+            return;
         };
         let cw = chroma.columns.len();
-        let mut rgb = Vec::with_capacity(3 * self.y.len());
-        for (row, &j) in self.y.chunks_exact(width).zip(&chroma.rows.at) {
-            let (u, v) = (&self.u[j * cw..(j + 1) * cw], &self.v[j * cw..(j + 1) * cw]);
-            for (&y, &i) in row.iter().zip(&chroma.columns.at) {
-                rgb.extend_from_slice(&m.rgb(y, u[i], v[i]));
+        let at = &chroma.columns.at[columns.clone()];
+        for (line, j) in lines.zip(rows) {
+            let c = chroma.rows.at[j] * cw;
+            let (u, v) = (&self.u[c..c + cw], &self.v[c..c + cw]);
+            let luma = &self.y[j * width + columns.start..j * width + columns.end];
+            for ((pixel, &y), &i) in line.chunks_exact_mut(3).zip(luma).zip(at) {
+                pixel.copy_from_slice(&m.rgb(y, u[i], v[i]));
             }
         }
-        rgb
     }
 }
 
@@ -434,34 +450,34 @@ impl KeptFrames {
     }
 
     /// A blank canvas of `layout` with the kept frame's windows painted in, as
-    /// [`Layout::paint`] paints a decoded frame.
+    /// [`Layout::paint`] paints a decoded frame; only the pixels shown are
+    /// converted to colour.
     pub(crate) fn paint(&self, frame: &KeptFrame, layout: &Layout) -> RgbImage {
         let mut image = RgbImage::from_pixel(layout.width, layout.height, BACKGROUND);
+        let mut rgb = Vec::new();
         let (w, h) = self.side.size();
-        let side = frame
-            .side
-            .to_rgb(w, self.matrix.as_ref().map(|m| (m, &self.side_chroma)));
-        let view = rgb_view(&side, w, h);
-        Window {
+        let yuv = self.matrix.as_ref().map(|m| (m, &self.side_chroma));
+        frame.side.to_rgb(w, yuv, (0..w, 0..h), &mut rgb);
+        let window = Window {
             src_x: 0,
             src_y: 0,
             width: w,
             height: h,
             shrink: 1,
             ..layout.side
-        }
-        .paint(&view, &mut image);
-        let (w, h) = self.band.size();
-        let band = frame
-            .band
-            .to_rgb(w, self.matrix.as_ref().map(|m| (m, &self.band_chroma)));
-        let view = rgb_view(&band, w, h);
-        Window {
-            src_x: layout.band.src_x - self.band.x,
-            src_y: layout.band.src_y - self.band.y,
+        };
+        window.paint(&rgb_view(&rgb, w, h), &mut image);
+        let band = &layout.band;
+        let (x, y) = (band.src_x - self.band.x, band.src_y - self.band.y);
+        let yuv = self.matrix.as_ref().map(|m| (m, &self.band_chroma));
+        let shown = (x..x + band.width, y..y + band.height);
+        frame.band.to_rgb(self.band.size().0, yuv, shown, &mut rgb);
+        let window = Window {
+            src_x: 0,
+            src_y: 0,
             ..layout.band
-        }
-        .paint(&view, &mut image);
+        };
+        window.paint(&rgb_view(&rgb, band.width, band.height), &mut image);
         image
     }
 }
