@@ -19,7 +19,7 @@
 //! resolution over the side window's rows, as 8-bit YUV copied from the decoder
 //! before any colour conversion; a frame folder's RGB block means. Colour is
 //! converted only for the frames drawn. A 720×1280 clip at 480 fps keeps about
-//! 0.1 MB a frame, 35 MB for the default span (BENCHMARKS.md).
+//! 0.3 MB a frame, 101 MB for the default span (BENCHMARKS.md).
 //!
 //! Two-view clips, videos not in 8-bit planar 4:2:0, videos turned by a display
 //! matrix, and spans that would need more than [`MAX_KEPT_BYTES`] keep nothing:
@@ -42,8 +42,11 @@ pub const MOVING_PX: f64 = 0.5;
 /// moving frame [s].
 pub const MARGIN_S: f64 = 0.05;
 /// The most the kept frames may take [bytes]; a longer span or a larger clip is
-/// decoded again instead.
-pub const MAX_KEPT_BYTES: usize = 96 << 20;
+/// decoded again instead. The side view is kept at most 360 px wide (the
+/// overlay's context views) with a chroma sample per pixel when shrunk: about
+/// 0.3 MB a frame whatever the clip's size, so this holds the default span of
+/// a 480 fps clip (101 MB at 720×1280).
+pub const MAX_KEPT_BYTES: usize = 128 << 20;
 
 /// A rectangle of the frame kept, reduced `shrink` × `shrink` [frame px].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

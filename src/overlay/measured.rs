@@ -25,7 +25,7 @@ use image::{Rgb, RgbImage};
 use serde::Serialize;
 
 use super::OverlayError;
-use super::canvas::{Window, text_lines};
+use super::canvas::{Window, text_lines, yuv420_of};
 use crate::analyse::{Experiment, ExperimentPlan};
 use crate::footage::Orientation;
 use crate::footage::{FrameSource, FrameView};
@@ -53,6 +53,8 @@ const TEXT: Rgb<u8> = Rgb([235, 235, 235]);
 const LEGEND: Rgb<u8> = Rgb([150, 150, 150]);
 pub(super) const BACKGROUND: Rgb<u8> = Rgb([20, 20, 20]);
 
+/// Frames handed to the encoder's thread at a time.
+const BATCH: usize = 8;
 /// Header band above the picture [canvas px]: three lines of text.
 const HEADER_PX: u32 = 62;
 /// Text size in the header [px].
@@ -335,15 +337,19 @@ pub fn write_measurement_overlays(
         }
     };
     // Frames are encoded on a second thread while the next ones are decoded and
-    // drawn; a few wait in the channel.
-    let (frames_out, frames_in) = std::sync::mpsc::sync_channel::<RgbImage>(4);
+    // drawn, handed over in batches (a thread woken for every frame cost 2 % of
+    // `analyse`); two batches wait in the channel at most.
+    let (frames_out, frames_in) = std::sync::mpsc::sync_channel::<Vec<RgbImage>>(2);
     let encoder = std::thread::spawn({
         let video = video.clone();
         let (width, height, fps) = (layout.width, layout.height, spec.playback_fps);
         move || -> Result<usize, String> {
             let mut writer = H264Writer::create(&video, width, height, fps, OVERLAY_H264)?;
-            for image in frames_in {
-                writer.push(&image)?;
+            let mut planes = Default::default();
+            for image in frames_in.iter().flatten() {
+                yuv420_of(&image, &mut planes);
+                let [y, u, v] = &planes;
+                writer.push_yuv420([y, u, v])?;
             }
             writer.finish()
         }
@@ -422,7 +428,7 @@ fn draw_span(
     layout: &Layout,
     spec: &OverlaySpec,
     (start, first, last): (usize, usize, usize),
-    video: &std::sync::mpsc::SyncSender<RgbImage>,
+    video: &std::sync::mpsc::SyncSender<Vec<RgbImage>>,
 ) -> Result<DrawnSpan, OverlayError> {
     let plan = &e.plan;
     let clip = &plan.clip;
@@ -432,6 +438,7 @@ fn draw_span(
     let slow_down = plan.fps.fps / spec.playback_fps;
     let mut tiles = Vec::new();
     let mut shown = Vec::new();
+    let mut batch = Vec::with_capacity(BATCH);
     let mut each = |position: usize, image: RgbImage, strip: Option<StripMark>| {
         let marks = FrameMarks {
             position,
@@ -464,11 +471,12 @@ fn draw_span(
             tiles.push((record, image.clone()));
         }
         if position >= first {
-            if video.send(image).is_err() {
-                // The encoder stopped; its error is the one to report.
+            batch.push(image);
+            shown.push(record);
+            // The encoder stopped: its error is the one to report.
+            if batch.len() == BATCH && video.send(std::mem::take(&mut batch)).is_err() {
                 return Ok(false);
             }
-            shown.push(record);
         }
         Ok(true)
     };
@@ -496,6 +504,8 @@ fn draw_span(
             each(position, layout.paint(view), strip)
         })?;
     }
+    // An encoder that stopped reports its own error.
+    let _ = video.send(batch);
     Ok((shown, tiles))
 }
 
