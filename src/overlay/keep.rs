@@ -346,19 +346,19 @@ impl Picture {
         }
     }
 
-    /// The picture's pixels `columns` × `rows` in RGB, 3 bytes a pixel, row
-    /// after row, into `out`; the picture is `width` pixels a row, and `yuv` its
-    /// matrix and chroma when it is YUV.
+    /// The picture's pixels `columns` × `rows` in RGB, 3 bytes a pixel, into
+    /// `out`'s rows `stride` bytes apart; the picture is `width` pixels a row,
+    /// and `yuv` its matrix and chroma when it is YUV.
     fn to_rgb(
         &self,
         width: usize,
         yuv: Option<(&YuvMatrix, &ChromaMap)>,
         (columns, rows): (Range<usize>, Range<usize>),
-        out: &mut Vec<u8>,
+        (out, stride): (&mut [u8], usize),
     ) {
-        out.clear();
-        out.resize(3 * columns.len() * rows.len(), 0);
-        let lines = out.chunks_exact_mut(3 * columns.len());
+        let lines = out
+            .chunks_mut(stride)
+            .map(|line| &mut line[..3 * columns.len()]);
         let Some((m, chroma)) = yuv else {
             for (line, j) in lines.zip(rows) {
                 let start = 3 * (j * width + columns.start);
@@ -457,10 +457,8 @@ impl KeptFrames {
     /// converted to colour.
     pub(crate) fn paint(&self, frame: &KeptFrame, layout: &Layout) -> RgbImage {
         let mut image = RgbImage::from_pixel(layout.width, layout.height, BACKGROUND);
-        let mut rgb = Vec::new();
         let (w, h) = self.side.size();
         let yuv = self.matrix.as_ref().map(|m| (m, &self.side_chroma));
-        frame.side.to_rgb(w, yuv, (0..w, 0..h), &mut rgb);
         let window = Window {
             src_x: 0,
             src_y: 0,
@@ -469,12 +467,29 @@ impl KeptFrames {
             shrink: 1,
             ..layout.side
         };
-        window.paint(&rgb_view(&rgb, w, h), &mut image);
+        let mut rgb = Vec::new();
+        if window.zoom == 1 {
+            // Shown as kept: converted straight into the canvas.
+            let stride = 3 * layout.width as usize;
+            let start = stride * window.dst_y as usize + 3 * window.dst_x as usize;
+            let canvas: &mut [u8] = &mut image;
+            frame
+                .side
+                .to_rgb(w, yuv, (0..w, 0..h), (&mut canvas[start..], stride));
+        } else {
+            rgb.resize(3 * w * h, 0);
+            frame.side.to_rgb(w, yuv, (0..w, 0..h), (&mut rgb, 3 * w));
+            window.paint(&rgb_view(&rgb, w, h), &mut image);
+        }
         let band = &layout.band;
         let (x, y) = (band.src_x - self.band.x, band.src_y - self.band.y);
         let yuv = self.matrix.as_ref().map(|m| (m, &self.band_chroma));
         let shown = (x..x + band.width, y..y + band.height);
-        frame.band.to_rgb(self.band.size().0, yuv, shown, &mut rgb);
+        rgb.resize(3 * band.width * band.height, 0);
+        let stride = 3 * band.width;
+        frame
+            .band
+            .to_rgb(self.band.size().0, yuv, shown, (&mut rgb, stride));
         let window = Window {
             src_x: 0,
             src_y: 0,
