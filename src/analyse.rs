@@ -1036,10 +1036,11 @@ pub fn analyse_clip_keeping(
             if let Some(gauge) = &gap_gauge {
                 gaps.push(gauge.measure(&side));
             }
-            let beta_raw = match (&mut strip_finder, plan) {
-                (Some(finder), Some(plan)) => finder.measure(&plan, index).ok().map(|s| s.beta),
+            let strip = match (&mut strip_finder, plan) {
+                (Some(finder), Some(plan)) => finder.measure(&plan, index).ok(),
                 _ => None,
             };
+            let beta_raw = strip.map(|s| s.beta);
             frames.push(FrameRecord {
                 index,
                 // Set from the container's timestamps once every frame is read.
@@ -1056,7 +1057,16 @@ pub fn analyse_clip_keeping(
             repeats.push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
             if let Some(keeper) = &mut keeper {
                 let moving = z_rim_px.is_some_and(|z| z >= crate::overlay::MOVING_PX);
-                keeper.offer(frames.len() - 1, moving, &mut source)?;
+                // The strip as measured, with its mask for the outline (made
+                // only for the frames kept).
+                let mark = || {
+                    let finder = strip_finder.as_mut()?;
+                    Some(crate::overlay::StripMark {
+                        strip: strip?,
+                        mask: finder.strip_mask(),
+                    })
+                };
+                keeper.offer(frames.len() - 1, moving, &mut source, mark)?;
             }
             if let Some((z_rim_px, edge_row)) = new_highest {
                 // The diagnostic shows the whole side view: convert the other columns.

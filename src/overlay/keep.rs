@@ -16,14 +16,17 @@
 //! **What of each frame.** The side window at the overlay's own reduction (the
 //! mean of `shrink` × `shrink` luma samples, and of the chroma samples those
 //! pixels take, [`ChromaMap`]), and the centre band's columns at full
-//! resolution over the side window's rows, as 8-bit YUV copied from the decoder
-//! before any colour conversion; a frame folder's RGB block means. Colour is
+//! resolution over the side window's rows, and on two-view clips the plan
+//! window as the side one with the strip `analyse` measured in it (its mask
+//! packed a bit a pixel), as 8-bit YUV copied from the decoder before any
+//! colour conversion; a frame folder's RGB block means. Colour is
 //! converted only for the frames drawn. A 720×1280 clip at 480 fps keeps about
 //! 0.3 MB a frame, 101 MB for the default span (BENCHMARKS.md).
 //!
-//! Two-view clips, videos not in 8-bit planar 4:2:0, videos turned by a display
-//! matrix, and spans that would need more than [`MAX_KEPT_BYTES`] keep nothing:
-//! their overlays decode the span again.
+//! Videos not in 8-bit planar 4:2:0, videos turned by a display matrix, and
+//! spans that would need more than [`MAX_KEPT_BYTES`] keep nothing: their
+//! overlays decode the span again (and measure the strip again on two-view
+//! clips).
 
 use std::collections::VecDeque;
 use std::ops::Range;
@@ -31,8 +34,9 @@ use std::ops::Range;
 use image::RgbImage;
 
 use super::canvas::Window;
-use super::measured::{BACKGROUND, Layout, LayoutGeometry, OverlaySpec};
+use super::measured::{BACKGROUND, Layout, LayoutGeometry, OverlaySpec, StripMark};
 use crate::footage::{ChannelOrder, FootageError, FrameSource, FrameView, VideoSignal, Yuv420};
+use crate::vision::Strip;
 
 /// A rim at least this high [px, raw pass-2 height] is moving: the last frame
 /// at or above it lies within 5 ms of the halt on the rendered clips (the halt
@@ -59,6 +63,17 @@ pub struct Region {
 }
 
 impl Region {
+    /// The frame rectangle a window shows.
+    fn of(window: &Window) -> Self {
+        Self {
+            x: window.src_x,
+            y: window.src_y,
+            width: window.width,
+            height: window.height,
+            shrink: window.shrink as usize,
+        }
+    }
+
     /// The kept picture's size [px].
     fn size(&self) -> (usize, usize) {
         (self.width / self.shrink, self.height / self.shrink)
@@ -386,6 +401,48 @@ pub struct KeptFrame {
     pub position: usize,
     side: Picture,
     band: Picture,
+    /// Two-view clips: the plan view, and the strip `analyse` found in it.
+    plan: Picture,
+    strip: Option<KeptStrip>,
+}
+
+/// The strip `analyse` found in a kept frame's plan view, with its mask
+/// packed a bit a pixel (the mask is about as large as the plan view).
+#[derive(Debug, Clone)]
+struct KeptStrip {
+    strip: Strip,
+    /// The mask's bits, row-major, and its width.
+    mask: Option<(Vec<u64>, usize, usize)>,
+}
+
+impl KeptStrip {
+    fn of(mark: StripMark) -> Self {
+        let mask = mark.mask.map(|(mask, width)| {
+            let mut bits = vec![0u64; mask.len().div_ceil(64)];
+            for (k, _) in mask.iter().enumerate().filter(|(_, set)| **set) {
+                bits[k / 64] |= 1 << (k % 64);
+            }
+            (bits, mask.len(), width)
+        });
+        Self {
+            strip: mark.strip,
+            mask,
+        }
+    }
+
+    fn mark(&self) -> StripMark {
+        StripMark {
+            strip: self.strip,
+            mask: self.mask.as_ref().map(|(bits, len, width)| {
+                (
+                    (0..*len)
+                        .map(|k| bits[k / 64] >> (k % 64) & 1 == 1)
+                        .collect(),
+                    *width,
+                )
+            }),
+        }
+    }
 }
 
 /// The frames kept for the overlays by `analyse` ([`FrameKeeper`]).
@@ -395,11 +452,14 @@ pub struct KeptFrames {
     side: Region,
     /// The centre band's columns over the side window's rows, full resolution.
     band: Region,
+    /// Two-view clips: the plan window, reduced as the overlay shows it.
+    plan: Option<Region>,
     /// `None`: RGB pictures (a frame folder).
     matrix: Option<YuvMatrix>,
-    /// Where the side and band pictures' chroma comes from (YUV pictures).
+    /// Where the side, band and plan pictures' chroma comes from (YUV pictures).
     side_chroma: ChromaMap,
     band_chroma: ChromaMap,
+    plan_chroma: Option<ChromaMap>,
     frames: VecDeque<KeptFrame>,
 }
 
@@ -423,21 +483,14 @@ impl KeptFrames {
         (first, last): (usize, usize),
         layout: &Layout,
     ) -> Option<Vec<&KeptFrame>> {
-        let side = &layout.side;
         let band = &layout.band;
-        let same_side = self.side
-            == Region {
-                x: side.src_x,
-                y: side.src_y,
-                width: side.width,
-                height: side.height,
-                shrink: side.shrink as usize,
-            };
+        let same_side = self.side == Region::of(&layout.side);
         let band_inside = band.src_x >= self.band.x
             && band.src_x + band.width <= self.band.x + self.band.width
             && band.src_y >= self.band.y
             && band.src_y + band.height <= self.band.y + self.band.height;
-        if !same_side || !band_inside || layout.plan.is_some() {
+        let same_plan = self.plan == layout.plan.as_ref().map(Region::of);
+        if !same_side || !band_inside || !same_plan {
             return None;
         }
         let start = self.frames.front()?.position;
@@ -457,29 +510,19 @@ impl KeptFrames {
     /// converted to colour.
     pub(crate) fn paint(&self, frame: &KeptFrame, layout: &Layout) -> RgbImage {
         let mut image = RgbImage::from_pixel(layout.width, layout.height, BACKGROUND);
-        let (w, h) = self.side.size();
-        let yuv = self.matrix.as_ref().map(|m| (m, &self.side_chroma));
-        let window = Window {
-            src_x: 0,
-            src_y: 0,
-            width: w,
-            height: h,
-            shrink: 1,
-            ..layout.side
-        };
         let mut rgb = Vec::new();
-        if window.zoom == 1 {
-            // Shown as kept: converted straight into the canvas.
-            let stride = 3 * layout.width as usize;
-            let start = stride * window.dst_y as usize + 3 * window.dst_x as usize;
-            let canvas: &mut [u8] = &mut image;
-            frame
-                .side
-                .to_rgb(w, yuv, (0..w, 0..h), (&mut canvas[start..], stride));
-        } else {
-            rgb.resize(3 * w * h, 0);
-            frame.side.to_rgb(w, yuv, (0..w, 0..h), (&mut rgb, 3 * w));
-            window.paint(&rgb_view(&rgb, w, h), &mut image);
+        let yuv = self.matrix.as_ref().map(|m| (m, &self.side_chroma));
+        paint_whole(
+            &frame.side,
+            &self.side,
+            yuv,
+            &layout.side,
+            &mut image,
+            &mut rgb,
+        );
+        if let (Some(region), Some(window)) = (&self.plan, &layout.plan) {
+            let yuv = self.matrix.as_ref().zip(self.plan_chroma.as_ref());
+            paint_whole(&frame.plan, region, yuv, window, &mut image, &mut rgb);
         }
         let band = &layout.band;
         let (x, y) = (band.src_x - self.band.x, band.src_y - self.band.y);
@@ -497,6 +540,46 @@ impl KeptFrames {
         };
         window.paint(&rgb_view(&rgb, band.width, band.height), &mut image);
         image
+    }
+}
+
+/// Paints the whole kept `picture` of `region` into `window` of the canvas
+/// (which shows that region), converting its colours with `yuv` when YUV;
+/// `rgb` is scratch space.
+fn paint_whole(
+    picture: &Picture,
+    region: &Region,
+    yuv: Option<(&YuvMatrix, &ChromaMap)>,
+    window: &Window,
+    image: &mut RgbImage,
+    rgb: &mut Vec<u8>,
+) {
+    let (w, h) = region.size();
+    let window = Window {
+        src_x: 0,
+        src_y: 0,
+        width: w,
+        height: h,
+        shrink: 1,
+        ..*window
+    };
+    if window.zoom == 1 {
+        // Shown as kept: converted straight into the canvas.
+        let stride = 3 * image.width() as usize;
+        let start = stride * window.dst_y as usize + 3 * window.dst_x as usize;
+        let canvas: &mut [u8] = image;
+        picture.to_rgb(w, yuv, (0..w, 0..h), (&mut canvas[start..], stride));
+    } else {
+        rgb.resize(3 * w * h, 0);
+        picture.to_rgb(w, yuv, (0..w, 0..h), (rgb, 3 * w));
+        window.paint(&rgb_view(rgb, w, h), image);
+    }
+}
+
+impl KeptFrame {
+    /// The strip mark of a kept frame (two-view clips), as `analyse` found it.
+    pub(crate) fn strip_mark(&self) -> Option<StripMark> {
+        self.strip.as_ref().map(KeptStrip::mark)
     }
 }
 
@@ -535,9 +618,6 @@ impl FrameKeeper {
         fps: f64,
         source: &FrameSource,
     ) -> Option<Self> {
-        if geometry.split_row.is_some() {
-            return None;
-        }
         let matrix = match source.video_signal() {
             Some(signal) => {
                 let planar = matches!(signal.pixel_format.as_str(), "yuv420p" | "yuvj420p");
@@ -550,13 +630,9 @@ impl FrameKeeper {
         };
         let layout = Layout::from_geometry(geometry, 0.0);
         let (s, b) = (&layout.side, &layout.band);
-        let side = Region {
-            x: s.src_x,
-            y: s.src_y,
-            width: s.width,
-            height: s.height,
-            shrink: s.shrink as usize,
-        };
+        let side = Region::of(s);
+        let plan = layout.plan.as_ref().map(Region::of);
+        let plan_chroma = plan.as_ref().map(ChromaMap::of);
         let band = Region {
             x: b.src_x,
             y: s.src_y,
@@ -569,9 +645,13 @@ impl FrameKeeper {
         let after = frames(spec.span_s.1 + MARGIN_S);
         let capacity = before + after + 1;
         let (side_chroma, band_chroma) = (ChromaMap::of(&side), ChromaMap::of(&band));
-        let pixels = side.size().0 * side.size().1 + band.size().0 * band.size().1;
+        let area = |r: &Region| r.size().0 * r.size().1;
+        let pixels = area(&side) + area(&band) + plan.as_ref().map_or(0, area);
+        let chroma = side_chroma.plane_bytes()
+            + band_chroma.plane_bytes()
+            + plan_chroma.as_ref().map_or(0, ChromaMap::plane_bytes);
         let bytes_per_frame = if matrix.is_some() {
-            pixels + 2 * (side_chroma.plane_bytes() + band_chroma.plane_bytes())
+            pixels + 2 * chroma
         } else {
             3 * pixels
         };
@@ -582,9 +662,11 @@ impl FrameKeeper {
             kept: KeptFrames {
                 side,
                 band,
+                plan,
                 matrix,
                 side_chroma,
                 band_chroma,
+                plan_chroma,
                 frames: VecDeque::with_capacity(capacity),
             },
             before,
@@ -601,11 +683,12 @@ impl FrameKeeper {
     ///
     /// # Errors
     /// A frame folder's frame cannot be lent whole.
-    pub fn offer(
+    pub(crate) fn offer(
         &mut self,
         position: usize,
         moving: bool,
         source: &mut FrameSource,
+        strip: impl FnOnce() -> Option<StripMark>,
     ) -> Result<(), FootageError> {
         if self.off {
             return Ok(());
@@ -640,13 +723,20 @@ impl FrameKeeper {
                 frame
                     .band
                     .keep_yuv(&yuv, &kept.band, &kept.band_chroma, greys);
+                if let (Some(region), Some(chroma)) = (&kept.plan, &kept.plan_chroma) {
+                    frame.plan.keep_yuv(&yuv, region, chroma, greys);
+                }
             }
             None => {
                 let view = source.whole_frame()?;
                 frame.side.keep_view(&view, &self.kept.side);
                 frame.band.keep_view(&view, &self.kept.band);
+                if let Some(region) = &self.kept.plan {
+                    frame.plan.keep_view(&view, region);
+                }
             }
         }
+        frame.strip = strip().map(KeptStrip::of);
         self.kept.frames.push_back(frame);
         Ok(())
     }
@@ -735,8 +825,24 @@ mod tests {
     /// a pixel of the red strip's edge beyond the gamut (a few in a thousand).
     #[test]
     fn kept_frames_cover_the_span_and_paint_as_decoded() {
-        let clip = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/side-dark-n050.mp4");
-        let config: ExperimentConfig = toml::from_str("fps = 480").unwrap();
+        kept_frames_paint_as_decoded("side-dark-n050.mp4", "fps = 480");
+    }
+
+    /// As [`kept_frames_cover_the_span_and_paint_as_decoded`] on the two-view
+    /// fixture, the plan view too; and each kept frame carries the strip
+    /// `analyse` measured, whose β the overlay's own measurement on the decoded
+    /// plan window (trimmed to a whole number of pixels, so its mean grey and
+    /// thresholds differ a little) repeats within 0.2°.
+    #[test]
+    fn two_view_frames_are_kept_with_their_strip() {
+        kept_frames_paint_as_decoded("two-view-n045.mp4", "fps = 480\ntwo_view = true");
+    }
+
+    fn kept_frames_paint_as_decoded(fixture: &str, config: &str) {
+        let clip = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("fixtures")
+            .join(fixture);
+        let config: ExperimentConfig = toml::from_str(config).unwrap();
         let spec = OverlaySpec::default();
         let e =
             analyse_clip_keeping(&clip, &config, Decoding::Whole, Some(&spec), &|_, _| {}).unwrap();
@@ -781,9 +887,29 @@ mod tests {
                 continue;
             };
             let decoded = layout.paint(&source.whole_frame().unwrap());
+            let kept_frame = frames[position - first];
+            let painted = kept.paint(kept_frame, &layout);
+            if let Some(window) = &layout.plan {
+                let (t, s) = e.plan.colour_thresholds.expect("two-view thresholds");
+                let mut finder = crate::vision::StripFinder::new(t, s);
+                let whole = source.whole_frame().unwrap();
+                let view = whole
+                    .crop(window.src_x, window.src_y, window.width, window.height)
+                    .unwrap();
+                let beta = finder.measure(&view, index).unwrap().beta;
+                let mark = kept_frame.strip_mark().expect("the strip kept");
+                assert!(
+                    (mark.strip.beta - beta).abs() < 0.2f64.to_radians(),
+                    "frame {index}: kept β {}, decoded {beta}",
+                    mark.strip.beta
+                );
+                assert!(mark.mask.is_some());
+            }
             let yuv = source.yuv420().expect("8-bit 4:2:0");
-            let painted = kept.paint(frames[position - first], &layout);
-            for window in [&layout.side, &layout.band] {
+            for window in std::iter::once(&layout.side)
+                .chain([&layout.band])
+                .chain(&layout.plan)
+            {
                 let (w, h) = window.canvas_size();
                 let (s, z) = (window.shrink as usize, window.zoom as usize);
                 for y in window.dst_y..window.dst_y + h {

@@ -4,8 +4,8 @@
 //! and where each window of the picture comes from.
 //!
 //! The frames come from what `analyse` kept while it read the clip
-//! ([`super::keep`]); when it kept none of them (two-view clips, some formats, a
-//! span not kept) the span is decoded again ([`FrameSource`], seeked to the span,
+//! ([`super::keep`]); when it kept none of them (some formats, a span not kept)
+//! the span is decoded again ([`FrameSource`], seeked to the span,
 //! one frame in memory at a time). Each shows:
 //!
 //! * the side view around the disk and, enlarged, the centre band around the rim
@@ -414,10 +414,11 @@ pub fn write_measurement_overlays(
 type DrawnSpan = (Vec<OverlayFrame>, Vec<(OverlayFrame, RgbImage)>);
 
 /// The strip found in a plan view: the mask's outline and principal axis drawn.
-struct StripMark {
-    strip: vision::Strip,
-    /// The mask over the plan window, row-major, and its width.
-    mask: Option<(Vec<bool>, usize)>,
+pub(crate) struct StripMark {
+    pub strip: vision::Strip,
+    /// The mask over the plan view from the window's corner, row-major, and its
+    /// width.
+    pub mask: Option<(Vec<bool>, usize)>,
 }
 
 /// Draws the frames at positions `start..=last`, from the frames `analyse` kept
@@ -484,7 +485,11 @@ fn draw_span(
         && let Some(frames) = kept.span((start, last), layout)
     {
         for frame in frames {
-            if !each(frame.position, kept.paint(frame, layout), None)? {
+            if !each(
+                frame.position,
+                kept.paint(frame, layout),
+                frame.strip_mark(),
+            )? {
                 break;
             }
         }

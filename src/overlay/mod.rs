@@ -14,10 +14,11 @@
 //! ```
 //!
 //! `analyse` keeps the overlay's pictures of the frames near the last motion
-//! while it reads the clip (keep.rs: reduced side views and the centre band, in
-//! YUV, a bounded ring), and the measurement overlay is drawn from them once the
-//! halt is known; where it kept none (two-view clips, `compare`, some formats)
-//! the overlays read the span a third time, one decoded frame at a time.
+//! while it reads the clip (keep.rs: reduced side and plan views and the centre
+//! band, in YUV, with the strip measured, a bounded ring), and the measurement
+//! overlay is drawn from them once the halt is known; where it kept none
+//! (`compare`, some formats) the overlays read the span a third time, one
+//! decoded frame at a time.
 
 mod canvas;
 mod keep;
@@ -30,11 +31,11 @@ use std::path::PathBuf;
 
 pub use canvas::Window;
 pub use keep::{FrameKeeper, KeptFrames, MOVING_PX};
-pub(crate) use measured::LayoutGeometry;
 pub use measured::{
     LAST_TURNS_IMAGE, OVERLAY_H264, OVERLAY_INDEX, OVERLAY_VIDEO, OverlayFrame, OverlayIndex,
     OverlaySpec, write_measurement_overlays,
 };
+pub(crate) use measured::{LayoutGeometry, StripMark};
 pub use model::{
     EdgeError, MODEL_LAST_TURNS_IMAGE, MODEL_OVERLAY_ERRORS, MODEL_OVERLAY_VIDEO, ModelOverlay,
     write_model_overlay,
