@@ -85,9 +85,11 @@ impl Default for OverlaySpec {
     }
 }
 
-/// H.264 settings of the overlays: libx264's fastest preset and a fast chroma
-/// filter (the overlays are looked at, not measured, and this keeps them a small
-/// part of `analyse`'s time) at crf 20 (marks one pixel wide stay sharp).
+/// H.264 settings of the overlays: libx264's fastest preset (the overlays are
+/// looked at, not measured, and this keeps them a small part of `analyse`'s
+/// time) at crf 20 (marks one pixel wide stay sharp). The overlays hand the
+/// writer 4:2:0 samples (`overlay::canvas::yuv420_of`), so the chroma filter is
+/// libswscale's only for a frame given as RGB.
 pub const OVERLAY_H264: H264Settings = H264Settings {
     crf: 20,
     preset: "ultrafast",

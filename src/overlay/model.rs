@@ -27,7 +27,7 @@ use image::{Rgb, RgbImage};
 use serde::Serialize;
 
 use super::OverlayError;
-use super::canvas::text_lines;
+use super::canvas::{text_lines, yuv420_of};
 use super::measured::{
     Layout, OVERLAY_H264, OverlaySpec, decode_positions, last_turns, peak_positions,
 };
@@ -235,6 +235,7 @@ pub fn write_model_overlay(
     )
     .map_err(encode_err)?;
     let turns = last_turns(e, &peak_positions(e), spec.last_turns);
+    let mut planes = Default::default();
     let mut tiles = Vec::new();
     let mut rows = Vec::new();
     let name = format!("{:?} (η = {:.3e})", c.options.model, c.eta);
@@ -313,7 +314,9 @@ pub fn write_model_overlay(
         if turns.contains(&position) {
             tiles.push((image.clone(), model));
         }
-        writer.push(&image).map_err(encode_err)?;
+        yuv420_of(&image, &mut planes);
+        let [y, u, v] = &planes;
+        writer.push_yuv420([y, u, v]).map_err(encode_err)?;
         Ok(true)
     })?;
     writer.finish().map_err(encode_err)?;
