@@ -33,6 +33,7 @@ use crate::config::{ExperimentConfig, HaltChoice, Plate};
 use crate::energy::{self, FitError, HaltTime, PowerLawFit};
 use crate::footage::{self, CaptureFps, FootageError, FrameSource, FrameTiming, FrameView};
 use crate::model::params::DiskParams;
+use crate::overlay::{FrameKeeper, KeptFrames, LayoutGeometry, OverlaySpec};
 use crate::report::diagnostics;
 use crate::signal::{self, SignalConfig, SignalError, StateSeries, ThesisRim};
 use crate::vision::{
@@ -323,6 +324,8 @@ struct MeasuredSpan {
     local_fit_periods: f64,
     /// The rest tail's length [s] (SignalConfig::rest_tail_s).
     rest_tail_s: f64,
+    /// The overlay's pictures of the frames near the last motion.
+    kept: Option<KeptFrames>,
 }
 
 /// Why a clip could not be analysed. Every message names the clip; vision errors
@@ -594,6 +597,10 @@ pub struct Experiment {
     /// frame of the highest rim thresholded with the band and the edge found.
     #[serde(skip)]
     pub diagnostics: Diagnostics,
+    /// The overlay's pictures kept while the clip was read
+    /// ([`analyse_clip_keeping`]), so that the overlay need not decode it again.
+    #[serde(skip)]
+    pub kept: Option<KeptFrames>,
 }
 
 /// PNG images for a person checking the image stage.
@@ -775,6 +782,22 @@ pub fn analyse_clip_decoding(
     clip: &Path,
     config: &ExperimentConfig,
     decoding: Decoding,
+    progress: &dyn Fn(usize, Option<usize>),
+) -> Result<Experiment, AnalyseError> {
+    analyse_clip_keeping(clip, config, decoding, None, progress)
+}
+
+/// [`analyse_clip_decoding`], keeping the pictures that the measurement overlay
+/// `overlay` will show while the frames are read ([`Experiment::kept`]), so that
+/// [`crate::overlay::write_measurement_overlays`] need not decode them again.
+///
+/// # Errors
+/// As [`analyse_clip`].
+pub fn analyse_clip_keeping(
+    clip: &Path,
+    config: &ExperimentConfig,
+    decoding: Decoding,
+    overlay: Option<&OverlaySpec>,
     progress: &dyn Fn(usize, Option<usize>),
 ) -> Result<Experiment, AnalyseError> {
     let vision_err = |error| AnalyseError::Vision {
@@ -1001,6 +1024,17 @@ pub fn analyse_clip_decoding(
         let mut strip_finder = colour_thresholds
             .as_ref()
             .map(|(t, s)| StripFinder::new(*t, *s));
+        let mut keeper = overlay.and_then(|spec| {
+            let geometry = LayoutGeometry {
+                calibration: cal,
+                origin: roi.map_or((0, 0), |[x, y, _, _]| (x as usize, y as usize)),
+                view: roi.map_or((width, height), |r| (r[2] as usize, r[3] as usize)),
+                split_row: split,
+                band_half_width_px: side_config.half_width_px,
+                zero_row: cal.z_base,
+            };
+            FrameKeeper::new(&geometry, spec, fps.fps, &source)
+        });
         let span_frames = expected - first;
         let mut frames = Vec::with_capacity(span_frames);
         let mut gaps = Vec::with_capacity(if gap_gauge.is_some() { span_frames } else { 0 });
@@ -1046,10 +1080,11 @@ pub fn analyse_clip_decoding(
             if let Some(gauge) = &gap_gauge {
                 gaps.push(gauge.measure(&side));
             }
-            let beta_raw = match (&mut strip_finder, plan) {
-                (Some(finder), Some(plan)) => finder.measure(&plan, index).ok().map(|s| s.beta),
+            let strip = match (&mut strip_finder, plan) {
+                (Some(finder), Some(plan)) => finder.measure(&plan, index).ok(),
                 _ => None,
             };
+            let beta_raw = strip.map(|s| s.beta);
             frames.push(FrameRecord {
                 index,
                 // Set from the container's timestamps once every frame is read.
@@ -1064,6 +1099,19 @@ pub fn analyse_clip_decoding(
                 progress(index - first, Some(span_frames));
             }
             repeats.push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
+            if let Some(keeper) = &mut keeper {
+                let moving = z_rim_px.is_some_and(|z| z >= crate::overlay::MOVING_PX);
+                // The strip as measured, with its mask for the outline (made
+                // only for the frames kept).
+                let mark = || {
+                    let finder = strip_finder.as_mut()?;
+                    Some(crate::overlay::StripMark {
+                        strip: strip?,
+                        mask: finder.strip_mask(),
+                    })
+                };
+                keeper.offer(frames.len() - 1, moving, &mut source, mark)?;
+            }
             if let Some((z_rim_px, edge_row)) = new_highest {
                 // The diagnostic shows the whole side view: convert the other columns.
                 let whole = source.whole_frame()?;
@@ -1282,6 +1330,7 @@ pub fn analyse_clip_decoding(
             metres_per_px,
             local_fit_periods: signal_config.state_window_periods,
             rest_tail_s: signal_config.rest_tail_s,
+            kept: keeper.and_then(FrameKeeper::finish),
         })
     };
     let mut first = plan_span.first_span();
@@ -1315,6 +1364,7 @@ pub fn analyse_clip_decoding(
         scale,
         metres_per_px,
         rest_tail_s,
+        kept,
         ..
     } = measured;
     let decoded = plan_span.decoded(first, attempts, frames.len());
@@ -1437,6 +1487,7 @@ pub fn analyse_clip_decoding(
             calibration_png,
             threshold_png,
         },
+        kept,
     })
 }
 
@@ -1642,8 +1693,14 @@ impl crate::study::ClipAnalyser for StudyAnalyser {
         key: &str,
     ) -> Result<crate::study::ExperimentSummary, String> {
         let config = config_for(&self.root, &clip.path, None).map_err(|e| e.to_string())?;
-        let experiment =
-            analyse_clip(&clip.path, &config, &|_, _| {}).map_err(|e| e.to_string())?;
+        let experiment = analyse_clip_keeping(
+            &clip.path,
+            &config,
+            Decoding::NearTheEnd,
+            self.overlay.as_ref(),
+            &|_, _| {},
+        )
+        .map_err(|e| e.to_string())?;
         crate::report::experiment::write_experiment(dir, &experiment, self.overlay.as_ref())
             .map_err(|e| e.to_string())?;
         let mut meta = clip.meta.clone();

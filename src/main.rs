@@ -243,7 +243,8 @@ struct CompareArgs {
     /// of tuning η to the measured halt.
     #[arg(long)]
     fit: bool,
-    /// Rank every dissipation model on this experiment (in compare-all/).
+    /// Rank every dissipation model on this experiment (in compare-all/); the
+    /// best one is drawn over the footage (unless --no-overlay).
     #[arg(long)]
     all_models: bool,
     /// Time of the initial state before the halt [s] (eq. 4.43: 0.5).
@@ -612,12 +613,18 @@ fn run_analyse(
         );
     }
     let bar = progress_bar(0, "frames");
-    let experiment = analyse::analyse_clip_decoding(clip, &config, decoding, &|done, total| {
-        if let Some(bar) = &bar {
-            bar.set_length(total.unwrap_or(0) as u64);
-            bar.set_position(done as u64);
-        }
-    })?;
+    let experiment = analyse::analyse_clip_keeping(
+        clip,
+        &config,
+        decoding,
+        overlay.as_ref(),
+        &|done, total| {
+            if let Some(bar) = &bar {
+                bar.set_length(total.unwrap_or(0) as u64);
+                bar.set_position(done as u64);
+            }
+        },
+    )?;
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
@@ -1056,18 +1063,34 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         let models = compare::rankable_models();
         eprintln!("comparing {} models…", models.len());
         let ranked = compare::rank_models(&experiment, &args.experiment, &options, &models);
+        // The best model (ranked first; failures come last) is drawn over the footage.
+        let mut best_overlay = None;
         for (i, r) in ranked.iter().enumerate() {
             match &r.outcome {
                 Ok(c) => {
                     print!("{:>2}. ", i + 1);
                     print(c);
-                    write_comparison(&comparison_dir(&args.experiment, r.model), c, None)?;
+                    let dir = comparison_dir(&args.experiment, r.model);
+                    let overlay = if i == 0 && !args.no_overlay {
+                        eulerdisk::report::create_folder(&dir)?;
+                        let overlay =
+                            write_model_overlay(&dir, &experiment, c, &OverlaySpec::default())?;
+                        print_edge_error(&overlay);
+                        Some(overlay)
+                    } else {
+                        None
+                    };
+                    write_comparison(&dir, c, overlay.as_ref())?;
+                    if let Some(overlay) = overlay {
+                        best_overlay = Some((r.model, overlay));
+                    }
                 }
                 Err(e) => println!("{:>2}. {:?}: failed: {e}", i + 1, r.model),
             }
         }
         let dir = args.experiment.join("compare-all");
-        write_ranking(&dir, &args.experiment, options.method, &ranked)?;
+        let best = best_overlay.as_ref().map(|(model, o)| (*model, o));
+        write_ranking(&dir, &args.experiment, options.method, &ranked, best)?;
         println!("report: {}", dir.join("index.html").display());
         return Ok(());
     }
@@ -1078,15 +1101,22 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
     let overlay = (!args.no_overlay)
         .then(|| write_model_overlay(&dir, &experiment, &comparison, &OverlaySpec::default()))
         .transpose()?;
-    if let Some(err) = overlay.as_ref().and_then(|o| o.edge_error) {
+    if let Some(overlay) = &overlay {
+        print_edge_error(overlay);
+    }
+    write_comparison(&dir, &comparison, overlay.as_ref())?;
+    println!("report: {}", dir.join("index.html").display());
+    Ok(())
+}
+
+/// The model overlay's rim-edge error, one line.
+fn print_edge_error(overlay: &eulerdisk::overlay::ModelOverlay) {
+    if let Some(err) = overlay.edge_error {
         println!(
             "model over the footage: rim edge model − footage {:+.2} px mean, {:.2} px RMS ({} frames)",
             err.mean_px, err.rms_px, err.frames
         );
     }
-    write_comparison(&dir, &comparison, overlay.as_ref())?;
-    println!("report: {}", dir.join("index.html").display());
-    Ok(())
 }
 
 fn run_reproduce(out: &Path, include_table_4_1: bool) -> Result<()> {

@@ -205,6 +205,7 @@ fn closed_loop(setup: &Setup) {
         &experiment_dir,
         options.method,
         &ranked,
+        None,
     )
     .expect("write ranking");
     for file in [

@@ -318,3 +318,51 @@ fn compare_draws_the_model_with_the_calibrated_pose() {
     let page = std::fs::read_to_string(cmp.join("index.html")).unwrap();
     assert!(page.contains("model-overlay.mp4") && page.contains("model − footage"));
 }
+
+/// `compare --all-models` draws the best model (ranked first) over the footage,
+/// in its own comparison folder, and the ranking page plays that video; the
+/// other models' folders have their plots only.
+#[test]
+fn compare_all_models_draws_the_best_model() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("c.toml"), "fps = 480\ntwo_view = true\n").unwrap();
+    let clip = fixture("two-view-n045.mp4");
+    run(
+        dir.path(),
+        &[
+            "analyse",
+            clip.to_str().unwrap(),
+            "-c",
+            "c.toml",
+            "-o",
+            "out",
+            "--no-overlay",
+        ],
+    );
+    run(
+        dir.path(),
+        &["compare", "out", "--all-models", "--lead", "0.45"],
+    );
+    let out = dir.path().join("out");
+    let ranking = json(&out.join("compare-all/ranking.json"));
+    let ranked = ranking.as_array().unwrap();
+    let best = ranked[0]["model"].as_str().unwrap();
+    let folder = out.join(format!("compare-{best}"));
+    let overlay = json(&folder.join("model-overlay.json"));
+    assert!(overlay["edge_error"]["frames"].as_u64().unwrap() > 0);
+    let (_, frames) = decode(&folder.join("model-overlay.mp4"));
+    assert!(!frames.is_empty());
+    let page = std::fs::read_to_string(out.join("compare-all/index.html")).unwrap();
+    assert!(
+        page.contains(&format!("src=\"../compare-{best}/model-overlay.mp4\"")),
+        "the ranking page does not play the best model's overlay"
+    );
+    for other in &ranked[1..] {
+        let name = other["model"].as_str().unwrap();
+        assert!(
+            !out.join(format!("compare-{name}/model-overlay.mp4"))
+                .exists(),
+            "{name} drawn too"
+        );
+    }
+}

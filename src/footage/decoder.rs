@@ -280,6 +280,19 @@ impl VideoDecoder {
         Some(samples)
     }
 
+    /// The current frame's planes of 8-bit planar 4:2:0 samples as stored, each
+    /// (samples, row stride): Y, then U and V at half the width and height;
+    /// `None` for other formats, a display matrix that turns the frame, or no
+    /// frame at hand.
+    pub(super) fn yuv420_planes(&self) -> Option<[(&[u8], usize); 3]> {
+        self.check_decoded().ok()?;
+        let planar = matches!(self.yuv.format(), Pixel::YUV420P | Pixel::YUVJ420P);
+        if !planar || self.map.is_some() {
+            return None;
+        }
+        Some([0, 1, 2].map(|i| (self.yuv.data(i), self.yuv.stride(i))))
+    }
+
     /// Convert only the displayed `columns` of the following frames (`None`: whole
     /// frames). Only planar 4:2:0 video is converted by columns; other formats
     /// always whole.

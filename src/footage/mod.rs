@@ -42,5 +42,5 @@ pub use info::{
 };
 pub use orientation::{Orientation, PixelMap};
 pub use repeats::{RepeatGauge, RepeatKind, RepeatedFrame};
-pub use source::{Frame, FrameSource, StreamIndex};
+pub use source::{Frame, FrameSource, StreamIndex, Yuv420};
 pub use timing::{FrameTiming, TimeSection, TimeSource, frame_times, time_sections};

@@ -36,6 +36,16 @@ pub struct StreamIndex {
     pub key_frames: Vec<usize>,
 }
 
+/// One frame's 8-bit planar 4:2:0 samples ([`FrameSource::yuv420`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Yuv420<'a> {
+    /// Frame size [px].
+    pub width: usize,
+    pub height: usize,
+    /// (samples, row stride) of Y, U and V; U and V cover 2 × 2 pixels each.
+    pub planes: [(&'a [u8], usize); 3],
+}
+
 /// The frames of one clip, decoded one at a time.
 pub struct FrameSource {
     path: PathBuf,
@@ -188,6 +198,22 @@ impl FrameSource {
             }
         }
         Ok(samples)
+    }
+
+    /// The frame last returned by [`Self::next_frame`] as the codec stores it,
+    /// when that is 8-bit planar 4:2:0 in the displayed orientation: samples not
+    /// yet converted to colour, for keeping parts of frames cheaply (the
+    /// overlays'); `None` otherwise (frame folders, other formats, turned video).
+    pub fn yuv420(&self) -> Option<Yuv420<'_>> {
+        let Reader::Video(decoder) = &self.reader else {
+            return None;
+        };
+        let (width, height) = decoder.size();
+        Some(Yuv420 {
+            width,
+            height,
+            planes: decoder.yuv420_planes()?,
+        })
     }
 
     /// Skip ahead so that the next frame returned is `index` (for a video, by

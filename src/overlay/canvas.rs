@@ -10,8 +10,12 @@
 //! Lines along the rows and columns are anti-aliased by their area, so a line at a
 //! fractional row is drawn there, not at the nearest pixel.
 
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::sync::OnceLock;
+
+use ab_glyph::{Font, FontRef, GlyphId, PxScaleFont, ScaleFont};
 use image::{Rgb, RgbImage};
-use plotters::prelude::*;
 use serde::Serialize;
 
 use crate::footage::{ChannelOrder, FrameView};
@@ -300,29 +304,147 @@ fn fill_box(image: &mut RgbImage, (x0, x1): (f64, f64), (y0, y1): (f64, f64), co
     }
 }
 
+/// One character of the embedded font at one size, rasterised as plotters
+/// rasterises it: coverage over its pixel bounds, placed `y_shift` rows below
+/// the line's top, then `advance` px to the next.
+struct Glyph {
+    id: GlyphId,
+    width: usize,
+    /// Coverage 0–1, row-major.
+    coverage: Vec<f32>,
+    y_shift: i32,
+    advance: f32,
+}
+
+impl Glyph {
+    fn new(font: &PxScaleFont<&FontRef<'static>>, c: char, size: u32) -> Self {
+        let id = font.glyph_id(c);
+        let (mut width, mut coverage, mut y_shift) = (0, Vec::new(), 0);
+        if let Some(outline) = font.outline_glyph(font.scaled_glyph(c)) {
+            let bounds = outline.px_bounds();
+            y_shift = (size as f32 / 2.0 + bounds.min.y) as i32;
+            width = bounds.width() as usize;
+            coverage = vec![0.0; width * bounds.height() as usize];
+            outline.draw(|x, y, c| coverage[y as usize * width + x as usize] = c);
+        }
+        Self {
+            id,
+            width,
+            coverage,
+            y_shift,
+            advance: font.h_advance(id),
+        }
+    }
+}
+
+/// The embedded font (the report's, DejaVu Sans).
+fn font() -> Result<&'static FontRef<'static>, String> {
+    static FONT: OnceLock<Option<FontRef<'static>>> = OnceLock::new();
+    FONT.get_or_init(|| FontRef::try_from_slice(crate::report::plot::FONT_BYTES).ok())
+        .as_ref()
+        .ok_or_else(|| "the embedded font DejaVuSans.ttf could not be loaded".into())
+}
+
+thread_local! {
+    /// Glyphs rasterised so far on this thread, by (size, character): the
+    /// overlays write three header lines on every frame, and rasterising their
+    /// outlines each time cost 5 % of `analyse` (issue 15 §3).
+    static GLYPHS: RefCell<HashMap<(u32, char), Glyph>> = RefCell::new(HashMap::new());
+}
+
 /// Writes lines of text, each in its colour, from canvas point (x, y) down, in
-/// the report's embedded font at `size` px.
+/// the report's embedded font at `size` px, placed and anti-aliased as plotters
+/// draws text (kerning, whole-pixel glyph positions), each glyph rasterised once
+/// per thread ([`GLYPHS`]).
 ///
 /// # Errors
-/// The font cannot be loaded or plotters fails to draw.
+/// The font cannot be loaded.
 pub fn text_lines(
     image: &mut RgbImage,
     (x, y): (i32, i32),
     size: u32,
     lines: &[(String, Rgb<u8>)],
 ) -> Result<(), String> {
-    crate::report::plot::ensure_font()?;
-    let (w, h) = image.dimensions();
-    let root = BitMapBackend::with_buffer(image.as_mut(), (w, h)).into_drawing_area();
+    let font = font()?.as_scaled(size as f32);
     let step = (f64::from(size) * 1.3).round() as i32;
-    for (k, (line, colour)) in lines.iter().enumerate() {
-        let style = ("sans-serif", f64::from(size))
-            .into_font()
-            .color(&RGBColor(colour[0], colour[1], colour[2]));
-        root.draw(&Text::new(line.as_str(), (x, y + step * k as i32), style))
-            .map_err(|e| e.to_string())?;
+    let (w, h) = (image.width() as i32, image.height() as i32);
+    GLYPHS.with_borrow_mut(|glyphs| {
+        for (k, (line, colour)) in lines.iter().enumerate() {
+            let top = y + step * k as i32;
+            let mut x_shift = 0f32;
+            let mut previous = None;
+            for c in line.chars() {
+                let glyph = glyphs
+                    .entry((size, c))
+                    .or_insert_with(|| Glyph::new(&font, c, size));
+                if let Some(previous) = previous {
+                    x_shift += font.kern(previous, glyph.id);
+                }
+                previous = Some(glyph.id);
+                let (gx, gy) = (x + x_shift as i32, top + glyph.y_shift);
+                for (dy, row) in glyph.coverage.chunks_exact(glyph.width.max(1)).enumerate() {
+                    let py = gy + dy as i32;
+                    for (dx, &a) in row.iter().enumerate() {
+                        let px = gx + dx as i32;
+                        if a <= 0.0 || px < 0 || py < 0 || px >= w || py >= h {
+                            continue;
+                        }
+                        let a = f64::from(a.min(1.0));
+                        let pixel = image.get_pixel_mut(px as u32, py as u32);
+                        for (p, q) in pixel.0.iter_mut().zip(colour.0) {
+                            *p = (f64::from(*p) * (1.0 - a) + f64::from(q) * a).round() as u8;
+                        }
+                    }
+                }
+                x_shift += glyph.advance;
+            }
+        }
+    });
+    Ok(())
+}
+
+/// A canvas's samples as the overlay videos store them: 8-bit 4:2:0, limited
+/// range, BT.601 (what [`crate::render::H264Writer::push`] makes of RGB with
+/// libswscale, within a level), each chroma sample from the mean colour of its
+/// 2 × 2 pixels. Converting here, in one pass of integer arithmetic, costs a
+/// third of libswscale's RGB24 path, which the overlays paid on every frame.
+/// `planes` is resized to Y, U, V; the canvas's size must be even.
+pub fn yuv420_of(image: &RgbImage, planes: &mut [Vec<u8>; 3]) {
+    // BT.601 with Y in 16–235 and chroma in 16–240, 16.16 fixed point.
+    const Y: [i32; 3] = [16829, 33039, 6416];
+    const U: [i32; 3] = [-9714, -19071, 28784];
+    const V: [i32; 3] = [28784, -24103, -4681];
+    let (w, h) = (image.width() as usize, image.height() as usize);
+    let [luma, u, v] = planes;
+    luma.resize(w * h, 0);
+    u.resize(w / 2 * (h / 2), 0);
+    v.resize(w / 2 * (h / 2), 0);
+    let row = 3 * w;
+    let rows = image.as_raw().chunks_exact(2 * row);
+    let luma_rows = luma.chunks_exact_mut(2 * w);
+    let chroma_rows = u.chunks_exact_mut(w / 2).zip(v.chunks_exact_mut(w / 2));
+    for ((pair, luma_pair), (u_row, v_row)) in rows.zip(luma_rows).zip(chroma_rows) {
+        let (top, bottom) = pair.split_at(row);
+        let (luma_top, luma_bottom) = luma_pair.split_at_mut(w);
+        for (rgb, out) in [(top, luma_top), (bottom, luma_bottom)] {
+            for (p, y) in rgb.chunks_exact(3).zip(out.iter_mut()) {
+                let (r, g, b) = (i32::from(p[0]), i32::from(p[1]), i32::from(p[2]));
+                *y = ((Y[0] * r + Y[1] * g + Y[2] * b + (16 << 16) + (1 << 15)) >> 16) as u8;
+            }
+        }
+        let blocks = top.chunks_exact(6).zip(bottom.chunks_exact(6));
+        for ((a, b), (u, v)) in blocks.zip(u_row.iter_mut().zip(v_row.iter_mut())) {
+            let sum = |c: usize| {
+                i32::from(a[c]) + i32::from(a[c + 3]) + i32::from(b[c]) + i32::from(b[c + 3])
+            };
+            let (r, g, b) = (sum(0), sum(1), sum(2));
+            let chroma = |k: [i32; 3]| {
+                ((k[0] * r + k[1] * g + k[2] * b + (128 << 18) + (1 << 17)) >> 18) as u8
+            };
+            *u = chroma(U);
+            *v = chroma(V);
+        }
     }
-    root.present().map_err(|e| e.to_string())
 }
 
 #[cfg(test)]
@@ -362,5 +484,42 @@ mod tests {
             let (_, drawn) = window.to_frame(0.0, centre);
             assert!((drawn - y).abs() < 0.01, "row {y}: drawn at {drawn}");
         }
+    }
+
+    /// The BT.601 limited-range samples of the primaries, white and black
+    /// (ITU-R BT.601 §2.5: Y = 16 + 219 E'y, C = 128 + 224 E'c, rounded), and a
+    /// chroma sample from the mean colour of its 2 × 2 pixels.
+    #[test]
+    fn canvas_samples_are_bt601_limited_range() {
+        let colours = [
+            ([255, 255, 255], [235, 128, 128]),
+            ([0, 0, 0], [16, 128, 128]),
+            ([255, 0, 0], [81, 90, 240]),
+            ([0, 255, 0], [145, 54, 34]),
+            ([0, 0, 255], [41, 240, 110]),
+        ];
+        for (rgb, [y, u, v]) in colours {
+            let image = RgbImage::from_pixel(4, 2, Rgb(rgb));
+            let mut planes = Default::default();
+            yuv420_of(&image, &mut planes);
+            assert_eq!(planes[0], vec![y; 8], "{rgb:?}");
+            assert_eq!(
+                (planes[1].clone(), planes[2].clone()),
+                (vec![u; 2], vec![v; 2]),
+                "{rgb:?}"
+            );
+        }
+        // Red beside blue in each 2 × 2 block: the chroma of their mean colour.
+        let mut image = RgbImage::new(2, 2);
+        for (x, y) in [(0, 0), (0, 1)] {
+            image.put_pixel(x, y, Rgb([255, 0, 0]));
+            image.put_pixel(x + 1, y, Rgb([0, 0, 255]));
+        }
+        let mut planes = Default::default();
+        yuv420_of(&image, &mut planes);
+        assert_eq!(planes[0], vec![81, 41, 81, 41]);
+        // Chroma is linear in the colour: the mean of red's (90, 240) and blue's
+        // (240, 110).
+        assert_eq!((planes[1][0], planes[2][0]), (165, 175));
     }
 }

@@ -3,8 +3,10 @@
 //! peaks), with `overlay.json`, which says which clip frame each video frame shows
 //! and where each window of the picture comes from.
 //!
-//! Every frame of the span is decoded again ([`FrameSource`], seeked to the span,
-//! one frame in memory at a time) and shows:
+//! The frames come from what `analyse` kept while it read the clip
+//! ([`super::keep`]); when it kept none of them (some formats, a span not kept)
+//! the span is decoded again ([`FrameSource`], seeked to the span,
+//! one frame in memory at a time). Each shows:
 //!
 //! * the side view around the disk and, enlarged, the centre band around the rim
 //!   edge (the rows z_rim is read on);
@@ -23,7 +25,7 @@ use image::{Rgb, RgbImage};
 use serde::Serialize;
 
 use super::OverlayError;
-use super::canvas::{Window, text_lines};
+use super::canvas::{Window, text_lines, yuv420_of};
 use crate::analyse::{Experiment, ExperimentPlan};
 use crate::footage::Orientation;
 use crate::footage::{FrameSource, FrameView};
@@ -49,8 +51,10 @@ const STRIP: Rgb<u8> = Rgb([0, 220, 255]);
 const AXIS: Rgb<u8> = Rgb([255, 220, 0]);
 const TEXT: Rgb<u8> = Rgb([235, 235, 235]);
 const LEGEND: Rgb<u8> = Rgb([150, 150, 150]);
-const BACKGROUND: Rgb<u8> = Rgb([20, 20, 20]);
+pub(super) const BACKGROUND: Rgb<u8> = Rgb([20, 20, 20]);
 
+/// Frames handed to the encoder's thread at a time.
+const BATCH: usize = 8;
 /// Header band above the picture [canvas px]: three lines of text.
 const HEADER_PX: u32 = 62;
 /// Text size in the header [px].
@@ -81,9 +85,11 @@ impl Default for OverlaySpec {
     }
 }
 
-/// H.264 settings of the overlays: libx264's fastest preset and a fast chroma
-/// filter (the overlays are looked at, not measured, and this keeps them a small
-/// part of `analyse`'s time) at crf 20 (marks one pixel wide stay sharp).
+/// H.264 settings of the overlays: libx264's fastest preset (the overlays are
+/// looked at, not measured, and this keeps them a small part of `analyse`'s
+/// time) at crf 20 (marks one pixel wide stay sharp). The overlays hand the
+/// writer 4:2:0 samples (`overlay::canvas::yuv420_of`), so the chroma filter is
+/// libswscale's only for a frame given as RGB.
 pub const OVERLAY_H264: H264Settings = H264Settings {
     crf: 20,
     preset: "ultrafast",
@@ -138,17 +144,53 @@ pub(crate) struct Layout {
     pub plan: Option<Window>,
 }
 
+/// What the windows of an overlay frame are placed by: known once the clip is
+/// calibrated, before its frames are measured (so that `analyse` can keep the
+/// windows' pixels while it reads them, [`super::keep`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LayoutGeometry {
+    pub calibration: vision::Calibration,
+    /// The side view's pixel (0, 0) in the frame ([`ExperimentPlan::side_view_origin`]).
+    pub origin: (usize, usize),
+    /// The region of interest's size, else the frame's [px].
+    pub view: (usize, usize),
+    /// The row splitting the side view (above) from the plan view (two-view clips).
+    pub split_row: Option<usize>,
+    pub band_half_width_px: usize,
+    /// The side view's row where z_rim = 0 ([`ExperimentPlan::rim_edge_row`]).
+    pub zero_row: f64,
+}
+
+impl LayoutGeometry {
+    /// The geometry of an analysed clip.
+    pub fn of(plan: &ExperimentPlan) -> Self {
+        let roi = plan.config.vision.as_ref().and_then(|v| v.roi);
+        Self {
+            calibration: plan.calibration.calibration,
+            origin: plan.side_view_origin(),
+            view: roi.map_or((plan.width, plan.height), |r| {
+                (r[2] as usize, r[3] as usize)
+            }),
+            split_row: plan.split_row.map(|(row, _)| row),
+            band_half_width_px: plan.band_half_width_px,
+            zero_row: plan.rim_edge_row(0.0),
+        }
+    }
+}
+
 impl Layout {
     /// Lays out the windows for `plan`, the band window tall enough for rim
     /// heights up to `z_max_px`.
     pub fn new(plan: &ExperimentPlan, z_max_px: f64) -> Self {
-        let c = &plan.calibration.calibration;
-        let (ox, oy) = plan.side_view_origin();
-        let roi = plan.config.vision.as_ref().and_then(|v| v.roi);
-        let (view_w, view_h) = roi.map_or((plan.width, plan.height), |r| {
-            (r[2] as usize, r[3] as usize)
-        });
-        let side_h = plan.split_row.map_or(view_h, |(row, _)| row);
+        Self::from_geometry(&LayoutGeometry::of(plan), z_max_px)
+    }
+
+    /// [`Self::new`] from the geometry alone.
+    pub fn from_geometry(g: &LayoutGeometry, z_max_px: f64) -> Self {
+        let c = &g.calibration;
+        let (ox, oy) = g.origin;
+        let (view_w, view_h) = g.view;
+        let side_h = g.split_row.unwrap_or(view_h);
         let diameter = c.x_r - c.x_l;
         let thickness = c.z_base - c.z_t;
         let clamp = |v: f64, hi: usize| (v.max(0.0) as usize).min(hi);
@@ -180,7 +222,7 @@ impl Layout {
             shrink,
         };
         let (left_w, side_h_canvas) = side.canvas_size();
-        let plan_window = plan.split_row.map(|(row, _)| Window {
+        let plan_window = g.split_row.map(|row| Window {
             name: "plan view",
             src_x: ox,
             src_y: oy + row,
@@ -193,9 +235,9 @@ impl Layout {
         });
         // The centre band at full resolution, enlarged: 8 columns either side,
         // from 5 px above the highest rim to 6 px below the rest edge.
-        let zero = plan.rim_edge_row(0.0);
+        let zero = g.zero_row;
         let centre = c.x_centre().floor();
-        let half = plan.band_half_width_px as f64 + 8.0;
+        let half = g.band_half_width_px as f64 + 8.0;
         let bx0 = clamp(centre - half, view_w - 1);
         let bx1 = clamp(centre + half + 1.0, view_w).max(bx0 + 1);
         let by0 = clamp((zero - z_max_px.max(4.0) - 5.0).floor(), side_h - 1);
@@ -255,8 +297,8 @@ struct FrameMarks<'a> {
     flags: Vec<&'a FrameFlag>,
 }
 
-/// Decodes the span of the clip again and writes `overlay.mp4`, `last-turns.png`
-/// and `overlay.json` into `dir`.
+/// Draws the span of the clip (from the frames `analyse` kept, else decoded
+/// again) and writes `overlay.mp4`, `last-turns.png` and `overlay.json` into `dir`.
 ///
 /// # Errors
 /// The clip cannot be opened or decoded (it moved, or changed since it was
@@ -297,15 +339,19 @@ pub fn write_measurement_overlays(
         }
     };
     // Frames are encoded on a second thread while the next ones are decoded and
-    // drawn; a few wait in the channel.
-    let (frames_out, frames_in) = std::sync::mpsc::sync_channel::<RgbImage>(4);
+    // drawn, handed over in batches (a thread woken for every frame cost 2 % of
+    // `analyse`); two batches wait in the channel at most.
+    let (frames_out, frames_in) = std::sync::mpsc::sync_channel::<Vec<RgbImage>>(2);
     let encoder = std::thread::spawn({
         let video = video.clone();
         let (width, height, fps) = (layout.width, layout.height, spec.playback_fps);
         move || -> Result<usize, String> {
             let mut writer = H264Writer::create(&video, width, height, fps, OVERLAY_H264)?;
-            for image in frames_in {
-                writer.push(&image)?;
+            let mut planes = Default::default();
+            for image in frames_in.iter().flatten() {
+                yuv420_of(&image, &mut planes);
+                let [y, u, v] = &planes;
+                writer.push_yuv420([y, u, v])?;
             }
             writer.finish()
         }
@@ -369,25 +415,34 @@ pub fn write_measurement_overlays(
 /// Frames shown in the video, and the contact sheet's tiles.
 type DrawnSpan = (Vec<OverlayFrame>, Vec<(OverlayFrame, RgbImage)>);
 
-/// Decodes the frames at positions `start..=last` of the clip again, draws each,
-/// sends those from `first` on to `video`, and keeps the contact sheet's.
+/// The strip found in a plan view: the mask's outline and principal axis drawn.
+pub(crate) struct StripMark {
+    pub strip: vision::Strip,
+    /// The mask over the plan view from the window's corner, row-major, and its
+    /// width.
+    pub mask: Option<(Vec<bool>, usize)>,
+}
+
+/// Draws the frames at positions `start..=last`, from the frames `analyse` kept
+/// or else decoded again, sends those from `first` on to `video`, and keeps the
+/// contact sheet's.
 fn draw_span(
     e: &Experiment,
     layout: &Layout,
     spec: &OverlaySpec,
     (start, first, last): (usize, usize, usize),
-    video: &std::sync::mpsc::SyncSender<RgbImage>,
+    video: &std::sync::mpsc::SyncSender<Vec<RgbImage>>,
 ) -> Result<DrawnSpan, OverlayError> {
     let plan = &e.plan;
     let clip = &plan.clip;
     let peaks = &e.series.peaks.peaks;
     let peak_frames = peak_positions(e);
     let turns = last_turns(e, &peak_frames, spec.last_turns);
-    let mut strip_finder = plan.colour_thresholds.map(|(t, s)| StripFinder::new(t, s));
     let slow_down = plan.fps.fps / spec.playback_fps;
     let mut tiles = Vec::new();
     let mut shown = Vec::new();
-    decode_positions(e, (start, last), layout, |position, view| {
+    let mut batch = Vec::with_capacity(BATCH);
+    let mut each = |position: usize, image: RgbImage, strip: Option<StripMark>| {
         let marks = FrameMarks {
             position,
             peaks: peak_frames
@@ -404,13 +459,13 @@ fn draw_span(
                 .filter(|f| f.index == e.frames[position].index)
                 .collect(),
         };
-        let image = draw_frame(e, layout, view, &marks, strip_finder.as_mut(), slow_down).map_err(
-            |reason| OverlayError::Draw {
+        let image = draw_frame(e, layout, image, &marks, strip, slow_down).map_err(|reason| {
+            OverlayError::Draw {
                 clip: clip.clone(),
                 frame: e.frames[position].index,
                 reason,
-            },
-        )?;
+            }
+        })?;
         let record = OverlayFrame {
             index: e.frames[position].index,
             t: e.frames[position].t,
@@ -419,14 +474,45 @@ fn draw_span(
             tiles.push((record, image.clone()));
         }
         if position >= first {
-            if video.send(image).is_err() {
-                // The encoder stopped; its error is the one to report.
+            batch.push(image);
+            shown.push(record);
+            // The encoder stopped: its error is the one to report.
+            if batch.len() == BATCH && video.send(std::mem::take(&mut batch)).is_err() {
                 return Ok(false);
             }
-            shown.push(record);
         }
         Ok(true)
-    })?;
+    };
+    if let Some(kept) = e.kept.as_ref()
+        && let Some(frames) = kept.span((start, last), layout)
+    {
+        for frame in frames {
+            if !each(
+                frame.position,
+                kept.paint(frame, layout),
+                frame.strip_mark(),
+            )? {
+                break;
+            }
+        }
+    } else {
+        let mut strip_finder = plan.colour_thresholds.map(|(t, s)| StripFinder::new(t, s));
+        decode_positions(e, (start, last), layout, |position, view| {
+            let strip = match (&layout.plan, strip_finder.as_mut()) {
+                (Some(window), Some(finder)) => view
+                    .crop(window.src_x, window.src_y, window.width, window.height)
+                    .and_then(|plan_view| finder.measure(&plan_view, e.frames[position].index).ok())
+                    .map(|strip| StripMark {
+                        strip,
+                        mask: finder.strip_mask(),
+                    }),
+                _ => None,
+            };
+            each(position, layout.paint(view), strip)
+        })?;
+    }
+    // An encoder that stopped reports its own error.
+    let _ = video.send(batch);
     Ok((shown, tiles))
 }
 
@@ -599,15 +685,14 @@ impl FrameMatcher {
 fn draw_frame(
     e: &Experiment,
     layout: &Layout,
-    frame: &FrameView,
+    mut image: RgbImage,
     marks: &FrameMarks,
-    strip_finder: Option<&mut StripFinder>,
+    strip: Option<StripMark>,
     slow_down: f64,
 ) -> Result<RgbImage, String> {
     let plan = &e.plan;
     let c = &plan.calibration.calibration;
     let record = &e.frames[marks.position];
-    let mut image = layout.paint(frame);
     let (ox, oy) = plan.side_view_origin();
     let (ox, oy) = (ox as f64, oy as f64);
     let view_w = plan
@@ -637,26 +722,21 @@ fn draw_frame(
         }
     }
     let mut beta = None;
-    if let (Some(window), Some(finder)) = (&layout.plan, strip_finder) {
-        let plan_view = frame.crop(window.src_x, window.src_y, window.width, window.height);
-        if let Some(view) = plan_view
-            && let Ok(strip) = finder.measure(&view, record.index)
-        {
-            if let Some((mask, w)) = finder.strip_mask() {
-                window.outline(&mut image, (&mask, w), (window.src_x, window.src_y), STRIP);
-            }
-            // The principal axis through the centroid, β counter-clockwise from
-            // the image's x axis with image up (eq. 3.24), 1.2 strip lengths long.
-            let length = 1.2 * 12f64.sqrt() * strip.axes_sd_px[0];
-            let (dx, dy) = (
-                0.5 * length * strip.beta.cos(),
-                -0.5 * length * strip.beta.sin(),
-            );
-            let [cx, cy] = strip.centroid_px;
-            let (cx, cy) = (cx + window.src_x as f64, cy + window.src_y as f64);
-            window.segment(&mut image, (cx - dx, cy - dy), (cx + dx, cy + dy), AXIS);
-            beta = Some(strip.beta);
+    if let (Some(window), Some(StripMark { strip, mask })) = (&layout.plan, strip) {
+        if let Some((mask, w)) = mask {
+            window.outline(&mut image, (&mask, w), (window.src_x, window.src_y), STRIP);
         }
+        // The principal axis through the centroid, β counter-clockwise from
+        // the image's x axis with image up (eq. 3.24), 1.2 strip lengths long.
+        let length = 1.2 * 12f64.sqrt() * strip.axes_sd_px[0];
+        let (dx, dy) = (
+            0.5 * length * strip.beta.cos(),
+            -0.5 * length * strip.beta.sin(),
+        );
+        let [cx, cy] = strip.centroid_px;
+        let (cx, cy) = (cx + window.src_x as f64, cy + window.src_y as f64);
+        window.segment(&mut image, (cx - dx, cy - dy), (cx + dx, cy + dy), AXIS);
+        beta = Some(strip.beta);
     }
 
     let name = plan

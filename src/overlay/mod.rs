@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! Experiment (plan, per-frame z_rim, peaks, halt, flags) ─┐
-//! clip ── footage::FrameSource, only the span, seeked ────┴► canvas: windows of
+//! kept frames (keep.rs), else the clip's span decoded ───┴► canvas: windows of
 //!         the frame enlarged, marks at their sub-pixel rows, a header of text
 //!   ├─► render::H264Writer → overlay.mp4 (slowed down), overlay.json (frame map)
 //!   └─► the frames at the last peaks → last-turns.png
@@ -13,10 +13,15 @@
 //!       model-last-turns.png, model-overlay.csv (rim-edge distance per frame)
 //! ```
 //!
-//! The overlays read the clip a third time, after the analysis, and hold one
-//! decoded frame at a time (plus the few contact-sheet tiles).
+//! `analyse` keeps the overlay's pictures of the frames near the last motion
+//! while it reads the clip (keep.rs: reduced side and plan views and the centre
+//! band, in YUV, with the strip measured, a bounded ring), and the measurement
+//! overlay is drawn from them once the halt is known; where it kept none
+//! (`compare`, some formats) the overlays read the span a third time, one
+//! decoded frame at a time.
 
 mod canvas;
+mod keep;
 mod last_turns;
 mod measured;
 mod model;
@@ -25,10 +30,12 @@ mod pose;
 use std::path::PathBuf;
 
 pub use canvas::Window;
+pub use keep::{FrameKeeper, KeptFrames, MOVING_PX};
 pub use measured::{
     LAST_TURNS_IMAGE, OVERLAY_H264, OVERLAY_INDEX, OVERLAY_VIDEO, OverlayFrame, OverlayIndex,
     OverlaySpec, write_measurement_overlays,
 };
+pub(crate) use measured::{LayoutGeometry, StripMark};
 pub use model::{
     EdgeError, MODEL_LAST_TURNS_IMAGE, MODEL_OVERLAY_ERRORS, MODEL_OVERLAY_VIDEO, ModelOverlay,
     write_model_overlay,

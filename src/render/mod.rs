@@ -939,7 +939,7 @@ impl Renderer {
     /// surface of the disk (ray casting; see the module docs).
     fn rim_edge_row(&self, pose: &Pose) -> Option<f64> {
         rim_edge_row(
-            &self.scene,
+            &self.scene.disk,
             &self.cameras[0],
             self.truth.calibration.x_centre,
             pose,
@@ -1304,14 +1304,13 @@ impl Renderer {
 /// Row of the lowest point on column `x` of `cam` whose ray first meets a white
 /// surface of the disk at `pose`: marching up the column in quarter pixels from below
 /// the disk's bounding box, then bisection to 1e-9 px (see the module docs).
-fn rim_edge_row(scene: &Scene, cam: &Camera, x: f64, pose: &Pose) -> Option<f64> {
+pub(crate) fn rim_edge_row(disk: &DiskShape, cam: &Camera, x: f64, pose: &Pose) -> Option<f64> {
     let white = |row: f64| {
         let (o, d) = cam.ray(x, row);
-        scene
-            .first_disk_hit(pose, o, d)
+        disk.intersect(pose, o, d)
             .is_some_and(|hit| hit.surface.is_white_disk())
     };
-    let corners = scene.disk.box_corners(pose);
+    let corners = disk.box_corners(pose);
     let (mut top, mut bottom) = (f64::INFINITY, f64::NEG_INFINITY);
     for c in corners {
         let (_, row) = cam.project(c);
@@ -1398,7 +1397,8 @@ fn pinhole_calibration(
              column (frame too small for the disk?)"
         ))
     };
-    let z_base = rim_edge_row(scene, cam, x_centre, &rest).ok_or_else(|| missing("bottom rim"))?;
+    let z_base =
+        rim_edge_row(&scene.disk, cam, x_centre, &rest).ok_or_else(|| missing("bottom rim"))?;
     let side = |row: f64| {
         let (o, dir) = cam.ray(x_centre, row);
         scene

@@ -565,4 +565,45 @@ impl H264Writer {
             .map_err(av("write the MP4 trailer"))?;
         Ok(self.frames as usize)
     }
+
+    /// Encodes the next frame from 8-bit 4:2:0 samples already in the clip's
+    /// storage (its range, the BT.601 matrix; Y at the frame's size, U and V at
+    /// half of it, rows packed), without [`Self::push`]'s conversion from RGB:
+    /// for the overlays, which convert their canvas themselves. Upright 8-bit
+    /// clips only.
+    ///
+    /// # Errors
+    /// Planes of another size, a turned or 10-bit clip, or FFmpeg failing to
+    /// encode or write.
+    pub fn push_yuv420(&mut self, planes: [&[u8]; 3]) -> Result<(), String> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        if !self.orientation.is_identity() || self.yuv.format() != Pixel::YUV420P {
+            return Err("only an upright 8-bit clip takes 4:2:0 samples".into());
+        }
+        for (k, plane) in planes.into_iter().enumerate() {
+            let (pw, ph) = if k == 0 { (w, h) } else { (w / 2, h / 2) };
+            if plane.len() != pw * ph {
+                return Err(format!(
+                    "frame {}: plane {k} holds {} samples, the clip's {pw} × {ph}",
+                    self.frames,
+                    plane.len()
+                ));
+            }
+            let stride = self.yuv.stride(k);
+            for (dst, src) in self
+                .yuv
+                .data_mut(k)
+                .chunks_mut(stride)
+                .zip(plane.chunks_exact(pw))
+            {
+                dst[..pw].copy_from_slice(src);
+            }
+        }
+        self.yuv.set_pts(Some(self.frames));
+        self.frames += 1;
+        self.encoder
+            .send_frame(&self.yuv)
+            .map_err(av("encode a frame"))?;
+        self.drain()
+    }
 }

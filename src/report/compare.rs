@@ -451,7 +451,9 @@ struct RankRow {
 }
 
 /// Writes the ranking of `--all-models` into `dir` (`ranking.json`, `ranking.csv`,
-/// `index.html`); returns the files written.
+/// `index.html`); returns the files written. `best_overlay`: the best model
+/// and its overlay on the footage, written in its own comparison folder
+/// ([`comparison_dir`]), which the page shows.
 ///
 /// # Errors
 /// A file cannot be written.
@@ -460,6 +462,7 @@ pub fn write_ranking(
     experiment_dir: &Path,
     method: EtaMethod,
     ranked: &[Ranked],
+    best_overlay: Option<(ModelKind, &ModelOverlay)>,
 ) -> Result<Vec<PathBuf>, ReportError> {
     let json = dir.join("ranking.json");
     write_json(&json, &ranked)?;
@@ -530,6 +533,22 @@ pub fn write_ranking(
             "Contour (eq. 4.59) and curvature-dependent offset (eq. 4.69) with k_u = 0 are the same moment and tie exactly."
         }
         (table(&header_refs, &cells, |i, j| i == 0 && j == 3))
+        @if let Some((model, overlay)) = best_overlay {
+            @let folder = comparison_dir(Path::new(".."), model).display().to_string();
+            h2 { "The best model on the footage" }
+            (video_figure(&format!("{folder}/{}", overlay.video), "model-overlay", &format!(
+                "{} (ranked first) drawn over the footage: its outline (orange), its rim edge on the \
+                 centre band (orange) against the measured one (green). The other models' pages \
+                 have their plots only; compare --model draws any one of them.",
+                model_name(model))))
+            @if let Some(err) = &overlay.edge_error {
+                p { (format!(
+                    "Rim edge on the centre band, model − footage, over {} frames: mean {:+.2} px, \
+                     RMS {:.2} px, largest {:.2} px. ", err.frames, err.mean_px, err.rms_px,
+                    err.max_abs_px))
+                    a href=(format!("{folder}/index.html")) { "Its page." } }
+            }
+        }
     };
     let html_path = dir.join("index.html");
     write_atomic(

@@ -86,7 +86,7 @@ const PANEL_GAP: u32 = 10;
 const PLOT_COLUMNS: usize = (WIDTH - Y_LABEL_W - LEFT_MARGIN - RIGHT_MARGIN) as usize;
 
 const FONT_FAMILY: &str = "sans-serif";
-static FONT_BYTES: &[u8] = include_bytes!("../../data/fonts/DejaVuSans.ttf");
+pub(crate) static FONT_BYTES: &[u8] = include_bytes!("../../data/fonts/DejaVuSans.ttf");
 
 /// Curve colour outside highlights.
 const BASE_COLOR: RGBColor = RGBColor(0, 0, 255);
