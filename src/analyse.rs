@@ -438,6 +438,12 @@ impl ExperimentPlan {
             - z_rim_px
     }
 
+    /// The side view's width [px]: the region of interest's, else the frame's.
+    pub fn side_view_width(&self) -> usize {
+        let roi = self.config.vision.as_ref().and_then(|v| v.roi);
+        roi.map_or(self.width, |r| r[2] as usize)
+    }
+
     /// Where the side view's pixel (0, 0) lies in the frame: the corner of the
     /// region of interest, else the frame's.
     pub fn side_view_origin(&self) -> (usize, usize) {

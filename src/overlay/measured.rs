@@ -695,13 +695,11 @@ fn draw_frame(
     let record = &e.frames[marks.position];
     let (ox, oy) = plan.side_view_origin();
     let (ox, oy) = (ox as f64, oy as f64);
-    let view_w = plan
-        .config
-        .vision
-        .as_ref()
-        .and_then(|v| v.roi)
-        .map_or(plan.width, |r| r[2] as usize);
-    let (b0, b1) = vision::band(c.x_centre(), plan.band_half_width_px, view_w);
+    let (b0, b1) = vision::band(
+        c.x_centre(),
+        plan.band_half_width_px,
+        plan.side_view_width(),
+    );
     let (b0, b1) = (b0 as f64 + ox, b1 as f64 + ox);
     for (window, line) in [(&layout.side, 1.0), (&layout.band, 2.0)] {
         let top = window.src_y as f64;

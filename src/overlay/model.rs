@@ -173,21 +173,8 @@ pub fn write_model_overlay(
     let (ox, oy) = plan.side_view_origin();
     let (ox, oy) = (ox as f64, oy as f64);
     let x_centre = plan.calibration.calibration.x_centre();
-    let disk = DiskShape {
-        radius: plan.disk.radius,
-        half_thickness: plan.disk.half_thickness,
-        beta0: 0.0,
-        strip_half_width: 0.0,
-        // The outline, all the cast reads, is the cylinder's either way.
-        edge_radius: 0.0,
-    };
-    let view_w = plan
-        .config
-        .vision
-        .as_ref()
-        .and_then(|v| v.roi)
-        .map_or(plan.width, |r| r[2] as usize);
-    let band = crate::vision::band(x_centre, plan.band_half_width_px, view_w);
+    let disk = outline(plan);
+    let band = crate::vision::band(x_centre, plan.band_half_width_px, plan.side_view_width());
     let model_image = |t: f64| -> Option<ModelImage> {
         let s = state_at(t)?;
         let pose = Pose::rolling(
@@ -343,6 +330,18 @@ pub fn write_model_overlay(
         mirrored,
         edge_error: edge_error(&rows),
     })
+}
+
+/// The disk the model is drawn as: the plan's cylinder (no strip; its rims
+/// sharp, as the outline and the ray cast of the rim edge read only the cylinder).
+fn outline(plan: &crate::analyse::ExperimentPlan) -> DiskShape {
+    DiskShape {
+        radius: plan.disk.radius,
+        half_thickness: plan.disk.half_thickness,
+        beta0: 0.0,
+        strip_half_width: 0.0,
+        edge_radius: 0.0,
+    }
 }
 
 /// Image point of a world point in `vision`'s convention (the camera's + 0.5).
@@ -552,13 +551,7 @@ mod tests {
         let layout = Layout::new(plan, 0.0);
         let camera =
             CameraPose::from_calibration(plan, silhouette_top(&e, &layout).unwrap()).camera(plan);
-        let disk = DiskShape {
-            radius: plan.disk.radius,
-            half_thickness: plan.disk.half_thickness,
-            beta0: 0.0,
-            strip_half_width: 0.0,
-            edge_radius: 0.0,
-        };
+        let disk = outline(plan);
         let band = crate::vision::band(
             plan.calibration.calibration.x_centre(),
             plan.band_half_width_px,
