@@ -91,9 +91,7 @@ pub struct PeakSeries {
 ///
 /// Peaks are local maxima (a plateau counts once, at its middle) of z_rim − rest
 /// level whose prominence exceeds `prominence_sigmas` × the rest noise (and
-/// `min_prominence`), and the halt's own frame when it is a maximum: the halt
-/// found it above the motion threshold, so it is the motion's last rise, not a
-/// wiggle of the noise. Each is refined by the local fit of `model` over one oscillation
+/// `min_prominence`). Each is refined by the local fit of `model` over one oscillation
 /// (module docs), falling back to the parabola through three samples.
 ///
 /// Errors with [`SignalError::TooFewPeaks`] when fewer than three peaks lie in the
@@ -195,12 +193,7 @@ pub(crate) fn extrema(
     let raw: Vec<(usize, f64)> = local_maxima(&v)
         .into_iter()
         .map(|k| (k, prominence(&v, k)))
-        .filter(|&(k, p)| {
-            // The halt's own frame, a maximum above the motion threshold, is the
-            // last rise of the motion: its peak, however small (module docs).
-            let last_rise = idx[k] == halt.index && v[k] > halt.threshold;
-            (p > min_prominence || last_rise) && ts[idx[k]] >= from && idx[k] <= halt.index
-        })
+        .filter(|&(k, p)| p > min_prominence && ts[idx[k]] >= from && idx[k] <= halt.index)
         .collect();
     let sample_times: Vec<f64> = idx.iter().map(|&i| ts[i]).collect();
     // Motion samples only (through the halt) for the local fits.

@@ -226,32 +226,6 @@ fn a_late_lone_excursion_sizes_the_noise_near_the_halt() {
     assert!(halt.threshold > 1.5 * 1.5 * before.threshold * 0.99);
 }
 
-/// The halt's own frame, a maximum above the motion threshold but below the peaks'
-/// prominence of 6σ, is the motion's last peak (o02 of the open footage: a true
-/// 0.69 px peak read 0.65 px with a rest noise σ of 0.15 px, and was left out).
-#[test]
-fn the_last_rise_is_a_peak_however_small() {
-    let (t, z, _) = clip(NOISE, 1);
-    // This clip's motion threshold is 5σ: a rise of 5.5σ is motion to the halt
-    // and below the 6σ prominence of the peaks.
-    let config = SignalConfig::default();
-    let before = halt_time(&t, &z, &config).expect("halt");
-    let (last, level) = (before.index, before.rest_level);
-    let mut small = z.clone();
-    small[last - 1] = level;
-    small[last] = level + 1.1 * before.threshold;
-    let halt = halt_time(&t, &small, &config).expect("halt");
-    assert_eq!(halt.index, last);
-    let rise = small[last] - halt.rest_level;
-    assert!(
-        rise < config.prominence_sigmas * halt.noise,
-        "the rise {rise} is below the prominence the other peaks need"
-    );
-    let series = find_peaks(&t, &small, &halt, &thesis_model(), &config).expect("peaks");
-    let final_peak = series.peaks.last().expect("peaks");
-    assert_eq!(final_peak.index, last);
-}
-
 /// How far a peak time may be from the truth: a tenth of a frame by the local fit
 /// (observed < 0.05) while ψ̇ changes slowly; half a frame by the parabola (the last,
 /// tiny peak, 5 frames a turn), or in the last 0.03 s, where ψ̇ ∝ τ^{−1/4} changes by
