@@ -32,6 +32,24 @@ fn run(dir: &Path, args: &[&str]) {
     );
 }
 
+/// `eulerdisk analyse` of the two-view fixture (`fps = 480`, two-view) in `dir`,
+/// writing to `dir/out_name`, with `extra` arguments (e.g. `--no-overlay`).
+fn analyse_two_view(dir: &Path, out_name: &str, extra: &[&str]) -> PathBuf {
+    std::fs::write(dir.join("c.toml"), "fps = 480\ntwo_view = true\n").unwrap();
+    let clip = fixture("two-view-n045.mp4");
+    let mut args = vec![
+        "analyse",
+        clip.to_str().unwrap(),
+        "-c",
+        "c.toml",
+        "-o",
+        out_name,
+    ];
+    args.extend_from_slice(extra);
+    run(dir, &args);
+    dir.join(out_name)
+}
+
 /// Rows of `frames.csv`: (index, t − t_φ, z_rim_px).
 fn frame_rows(dir: &Path) -> Vec<(usize, f64, Option<f64>)> {
     let mut reader = csv::Reader::from_path(dir.join("frames.csv")).unwrap();
@@ -77,20 +95,7 @@ fn decode(video: &Path) -> (f64, Vec<(usize, usize, Vec<u8>)>) {
 #[test]
 fn overlay_video_holds_the_span_at_its_rate_and_size() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("c.toml"), "fps = 480\ntwo_view = true\n").unwrap();
-    let clip = fixture("two-view-n045.mp4");
-    run(
-        dir.path(),
-        &[
-            "analyse",
-            clip.to_str().unwrap(),
-            "-c",
-            "c.toml",
-            "-o",
-            "out",
-        ],
-    );
-    let out = dir.path().join("out");
+    let out = analyse_two_view(dir.path(), "out", &[]);
     let index = json(&out.join("overlay.json"));
     let span: Vec<usize> = frame_rows(&out)
         .into_iter()
@@ -147,19 +152,7 @@ fn overlay_video_holds_the_span_at_its_rate_and_size() {
     assert!(page.contains("showFrame("), "peaks link to their frames");
 
     // --no-overlay writes neither.
-    run(
-        dir.path(),
-        &[
-            "analyse",
-            clip.to_str().unwrap(),
-            "-c",
-            "c.toml",
-            "-o",
-            "bare",
-            "--no-overlay",
-        ],
-    );
-    let bare = dir.path().join("bare");
+    let bare = analyse_two_view(dir.path(), "bare", &["--no-overlay"]);
     assert!(!bare.join("overlay.mp4").exists() && !bare.join("last-turns.png").exists());
     assert!(
         !std::fs::read_to_string(bare.join("index.html"))
@@ -269,20 +262,7 @@ fn drawn_rim_edge_lies_on_the_measured_and_true_rim() {
 #[test]
 fn compare_draws_the_model_with_the_calibrated_pose() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("c.toml"), "fps = 480\ntwo_view = true\n").unwrap();
-    let clip = fixture("two-view-n045.mp4");
-    run(
-        dir.path(),
-        &[
-            "analyse",
-            clip.to_str().unwrap(),
-            "-c",
-            "c.toml",
-            "-o",
-            "out",
-            "--no-overlay",
-        ],
-    );
+    analyse_two_view(dir.path(), "out", &["--no-overlay"]);
     run(
         dir.path(),
         &[
@@ -325,20 +305,7 @@ fn compare_draws_the_model_with_the_calibrated_pose() {
 #[test]
 fn compare_all_models_draws_the_best_model() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("c.toml"), "fps = 480\ntwo_view = true\n").unwrap();
-    let clip = fixture("two-view-n045.mp4");
-    run(
-        dir.path(),
-        &[
-            "analyse",
-            clip.to_str().unwrap(),
-            "-c",
-            "c.toml",
-            "-o",
-            "out",
-            "--no-overlay",
-        ],
-    );
+    analyse_two_view(dir.path(), "out", &["--no-overlay"]);
     run(
         dir.path(),
         &["compare", "out", "--all-models", "--lead", "0.45"],
