@@ -424,6 +424,10 @@ pub struct ExperimentPlan {
     /// before it was recorded (then z_base).
     #[serde(default)]
     pub rim_zero_row_px: Option<f64>,
+    /// 1σ uncertainty of that zero [px], carried into the intervals of n
+    /// (`PowerLawFit::se_n_zero`); 0 in results written before it was.
+    #[serde(default)]
+    pub rim_zero_uncertainty_px: f64,
     pub colour_thresholds: Option<(ColourThresholds, ThresholdSource)>,
     pub window_s: f64,
     pub halt: HaltChoice,
@@ -1282,16 +1286,7 @@ pub fn analyse_clip_keeping(
                 .map(|f| f.beta_raw.unwrap_or(f64::NAN))
                 .collect()
         });
-        let signal_config = SignalConfig {
-            window_s,
-            // The rim is located to about 0.01 px on lossless frames (the edge, and
-            // the gap's darkness below 2 px), so a clean rest tail can have almost no
-            // spread: floor the noise at 0.02 px (motion from 0.1 px on), and ask a
-            // peak to stand 0.2 px above its surroundings.
-            noise_floor: 0.02 * metres_per_px,
-            min_prominence: 0.2 * metres_per_px,
-            ..SignalConfig::default()
-        };
+        let signal_config = signal_config(window_s, metres_per_px);
         let model = ThesisRim {
             radius: params.radius,
         };
@@ -1443,6 +1438,55 @@ pub fn analyse_clip_keeping(
         )
         .ok()
     });
+    // The zero of z_rim (the edge at rest) is shared by every height, so an error in
+    // it moves n without a trace in the residuals: each fit is made again with the
+    // zero moved down and up by its uncertainty, and half the change of n enters
+    // n's interval.
+    let zero_px = config.rim_zero_uncertainty_px();
+    let model = ThesisRim {
+        radius: params.radius,
+    };
+    let t: Vec<f64> = frames.iter().map(|f| f.t_capture).collect();
+    let z: Vec<f64> = frames
+        .iter()
+        .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
+        .collect();
+    let moved = [-1.0, 1.0].map(|sign| {
+        signal::with_zero_moved(
+            &t,
+            &z,
+            &series,
+            sign * zero_px * metres_per_px,
+            &model,
+            &signal_config(window_s, metres_per_px),
+        )
+        .ok()
+    });
+    let peaks_fit = with_zero_error(
+        peaks_fit,
+        &moved,
+        |s| peak_energies(&params, s),
+        window_s,
+        halt,
+    );
+    let frames_fit = frames_fit.map(|f| {
+        with_zero_error(
+            f,
+            &moved,
+            |s| frame_energies(&params, s, None),
+            window_s,
+            halt,
+        )
+    });
+    let full_state_fit = full_state_fit.map(|f| {
+        with_zero_error(
+            f,
+            &moved,
+            |s| frame_energies(&params, s, s.strip.as_ref()),
+            window_s,
+            halt,
+        )
+    });
 
     let threshold_png = highest.map_or_else(Vec::new, |(_, edge_row, frame)| {
         png(&diagnostics::threshold_image(
@@ -1476,6 +1520,7 @@ pub fn analyse_clip_keeping(
         band_half_width_px: side_config.half_width_px,
         rim,
         rim_zero_row_px: Some(rim_zero_row_px),
+        rim_zero_uncertainty_px: zero_px,
         colour_thresholds,
         window_s,
         halt: config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default(),
@@ -1588,6 +1633,51 @@ fn frame_energies(
             })
         })
         .collect()
+}
+
+/// The signal stage's settings for a clip measured at `metres_per_px`.
+fn signal_config(window_s: f64, metres_per_px: f64) -> SignalConfig {
+    SignalConfig {
+        window_s,
+        // The rim is located to about 0.01 px on lossless frames (the edge, and
+        // the gap's darkness below 2 px), so a clean rest tail can have almost no
+        // spread: floor the noise at 0.02 px (motion from 0.1 px on), and ask a
+        // peak to stand 0.2 px above its surroundings.
+        noise_floor: 0.02 * metres_per_px,
+        min_prominence: 0.2 * metres_per_px,
+        ..SignalConfig::default()
+    }
+}
+
+/// `fit` with the standard error of its n from the zero of z_rim: half the change of
+/// n between the fits of the same samples from `moved` (the series with the zero
+/// moved down and up by its uncertainty), or the whole change when only one fits.
+fn with_zero_error(
+    fit: EnergyFit,
+    moved: &[Option<StateSeries>; 2],
+    samples: impl Fn(&StateSeries) -> Vec<EnergySample>,
+    window_s: f64,
+    halt: HaltTime,
+) -> EnergyFit {
+    let n: Vec<f64> = moved
+        .iter()
+        .flatten()
+        .filter_map(|series| {
+            let s = samples(series);
+            let t: Vec<f64> = s.iter().map(|s| s.t).collect();
+            let e: Vec<f64> = s.iter().map(|s| s.energy).collect();
+            energy::fit_window(&t, &e, window_s, halt).ok().map(|f| f.n)
+        })
+        .collect();
+    let se_zero = match n[..] {
+        [low, high] => 0.5 * (high - low).abs(),
+        [one] => (one - fit.fit.n).abs(),
+        _ => return fit,
+    };
+    EnergyFit {
+        fit: fit.fit.with_zero_error(se_zero),
+        ..fit
+    }
 }
 
 fn fit_series(

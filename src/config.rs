@@ -37,6 +37,7 @@
 //! [fit]
 //! window_s = 0.5                 # fit the last 0.5 s before the halt
 //! halt = "free"                  # free (t0 fitted) | measured (t0 fixed at the halt)
+//! rim_zero_uncertainty_px = 0.08 # 1σ of z_rim's zero, in n's interval (0: left out)
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -127,6 +128,9 @@ pub struct FitConfig {
     /// Length of the fit window before the halt [s].
     pub window_s: Option<f64>,
     pub halt: Option<HaltChoice>,
+    /// 1σ uncertainty of the zero of z_rim [px], carried into the interval of n
+    /// (default [`DEFAULT_RIM_ZERO_UNCERTAINTY_PX`]; 0 leaves it out).
+    pub rim_zero_uncertainty_px: Option<f64>,
 }
 
 /// One experiment's configuration, as written (before automatic choices).
@@ -151,6 +155,16 @@ pub struct ExperimentConfig {
 
 /// Default fit window before the halt [s] (the thesis's last 0.5 s).
 pub const DEFAULT_WINDOW_S: f64 = 0.5;
+
+/// How well the zero of z_rim is known [px], 1σ, by default. The zero is the edge
+/// at rest; a lifted rim's edge is read the same way, but not exactly: blur, the
+/// rim's rounding, the mirror image or shadow under it and the codec change between
+/// rest and lift, so every lifted height carries one shared offset. Measured against
+/// ground truth as the mean error of z_rim over the frames lifted past 0.5 px in the
+/// last 0.5 s: RMS 0.071 px over 60 seeded renders (`scripts/coverage`'s six
+/// conditions) and 0.079 px over the 8 open clips (−0.14 … +0.09 px), BENCHMARKS.md
+/// "Coverage"; rounded up to 0.08 px.
+pub const DEFAULT_RIM_ZERO_UNCERTAINTY_PX: f64 = 0.08;
 
 impl ExperimentConfig {
     /// Parse one TOML text; `path` names it in errors.
@@ -314,6 +328,14 @@ impl ExperimentConfig {
             self.fit.as_ref().and_then(|f| f.window_s),
             "s",
         )?;
+        if let Some(u) = self.fit.as_ref().and_then(|f| f.rim_zero_uncertainty_px)
+            && !(u.is_finite() && u >= 0.0)
+        {
+            return fail(
+                "fit.rim_zero_uncertainty_px",
+                format!("`fit.rim_zero_uncertainty_px` = {u} must be a number ≥ 0 [px]"),
+            );
+        }
         Ok(())
     }
 
@@ -341,6 +363,14 @@ impl ExperimentConfig {
             .as_ref()
             .and_then(|f| f.window_s)
             .unwrap_or(DEFAULT_WINDOW_S)
+    }
+
+    /// The 1σ uncertainty of the zero of z_rim [px] carried into n's interval.
+    pub fn rim_zero_uncertainty_px(&self) -> f64 {
+        self.fit
+            .as_ref()
+            .and_then(|f| f.rim_zero_uncertainty_px)
+            .unwrap_or(DEFAULT_RIM_ZERO_UNCERTAINTY_PX)
     }
 }
 

@@ -154,7 +154,14 @@ pub struct PowerLawFit {
     pub se_t0: Option<f64>,
     /// 95 % confidence interval of A_e [J s^-n].
     pub ci95_a_e: (f64, f64),
-    /// 95 % confidence interval of n.
+    /// Standard error of n from how well the zero of the measured heights is known:
+    /// a systematic every sample shares, which the residuals cannot show (`analyse`
+    /// refits with the zero moved by ± its uncertainty, [`PowerLawFit::with_zero_error`]);
+    /// 0 when not assessed.
+    #[serde(default)]
+    pub se_n_zero: f64,
+    /// 95 % confidence interval of n: the statistical half-width (Student t, from
+    /// `se_n`) and the zero's (normal, from `se_n_zero`) added in quadrature.
     pub ci95_n: (f64, f64),
     /// 95 % confidence interval of t0 [s]; `None` when t0 was fixed.
     pub ci95_t0: Option<(f64, f64)>,
@@ -171,6 +178,19 @@ pub struct PowerLawFit {
 }
 
 impl PowerLawFit {
+    /// The fit with `se_zero`, the standard error of n from the zero of the measured
+    /// heights, in its interval of n: half-width √(h² + (1.96 se_zero)²), h the
+    /// statistical half-width (replacing an earlier zero error, not adding to it).
+    pub fn with_zero_error(mut self, se_zero: f64) -> Self {
+        let z = 1.959_963_984_540_054;
+        let half = 0.5 * (self.ci95_n.1 - self.ci95_n.0);
+        let statistical = (half * half - (z * self.se_n_zero).powi(2)).max(0.0);
+        let half = (statistical + (z * se_zero).powi(2)).sqrt();
+        self.se_n_zero = se_zero;
+        self.ci95_n = (self.n - half, self.n + half);
+        self
+    }
+
     /// The fitted energy A_e (t0 − t)^n at time `t` [J]; zero at and after the halt.
     pub fn energy_at(&self, t: f64) -> f64 {
         if t < self.t0 {
@@ -536,6 +556,7 @@ fn fit_with_limit(
         bandwidth,
         se_t0: free.then(|| se[2]),
         ci95_a_e: ci(a_e, se[0]),
+        se_n_zero: 0.0,
         ci95_n: ci(n, se[1]),
         ci95_t0: free.then(|| ci(t0, se[2])),
         r_squared: 1.0 - ssr / sst,
@@ -1253,6 +1274,68 @@ mod tests {
                 .count();
             assert!(covered >= 180, "n = {n}: covered {covered}/200");
         }
+    }
+
+    /// An offset every sample shares, as an error of the heights' zero makes, moves n
+    /// without a trace in the residuals: the statistical interval alone covers the
+    /// true n far less often than 95 %. With the offset's own standard error σ carried
+    /// in (each fit made again with the energies moved by ±σ, half the change of n as
+    /// `se_n_zero`), the intervals cover it as often as they say. Energies near the
+    /// halt are ∝ φ ∝ z_rim, so a zero error δ adds about (E/z) δ to each: here a
+    /// constant c δ, δ ~ N(0, σ), with white noise besides.
+    #[test]
+    fn a_shared_offset_is_carried_into_the_interval_of_n() {
+        let (a_e, n, t0) = (0.0063, 0.55, 0.0);
+        let t: Vec<f64> = (0..40).map(|k| -0.5 + 0.0125 * k as f64).collect();
+        let truth: Vec<f64> = t.iter().map(|&ti| a_e * (t0 - ti).powf(n)).collect();
+        let sigma = 1.5e-5; // the shared offset's σ [J], about 1 % of E at the window's end
+        let mut rng = crate::rng::SplitMix64::new(12);
+        let (mut statistical, mut with_zero) = (0, 0);
+        let trials = 200;
+        for _ in 0..trials {
+            let offset = sigma * rng.gaussian();
+            let e: Vec<f64> = truth
+                .iter()
+                .map(|&x| x + offset + 2e-6 * rng.gaussian())
+                .collect();
+            let fit = fit_window(&t, &e, 0.5, HaltTime::Free).expect("fit");
+            let moved = |shift: f64| {
+                let e: Vec<f64> = e.iter().map(|&x| x + shift).collect();
+                fit_window(&t, &e, 0.5, HaltTime::Free).expect("moved").n
+            };
+            let se_zero = 0.5 * (moved(sigma) - moved(-sigma)).abs();
+            let covers = |f: &PowerLawFit| f.ci95_n.0 <= n && n <= f.ci95_n.1;
+            statistical += usize::from(covers(&fit));
+            let fit = fit.with_zero_error(se_zero);
+            assert_eq!(fit.se_n_zero, se_zero);
+            with_zero += usize::from(covers(&fit));
+        }
+        assert!(
+            statistical < trials * 80 / 100,
+            "statistical {statistical}/{trials}"
+        );
+        assert!(
+            (trials * 90 / 100..=trials * 99 / 100).contains(&with_zero),
+            "with the zero {with_zero}/{trials}"
+        );
+    }
+
+    /// Carrying a zero error in twice replaces it: the statistical half-width stays.
+    #[test]
+    fn the_zero_error_replaces_an_earlier_one() {
+        let t: Vec<f64> = (0..30).map(|k| -0.5 + 0.016 * k as f64).collect();
+        let e: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .map(|(k, &ti)| 0.0063 * (0.01 - ti).powf(0.5) * (1.0 + 0.01 * (k as f64).sin()))
+            .collect();
+        let fit = fit_window(&t, &e, 0.5, HaltTime::Free).expect("fit");
+        let once = fit.clone().with_zero_error(0.02);
+        let twice = once.clone().with_zero_error(0.01).with_zero_error(0.02);
+        assert!((once.ci95_n.1 - twice.ci95_n.1).abs() < 1e-12);
+        let half = |f: &PowerLawFit| 0.5 * (f.ci95_n.1 - f.ci95_n.0);
+        let z = 1.959_963_984_540_054;
+        assert!((half(&once).powi(2) - half(&fit).powi(2) - (z * 0.02f64).powi(2)).abs() < 1e-12);
     }
 
     /// Student t quantiles t_{0.975}(dof) from standard tables.

@@ -287,6 +287,7 @@ fn fit_row(f: &EnergyFit) -> Vec<String> {
         f.method.clone(),
         format!("{:.4}", fit.n),
         format!("{:.4} … {:.4}", fit.ci95_n.0, fit.ci95_n.1),
+        format!("{:.4}", 1.96 * fit.se_n_zero),
         format!("{:.3e}", fit.a_e),
         match fit.ci95_t0 {
             Some((lo, hi)) => format!("{:.4} ({:.4} … {:.4})", fit.t0, lo, hi),
@@ -474,8 +475,11 @@ fn experiment_page(
         p {
             "Energy exponent "
             strong { (format!("n = {:.3}", e.peaks_fit.fit.n)) }
-            (format!(" (95 % CI {:.3} … {:.3}) from {} peaks in the last {} s before the halt.",
-                e.peaks_fit.fit.ci95_n.0, e.peaks_fit.fit.ci95_n.1, e.peaks_fit.fit.points, plan.window_s))
+            (format!(" (95 % CI {:.3} … {:.3}) from {} peaks in the last {} s before the halt; \
+                the interval includes ± {:.3} from the zero of z_rim, known to {} px (the fits \
+                made again with it moved by that much).",
+                e.peaks_fit.fit.ci95_n.0, e.peaks_fit.fit.ci95_n.1, e.peaks_fit.fit.points, plan.window_s,
+                1.96 * e.peaks_fit.fit.se_n_zero, plan.rim_zero_uncertainty_px))
         }
         @if let Some(s) = strip {
             p { (format!("Strip stop t_β − t_φ = {:.4} s ({}).", s.rotation_after_flat,
@@ -486,7 +490,7 @@ fn experiment_page(
             ul { @for w in &e.warnings { li class="bad" { (w) } } }
         }
         h2 { "Power law E = A_e (t0 − t)^n" }
-        (table(&["energy", "n", "95 % CI of n", "A_e [J s^-n]", "t0 [s]", "R²", "points"], &fit_rows, |_, _| false))
+        (table(&["energy", "n", "95 % CI of n", "of it ± from z_rim's zero", "A_e [J s^-n]", "t0 [s]", "R²", "points"], &fit_rows, |_, _| false))
         @if let Some(spin) = e.full_state_fit.as_ref().and(carried_spin_energy(e)) {
             p { (format!("Eq. 3.6 keeps the spin the disk carries into the flat: with β̇ = {:.2} rad/s at t_φ, \
                 C/2 β̇² + m/2 (R β̇)² = {:.2e} J remain at the halt, which a power law to zero does not describe. \
@@ -494,7 +498,7 @@ fn experiment_page(
         }
         (svg_figure(energy_svg, "Energy at the peaks (eq. 3.8) with the fitted power law; the band spans n over its 95 % interval."))
         h2 { "Window sensitivity (eq. 3.8 at peaks)" }
-        (table(&["window", "n", "95 % CI", "points"], &window_rows, |_, _| false))
+        (table(&["window", "n", "95 % CI (statistical only)", "points"], &window_rows, |_, _| false))
         h2 { "Series" }
         @if overlay.is_some() {
             p class="note" { "Click a series plot at an instant inside the overlay video's span: the video below stops at the frame nearest it." }

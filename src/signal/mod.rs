@@ -568,6 +568,33 @@ pub fn analyse(
     })
 }
 
+/// The peaks and states of `series` (from [`analyse`] of `t`, `z_rim`) again, with
+/// every rim height up to the halt moved up by `shift` [m]: a zero of z_rim that much
+/// lower, as an error of the edge at rest would make it. The halt, strip and flags
+/// stay. How the energy fits respond to it is the zero's share of their errors.
+pub fn with_zero_moved(
+    t: &[f64],
+    z_rim: &[f64],
+    series: &StateSeries,
+    shift: f64,
+    model: &dyn RimModel,
+    config: &SignalConfig,
+) -> Result<StateSeries, SignalError> {
+    check_series(t, z_rim, "z_rim")?;
+    let z: Vec<f64> = z_rim
+        .iter()
+        .zip(&series.halt.shifted_t)
+        .map(|(&z, &ts)| if ts <= 0.0 { z + shift } else { z })
+        .collect();
+    let peaks = find_peaks(t, &z, &series.halt, model, config)?;
+    let states = frame_states(t, &z, &series.halt, &peaks, model, config);
+    Ok(StateSeries {
+        peaks,
+        states,
+        ..series.clone()
+    })
+}
+
 /// Checks that `t` and `values` pair up and that `t` is finite and increasing.
 fn check_series(t: &[f64], values: &[f64], series: &'static str) -> Result<(), SignalError> {
     if t.len() != values.len() {
