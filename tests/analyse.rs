@@ -421,3 +421,60 @@ fn a_rounded_rim_is_scaled_from_the_plate_line() {
     let rms = (squares.iter().sum::<f64>() / squares.len() as f64).sqrt();
     assert!(rms < 0.15, "z_rim RMS error {rms} px");
 }
+
+/// A phone held close and a little above the plate (0.25 m, 3°) sees the top face
+/// only 1–3 px tall above the side, too thin for the calibration's two plateaus; the
+/// fitted three-level profile (`vision::calibration::thin_top_face`) finds the near
+/// top rim z_t there, where the silhouette's top (the far rim, the fallback before)
+/// lies 2–3 px higher, so eq. 3.10's scale at the near rim holds.
+#[test]
+fn a_thin_top_face_gives_the_near_top_rim() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = util::eulerdisk(
+        dir.path(),
+        &[
+            "render",
+            "--n",
+            "0.5",
+            "--halt",
+            "0.8",
+            "--size",
+            "240x160",
+            "--camera-distance",
+            "0.25",
+            "--elevation",
+            "3",
+            "--noise",
+            "1",
+            "-o",
+            "close.mp4",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let truth: Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("close.truth.json")).unwrap(),
+    )
+    .unwrap();
+    let e = analyse_clip(
+        &dir.path().join("close.mp4"),
+        &config("fps = 480\n"),
+        &|_, _| {},
+    )
+    .expect("analyse");
+    // Rows: the truth's on pixel centres at integers, ours at half-integers.
+    let near = f(&truth["calibration"]["z_t"]) + 0.5;
+    let far = f(&truth["camera"]["z_t_far"]) + 0.5;
+    let z_t = e.plan.calibration.calibration.z_t;
+    assert!(near - far > 1.0, "the top face is {} px tall", near - far);
+    assert!(
+        (z_t - near).abs() < 0.5,
+        "z_t {z_t} px, near rim {near}, far {far}"
+    );
+    let scale = f(&truth["camera"]["near_rim_metres_per_px"]);
+    let error = e.plan.metres_per_px / scale - 1.0;
+    assert!(error.abs() < 0.02, "scale error {:+.2} %", 100.0 * error);
+}

@@ -31,6 +31,7 @@
 //! sub-pixel by the area of its step (`profile::area_edge`), and averaged over
 //! the rest frames.
 
+use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::VisionError;
@@ -623,7 +624,9 @@ fn vertical_points(
         }
         None => (z_bottom, bottom),
     };
-    let z_near = near_top_rim(&p, top, side_end, contrast, origin).unwrap_or(z_t);
+    let z_near = near_top_rim(&p, top, side_end, contrast, origin)
+        .or_else(|| thin_top_face(&p, z_t - origin, side_end, contrast).map(|z| z + origin))
+        .unwrap_or(z_t);
     Ok((z_near, z_base))
 }
 
@@ -694,6 +697,91 @@ pub(super) fn near_top_rim(
         d(a).total_cmp(&d(b))
     })?;
     area_edge(p, i, REACH, origin)
+}
+
+/// The near top rim on a top face too thin for [`near_top_rim`]'s plateaus (a camera
+/// looking down by 1–3° from a few decimetres shows it 1–3 px tall, within the
+/// [`REACH`] rows those leave out), by fitting the band profile `p` about the
+/// silhouette's top `far` (its area edge, the far top rim, in `p`'s rows) with three
+/// levels, background B, top face T and side S, and two edges blurred alike by a
+/// Gaussian σ and sampled by area:
+///
+/// ```text
+/// p_k = B + (T − B) c_k(far′) + (S − T) c_k(near),   c_k(e) = ∫_k^{k+1} Φ((u − e)/σ) du
+/// ```
+///
+/// (B, T, S) by least squares for each (far′, near, σ) of a grid, the face at most
+/// [`REACH`] + 2 px tall. The answer is refused (`None`) when
+/// - the face is less than 2σ tall: two edges blurred alike are told apart only that
+///   far apart, and closer the face's level and height trade off;
+/// - a fitted level lies beyond the profile's range by more than a tenth of it (the
+///   same trade-off);
+/// - the fitted S is not the side's own level (the median of the side's rows from
+///   `REACH` + 3 px below the silhouette's top to `side_end`, which a thin line across
+///   the face, a strip, does not move), or T differs from it by less than
+///   [`NEAR_RIM_STEP_FRACTION`] of `contrast` (no face seen).
+fn thin_top_face(p: &[f32], far: f64, side_end: usize, contrast: f32) -> Option<f64> {
+    let top = far.ceil() as usize;
+    let side_rows = p.get(top + REACH + 3..side_end.checked_sub(REACH)?)?;
+    if side_rows.len() < 3 {
+        return None;
+    }
+    let mut sorted = side_rows.to_vec();
+    sorted.sort_by(f32::total_cmp);
+    let side_level = f64::from(sorted[sorted.len() / 2]);
+    let first = (far.floor() as usize).checked_sub(REACH)?;
+    let last = side_end.min(top + REACH + 5);
+    let rows: Vec<(f64, f64)> = (first..last).map(|k| (k as f64, f64::from(p[k]))).collect();
+    // ∫Φ = x Φ(x) + φ(x): the area of a blurred step over one pixel.
+    let integral = |x: f64| {
+        let cdf = 0.5 * (1.0 + statrs::function::erf::erf(x / std::f64::consts::SQRT_2));
+        x * cdf + (-0.5 * x * x).exp() / (2.0 * std::f64::consts::PI).sqrt()
+    };
+    let coverage = |k: f64, e: f64, sigma: f64| {
+        sigma * (integral((k + 1.0 - e) / sigma) - integral((k - e) / sigma))
+    };
+    let yy: f64 = rows.iter().map(|r| r.1 * r.1).sum();
+    // (SSR, face's height, σ, near, levels)
+    let mut best: Option<(f64, f64, f64, f64, Vector3<f64>)> = None;
+    for si in 0..18 {
+        let sigma = 0.3 + 0.1 * f64::from(si);
+        for fi in 0..=40 {
+            let far = far - 1.0 + 0.05 * f64::from(fi);
+            for ni in 0..=(20 * (REACH + 2) - 4) {
+                let near = far + 0.2 + 0.05 * ni as f64;
+                // Normal equations of the three levels.
+                let (mut xx, mut xy) = (Matrix3::zeros(), Vector3::zeros());
+                for &(k, v) in &rows {
+                    let (a, b) = (coverage(k, far, sigma), coverage(k, near, sigma));
+                    let x = Vector3::new(1.0 - a, a - b, b);
+                    xx += x * x.transpose();
+                    xy += x * v;
+                }
+                let Some(levels) = xx.cholesky().map(|c| c.solve(&xy)) else {
+                    continue;
+                };
+                let ssr = yy - 2.0 * levels.dot(&xy) + levels.dot(&(xx * levels));
+                if best.as_ref().is_none_or(|b| ssr < b.0) {
+                    best = Some((ssr, near - far, sigma, near, levels));
+                }
+            }
+        }
+    }
+    let (_, height, sigma, near, levels) = best?;
+    let (lo, hi) = rows
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
+            (lo.min(r.1), hi.max(r.1))
+        });
+    let margin = 0.1 * (hi - lo);
+    let in_range = levels
+        .iter()
+        .all(|&v| (lo - margin..=hi + margin).contains(&v));
+    let step = (levels[1] - side_level).abs();
+    let resolved = height >= 2.0 * sigma;
+    let side_agrees = (levels[2] - side_level).abs() < 0.5 * step;
+    (resolved && in_range && side_agrees && step >= f64::from(NEAR_RIM_STEP_FRACTION * contrast))
+        .then_some(near)
 }
 
 /// x_l and x_r: the ends of the disk, the outermost half-level crossings of the
