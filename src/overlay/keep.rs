@@ -19,8 +19,11 @@
 //! resolution over the side window's rows, and on two-view clips the plan
 //! window as the side one with the strip `analyse` measured in it (its mask
 //! packed a bit a pixel), as 8-bit YUV copied from the decoder before any
-//! colour conversion; a frame folder's RGB block means. Colour is
-//! converted only for the frames drawn. A 720×1280 clip at 480 fps keeps about
+//! colour conversion; a frame folder's RGB block means. `overlay.mp4`'s frames
+//! are painted from these samples as they are, on the encoder's own 4:2:0
+//! samples ([`KeptFrames::paint_yuv`]; recoded first if the clip's matrix or
+//! range is not the video's), and only the contact sheet's few frames are
+//! converted to colour ([`KeptFrames::paint`]). A 720×1280 clip at 480 fps keeps about
 //! 0.3 MB a frame, 101 MB for the default span (BENCHMARKS.md).
 //!
 //! Videos not in 8-bit planar 4:2:0, videos turned by a display matrix, and
@@ -31,9 +34,9 @@
 use std::collections::VecDeque;
 use std::ops::Range;
 
-use image::RgbImage;
+use image::{Rgb, RgbImage};
 
-use super::canvas::Window;
+use super::canvas::{U_OF_RGB, V_OF_RGB, Window, YuvCanvas, YuvPicture, yuv_of};
 use super::measured::{BACKGROUND, Layout, LayoutGeometry, OverlaySpec, StripMark};
 use crate::footage::{ChannelOrder, FootageError, FrameSource, FrameView, VideoSignal, Yuv420};
 use crate::vision::Strip;
@@ -93,6 +96,9 @@ struct YuvMatrix {
     b_cb: [i32; 256],
     /// See [`Self::greys`].
     greys: (u8, u8),
+    /// The overlay videos' own coding (BT.601, limited range): the samples are
+    /// painted on their canvas as they are ([`YuvCanvas`]).
+    canvas_coding: bool,
 }
 
 impl YuvMatrix {
@@ -124,7 +130,29 @@ impl YuvMatrix {
             } else {
                 (16, 235)
             },
+            canvas_coding: (kr, kb) == (0.299, 0.114) && !signal.full_range,
         }
+    }
+
+    /// Y, Cb and Cr of one sample in the overlay videos' coding ([`yuv_of`]):
+    /// luma from its colour clamped to 0–255, as the RGB canvas had it; chroma
+    /// from the sample's chroma alone (the conversion is affine and the luma's
+    /// share of a chroma sample cancels, clamping aside).
+    fn recode(&self, y: u8, u: u8, v: u8) -> [u8; 3] {
+        let [luma, ..] = yuv_of(Rgb(self.rgb(y, u, v)));
+        let (u, v) = (usize::from(u), usize::from(v));
+        let rgb = [self.r_cr[v], self.g_cb[u] + self.g_cr[v], self.b_cb[u]]
+            .map(|c| f64::from(c) / 65536.0);
+        let chroma = |k: [f64; 3]| {
+            (128.0 + (k[0] * rgb[0] + k[1] * rgb[1] + k[2] * rgb[2]) / 65536.0)
+                .round()
+                .clamp(0.0, 255.0) as u8
+        };
+        [
+            luma,
+            chroma(U_OF_RGB.map(f64::from)),
+            chroma(V_OF_RGB.map(f64::from)),
+        ]
     }
 
     /// The luma samples that convert to greys within 0–255 (16–235 at limited
@@ -394,6 +422,48 @@ impl Picture {
     }
 }
 
+impl Picture {
+    /// The YUV picture in the overlay videos' coding ([`YuvMatrix::recode`]),
+    /// into `out`; the picture is `width` pixels a row.
+    fn recode_into(&self, width: usize, m: &YuvMatrix, chroma: &ChromaMap, out: &mut Picture) {
+        let cw = chroma.columns.len();
+        out.y.clear();
+        for (j, row) in self.y.chunks_exact(width.max(1)).enumerate() {
+            let c = chroma.rows.at[j] * cw;
+            out.y.extend(
+                row.iter()
+                    .zip(&chroma.columns.at)
+                    .map(|(&y, &i)| m.recode(y, self.u[c + i], self.v[c + i])[0]),
+            );
+        }
+        out.u.clear();
+        out.v.clear();
+        for (&u, &v) in self.u.iter().zip(&self.v) {
+            let [_, u, v] = m.recode(128, u, v);
+            out.u.push(u);
+            out.v.push(v);
+        }
+    }
+
+    /// The picture's pixels `columns` × `rows` for [`YuvCanvas::paint`]; the
+    /// picture is `width` pixels a row.
+    fn yuv<'a>(
+        &'a self,
+        width: usize,
+        chroma: &'a ChromaMap,
+        (columns, rows): (Range<usize>, Range<usize>),
+    ) -> YuvPicture<'a> {
+        YuvPicture {
+            luma: &self.y[rows.start * width + columns.start..],
+            luma_stride: width,
+            chroma: [&self.u, &self.v],
+            chroma_stride: chroma.columns.len(),
+            columns: &chroma.columns.at[columns],
+            rows: &chroma.rows.at[rows],
+        }
+    }
+}
+
 /// One kept frame.
 #[derive(Debug, Clone, Default)]
 pub struct KeptFrame {
@@ -540,6 +610,57 @@ impl KeptFrames {
         };
         window.paint(&rgb_view(&rgb, band.width, band.height), &mut image);
         image
+    }
+
+    /// [`Self::paint`] on the encoder's samples: the kept YUV samples painted
+    /// on `canvas` as they are (recoded first if the clip's matrix or range is
+    /// not the video's), without converting them to colour; a frame folder's
+    /// RGB pictures painted and converted.
+    pub(crate) fn paint_yuv(&self, frame: &KeptFrame, layout: &Layout, canvas: &mut YuvCanvas) {
+        let Some(m) = &self.matrix else {
+            canvas.set_rgb(&self.paint(frame, layout));
+            return;
+        };
+        canvas.fill(layout.width, layout.height, BACKGROUND);
+        let recoded;
+        let frame = if m.canvas_coding {
+            frame
+        } else {
+            let mut out = KeptFrame::default();
+            let (side_w, band_w) = (self.side.size().0, self.band.size().0);
+            frame
+                .side
+                .recode_into(side_w, m, &self.side_chroma, &mut out.side);
+            frame
+                .band
+                .recode_into(band_w, m, &self.band_chroma, &mut out.band);
+            if let (Some(region), Some(chroma)) = (&self.plan, &self.plan_chroma) {
+                let plan_w = region.size().0;
+                frame.plan.recode_into(plan_w, m, chroma, &mut out.plan);
+            }
+            recoded = out;
+            &recoded
+        };
+        let whole = |r: &Region| {
+            let (w, h) = r.size();
+            (0..w, 0..h)
+        };
+        let side = &layout.side;
+        let picture = frame
+            .side
+            .yuv(self.side.size().0, &self.side_chroma, whole(&self.side));
+        canvas.paint(&picture, (side.dst_x, side.dst_y), side.zoom);
+        if let (Some(region), Some(chroma), Some(window)) =
+            (&self.plan, &self.plan_chroma, &layout.plan)
+        {
+            let picture = frame.plan.yuv(region.size().0, chroma, whole(region));
+            canvas.paint(&picture, (window.dst_x, window.dst_y), window.zoom);
+        }
+        let band = &layout.band;
+        let (x, y) = (band.src_x - self.band.x, band.src_y - self.band.y);
+        let shown = (x..x + band.width, y..y + band.height);
+        let picture = frame.band.yuv(self.band.size().0, &self.band_chroma, shown);
+        canvas.paint(&picture, (band.dst_x, band.dst_y), band.zoom);
     }
 }
 
