@@ -31,7 +31,7 @@ use super::canvas::{Canvas, Window, YuvCanvas, text_lines};
 use crate::analyse::{Experiment, ExperimentPlan};
 use crate::footage::Orientation;
 use crate::footage::{FrameSource, FrameView};
-use crate::render::{ChromaFilter, H264Settings, H264Writer, SampleStorage};
+use crate::render::{ChromaFilter, H264Settings, H264Writer, RateControl, SampleStorage};
 use crate::report::{write_atomic, write_json};
 use crate::signal::FrameFlag;
 use crate::vision::{self, StripFinder};
@@ -89,11 +89,13 @@ impl Default for OverlaySpec {
 
 /// H.264 settings of the overlays: libx264's fastest preset (the overlays are
 /// looked at, not measured, and this keeps them a small part of `analyse`'s
-/// time) at crf 20 (marks one pixel wide stay sharp). The overlays hand the
+/// time) at a constant quantiser of 20 (marks one pixel wide stay sharp; about
+/// crf 20's size, without crf's per-frame complexity estimate, which took a
+/// third of x264's time here). The overlays hand the
 /// writer 4:2:0 samples (`overlay::canvas::YuvCanvas`), so the chroma filter is
 /// libswscale's only for a frame given as RGB.
 pub const OVERLAY_H264: H264Settings = H264Settings {
-    crf: 20,
+    rate: RateControl::Qp(20),
     preset: "ultrafast",
     chroma: ChromaFilter::FastBilinear,
     storage: SampleStorage {
