@@ -294,23 +294,15 @@ impl Picture {
                     .extend_from_slice(&luma[row * stride + r.x..row * stride + r.x + w]);
             }
         } else if s == 2 {
-            // Vertical sums first, then pairs of them: both loops vectorise.
-            let mut column_sums = vec![0u16; 2 * w];
-            for j in 0..h {
-                let row = (r.y + 2 * j) * stride + r.x;
-                let (a, b) = (
-                    &luma[row..row + 2 * w],
-                    &luma[row + stride..row + stride + 2 * w],
-                );
-                for ((sum, &a), &b) in column_sums.iter_mut().zip(a).zip(b) {
-                    *sum = u16::from(a.clamp(black, white)) + u16::from(b.clamp(black, white));
-                }
-                self.y.extend(
-                    column_sums
-                        .chunks_exact(2)
-                        .map(|pair| ((pair[0] + pair[1] + 2) >> 2) as u8),
-                );
-            }
+            let start = self.y.len();
+            self.y.resize(start + w * h, 0);
+            let origin = r.y * stride + r.x;
+            shrink_by_2(
+                &luma[origin..],
+                stride,
+                (&mut self.y[start..], w),
+                (black, white),
+            );
         } else {
             let mut sums = vec![0u32; w];
             let rounding = (s * s / 2) as u32;
@@ -418,6 +410,49 @@ impl Picture {
             for ((pixel, &y), &i) in line.chunks_exact_mut(3).zip(luma).zip(at) {
                 pixel.copy_from_slice(&m.rgb(y, u[i], v[i]));
             }
+        }
+    }
+}
+
+/// The 2 × 2 means of the luma samples from `luma`'s first (rows `stride`
+/// apart), each clamped to `black..=white` first, into `out`'s rows of `width`
+/// means. Compiled for AVX2 too, taken where the CPU has it: the baseline
+/// x86-64 build (SSE2) took 2.5 times as long, and this runs on every moving
+/// frame of a clip.
+fn shrink_by_2(luma: &[u8], stride: usize, (out, width): (&mut [u8], usize), greys: (u8, u8)) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        #[target_feature(enable = "avx2")]
+        fn avx2(luma: &[u8], stride: usize, out: (&mut [u8], usize), greys: (u8, u8)) {
+            shrink_by_2_inline(luma, stride, out, greys);
+        }
+        // SAFETY: the CPU has AVX2 (checked above).
+        unsafe { avx2(luma, stride, (out, width), greys) };
+        return;
+    }
+    shrink_by_2_inline(luma, stride, (out, width), greys);
+}
+
+#[inline(always)]
+fn shrink_by_2_inline(
+    luma: &[u8],
+    stride: usize,
+    (out, width): (&mut [u8], usize),
+    (black, white): (u8, u8),
+) {
+    // Vertical sums first, then pairs of them: both loops vectorise.
+    let mut column_sums = vec![0u16; 2 * width];
+    for (j, out) in out.chunks_exact_mut(width.max(1)).enumerate() {
+        let row = 2 * j * stride;
+        let (a, b) = (
+            &luma[row..row + 2 * width],
+            &luma[row + stride..row + stride + 2 * width],
+        );
+        for ((sum, &a), &b) in column_sums.iter_mut().zip(a).zip(b) {
+            *sum = u16::from(a.max(black).min(white)) + u16::from(b.max(black).min(white));
+        }
+        for (mean, pair) in out.iter_mut().zip(column_sums.chunks_exact(2)) {
+            *mean = ((pair[0] + pair[1] + 2) >> 2) as u8;
         }
     }
 }
