@@ -36,7 +36,7 @@ use std::ops::Range;
 
 use image::{Rgb, RgbImage};
 
-use super::canvas::{U_OF_RGB, V_OF_RGB, Window, YuvCanvas, YuvPicture, yuv_of};
+use super::canvas::{U_OF_RGB, V_OF_RGB, Window, YuvCanvas, YuvPicture, means_2x2, yuv_of};
 use super::measured::{BACKGROUND, Layout, LayoutGeometry, OverlaySpec, StripMark};
 use crate::footage::{ChannelOrder, FootageError, FrameSource, FrameView, VideoSignal, Yuv420};
 use crate::vision::Strip;
@@ -416,44 +416,13 @@ impl Picture {
 
 /// The 2 × 2 means of the luma samples from `luma`'s first (rows `stride`
 /// apart), each clamped to `black..=white` first, into `out`'s rows of `width`
-/// means. Compiled for AVX2 too, taken where the CPU has it: the baseline
-/// x86-64 build (SSE2) took 2.5 times as long, and this runs on every moving
-/// frame of a clip.
+/// means ([`means_2x2`]).
 fn shrink_by_2(luma: &[u8], stride: usize, (out, width): (&mut [u8], usize), greys: (u8, u8)) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        #[target_feature(enable = "avx2")]
-        fn avx2(luma: &[u8], stride: usize, out: (&mut [u8], usize), greys: (u8, u8)) {
-            shrink_by_2_inline(luma, stride, out, greys);
-        }
-        // SAFETY: the CPU has AVX2 (checked above).
-        unsafe { avx2(luma, stride, (out, width), greys) };
-        return;
-    }
-    shrink_by_2_inline(luma, stride, (out, width), greys);
-}
-
-#[inline(always)]
-fn shrink_by_2_inline(
-    luma: &[u8],
-    stride: usize,
-    (out, width): (&mut [u8], usize),
-    (black, white): (u8, u8),
-) {
-    // Vertical sums first, then pairs of them: both loops vectorise.
-    let mut column_sums = vec![0u16; 2 * width];
+    let mut sums = Vec::new();
     for (j, out) in out.chunks_exact_mut(width.max(1)).enumerate() {
         let row = 2 * j * stride;
-        let (a, b) = (
-            &luma[row..row + 2 * width],
-            &luma[row + stride..row + stride + 2 * width],
-        );
-        for ((sum, &a), &b) in column_sums.iter_mut().zip(a).zip(b) {
-            *sum = u16::from(a.max(black).min(white)) + u16::from(b.max(black).min(white));
-        }
-        for (mean, pair) in out.iter_mut().zip(column_sums.chunks_exact(2)) {
-            *mean = ((pair[0] + pair[1] + 2) >> 2) as u8;
-        }
+        let (a, b) = (&luma[row..], &luma[row + stride..]);
+        means_2x2((a, b), out, greys, &mut sums);
     }
 }
 
