@@ -304,9 +304,34 @@ pub trait Canvas {
     /// `colour`.
     fn set_pixels(&mut self, pixels: &[(u32, u32)], colour: Rgb<u8>);
 
-    /// Blends `colour` over the pixels from (x, y) on by `coverage` (0–1,
-    /// row-major, `width` a row), clipped to the canvas: a glyph.
-    fn blend_coverage(&mut self, at: (i32, i32), width: usize, coverage: &[f32], colour: Rgb<u8>);
+    /// Blends `colour` over the pixels from (x, y) on by `mask`'s coverage,
+    /// clipped to the canvas: a glyph.
+    fn blend_mask(&mut self, at: (i32, i32), mask: &Mask, colour: Rgb<u8>);
+}
+
+/// A glyph's coverage of the pixels of its box.
+#[derive(Debug, Clone, Default)]
+pub struct Mask {
+    /// Pixels a row.
+    pub width: usize,
+    /// 0–1, row-major.
+    pub coverage: Vec<f32>,
+    /// The same in 1/255ths, rounded (for [`YuvCanvas`]'s integer blending).
+    pub alpha: Vec<u8>,
+}
+
+impl Mask {
+    fn new(width: usize, coverage: Vec<f32>) -> Self {
+        let alpha = coverage
+            .iter()
+            .map(|&c| (c.clamp(0.0, 1.0) * 255.0 + 0.5) as u8)
+            .collect();
+        Self {
+            width,
+            coverage,
+            alpha,
+        }
+    }
 }
 
 /// The rounded means of 2 × 2 samples, two rows `a` and `b` at a time: `out[i]`
@@ -395,14 +420,9 @@ impl Canvas for RgbImage {
         }
     }
 
-    fn blend_coverage(
-        &mut self,
-        (x, y): (i32, i32),
-        width: usize,
-        coverage: &[f32],
-        colour: Rgb<u8>,
-    ) {
+    fn blend_mask(&mut self, (x, y): (i32, i32), mask: &Mask, colour: Rgb<u8>) {
         let (w, h) = (self.width() as i32, self.height() as i32);
+        let (coverage, width) = (&mask.coverage, mask.width);
         for (dy, row) in coverage.chunks_exact(width.max(1)).enumerate() {
             let py = y + dy as i32;
             for (dx, &a) in row.iter().enumerate() {
@@ -458,8 +478,8 @@ pub struct YuvCanvas {
     row_taps: Vec<[Option<usize>; 2]>,
     whole_columns: Vec<[usize; 2]>,
     sums: Vec<u16>,
-    /// A glyph's coverage summed over each chroma sample's pixels.
-    coverage: Vec<f64>,
+    /// A glyph's coverage summed over each chroma sample's pixels [1/255].
+    coverage: Vec<u32>,
 }
 
 /// A picture to paint on a [`YuvCanvas`], in its coding (BT.601 limited range):
@@ -670,27 +690,31 @@ impl Canvas for YuvCanvas {
             return;
         }
         let q = yuv_of(colour);
-        let (px0, px1) = (x0.floor() as usize, x1.ceil() as usize);
-        let (py0, py1) = (y0.floor() as usize, y1.ceil() as usize);
+        // Each column's and row's covered fraction, from an even one on (the
+        // chroma samples take them in pairs).
+        let (px0, px1) = (x0.floor() as usize & !1, x1.ceil() as usize);
+        let (py0, py1) = (y0.floor() as usize & !1, y1.ceil() as usize);
+        let covers = |a: f64, b: f64, from: usize, to: usize| -> Vec<f64> {
+            (from..to.next_multiple_of(2))
+                .map(|p| cover(a, b, p as f64))
+                .collect()
+        };
+        let (columns, rows) = (covers(x0, x1, px0, px1), covers(y0, y1, py0, py1));
         let stride = self.width as usize;
-        for py in py0..py1 {
-            let cy = cover(y0, y1, py as f64);
+        for (py, &cy) in (py0..py1).zip(&rows) {
             let row = &mut self.planes[0][py * stride + px0..py * stride + px1];
-            for (px, p) in (px0..).zip(row) {
-                let c = cy * cover(x0, x1, px as f64);
+            for (p, &cx) in row.iter_mut().zip(&columns) {
+                let c = cy * cx;
                 if c > 0.0 {
                     *p = blend(*p, q[0], c);
                 }
             }
         }
         // A chroma sample by the mean coverage of its 2 × 2 pixels.
-        let pair = |a: f64, b: f64, c: usize| {
-            0.5 * (cover(a, b, 2.0 * c as f64) + cover(a, b, 2.0 * c as f64 + 1.0))
-        };
-        for cy in py0 / 2..py1.div_ceil(2) {
-            let c_y = pair(y0, y1, cy);
-            for cx in px0 / 2..px1.div_ceil(2) {
-                let c = c_y * pair(x0, x1, cx);
+        for (cy, pair) in (py0 / 2..).zip(rows.chunks_exact(2)) {
+            let c_y = 0.5 * (pair[0] + pair[1]);
+            for (cx, pair) in (px0 / 2..).zip(columns.chunks_exact(2)) {
+                let c = c_y * 0.5 * (pair[0] + pair[1]);
                 if c > 0.0 {
                     self.blend_chroma((cx, cy), q, c);
                 }
@@ -718,15 +742,9 @@ impl Canvas for YuvCanvas {
         }
     }
 
-    fn blend_coverage(
-        &mut self,
-        (x, y): (i32, i32),
-        width: usize,
-        coverage: &[f32],
-        colour: Rgb<u8>,
-    ) {
-        let width = width.max(1);
-        let height = (coverage.len() / width) as i32;
+    fn blend_mask(&mut self, (x, y): (i32, i32), mask: &Mask, colour: Rgb<u8>) {
+        let width = mask.width.max(1);
+        let height = (mask.alpha.len() / width) as i32;
         let (w, h) = (self.width as i32, self.height as i32);
         let (px0, px1) = (x.max(0), (x + width as i32).min(w));
         let (py0, py1) = (y.max(0), (y + height).min(h));
@@ -735,30 +753,32 @@ impl Canvas for YuvCanvas {
         }
         let q = yuv_of(colour);
         let stride = self.width as usize;
-        // Luma pixel by pixel; each chroma sample by its pixels' summed coverage.
+        // Luma pixel by pixel, in integers (within a level of `blend`); each
+        // chroma sample by its pixels' summed coverage.
         let (cx0, cy0) = (px0 / 2, py0 / 2);
         let columns = ((px1 + 1) / 2 - cx0) as usize;
         let rows = ((py1 + 1) / 2 - cy0) as usize;
         self.coverage.clear();
-        self.coverage.resize(columns * rows, 0.0);
+        self.coverage.resize(columns * rows, 0);
+        let qy = u32::from(q[0]);
         for py in py0..py1 {
-            let glyph = &coverage[(py - y) as usize * width..][..width];
+            let glyph = &mask.alpha[(py - y) as usize * width..][..width];
             let luma = &mut self.planes[0][py as usize * stride..][..stride];
             let sums = &mut self.coverage[(py / 2 - cy0) as usize * columns..][..columns];
             for px in px0..px1 {
-                let a = glyph[(px - x) as usize];
-                if a > 0.0 {
-                    let a = f64::from(a.min(1.0));
-                    luma[px as usize] = blend(luma[px as usize], q[0], a);
+                let a = u32::from(glyph[(px - x) as usize]);
+                if a > 0 {
+                    let p = &mut luma[px as usize];
+                    *p = ((u32::from(*p) * (255 - a) + qy * a + 127) / 255) as u8;
                     sums[(px / 2 - cx0) as usize] += a;
                 }
             }
         }
         for k in 0..self.coverage.len() {
-            let c = 0.25 * self.coverage[k];
-            if c > 0.0 {
+            let sum = self.coverage[k];
+            if sum > 0 {
                 let at = ((cx0 as usize) + k % columns, (cy0 as usize) + k / columns);
-                self.blend_chroma(at, q, c);
+                self.blend_chroma(at, q, f64::from(sum) / (4.0 * 255.0));
             }
         }
     }
@@ -769,9 +789,7 @@ impl Canvas for YuvCanvas {
 /// the line's top, then `advance` px to the next.
 struct Glyph {
     id: GlyphId,
-    width: usize,
-    /// Coverage 0–1, row-major.
-    coverage: Vec<f32>,
+    mask: Mask,
     y_shift: i32,
     advance: f32,
 }
@@ -789,8 +807,7 @@ impl Glyph {
         }
         Self {
             id,
-            width,
-            coverage,
+            mask: Mask::new(width, coverage),
             y_shift,
             advance: font.h_advance(id),
         }
@@ -841,7 +858,7 @@ pub fn text_lines(
                 }
                 previous = Some(glyph.id);
                 let at = (x + x_shift as i32, top + glyph.y_shift);
-                image.blend_coverage(at, glyph.width, &glyph.coverage, *colour);
+                image.blend_mask(at, &glyph.mask, *colour);
                 x_shift += glyph.advance;
             }
         }

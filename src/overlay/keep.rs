@@ -286,24 +286,21 @@ impl Picture {
         let (w, h) = r.size();
         let s = r.shrink;
         let (luma, stride) = yuv.planes[0];
-        self.y.clear();
-        self.y.reserve(w * h);
-        if s == 1 {
+        if s == 2 {
+            // A frame's buffers are reused at the same size: resized (zeroed)
+            // once, then written over.
+            self.y.resize(w * h, 0);
+            let origin = r.y * stride + r.x;
+            shrink_by_2(&luma[origin..], stride, (&mut self.y, w), (black, white));
+        } else if s == 1 {
+            self.y.clear();
             for row in r.y..r.y + h {
                 self.y
                     .extend_from_slice(&luma[row * stride + r.x..row * stride + r.x + w]);
             }
-        } else if s == 2 {
-            let start = self.y.len();
-            self.y.resize(start + w * h, 0);
-            let origin = r.y * stride + r.x;
-            shrink_by_2(
-                &luma[origin..],
-                stride,
-                (&mut self.y[start..], w),
-                (black, white),
-            );
         } else {
+            self.y.clear();
+            self.y.reserve(w * h);
             let mut sums = vec![0u32; w];
             let rounding = (s * s / 2) as u32;
             let area = (s * s) as u32;
