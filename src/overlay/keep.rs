@@ -624,6 +624,13 @@ impl KeptFrames {
         image
     }
 
+    /// Whether the kept samples are recoded to the video's coding when painted
+    /// ([`Self::paint_yuv`]).
+    #[cfg(test)]
+    pub(crate) fn recodes(&self) -> bool {
+        self.matrix.as_ref().is_some_and(|m| !m.canvas_coding)
+    }
+
     /// [`Self::paint`] on the encoder's samples: the kept YUV samples painted
     /// on `canvas` as they are (recoded first if the clip's matrix or range is
     /// not the video's), without converting them to colour; a frame folder's

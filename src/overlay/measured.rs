@@ -886,16 +886,23 @@ mod tests {
     /// pixels differ in colour (the strip's outline on its red edge, the rim
     /// line across the plate line): the samples blend the block's mean colour by
     /// the mark's mean coverage, RGB blends each pixel, up to a quarter of the
-    /// colours' difference apart (50 levels of Cr at the outline).
+    /// colours' difference apart (50 levels of Cr at the outline). The same on a
+    /// rendered clip stored at full range, whose samples are recoded to the
+    /// video's limited range first.
     #[test]
     fn frames_drawn_in_yuv_are_the_rgb_canvas_converted() {
-        for (fixture, config) in [
-            ("side-dark-n050.mp4", "fps = 480"),
-            ("two-view-n045.mp4", "fps = 480\ntwo_view = true"),
+        let dir = tempfile::tempdir().unwrap();
+        let full_range = full_range_clip(dir.path());
+        let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+        for (clip, config) in [
+            (fixtures.join("side-dark-n050.mp4"), "fps = 480"),
+            (
+                fixtures.join("two-view-n045.mp4"),
+                "fps = 480\ntwo_view = true",
+            ),
+            (full_range, "fps = 480"),
         ] {
-            let clip = Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("fixtures")
-                .join(fixture);
+            let fixture = clip.file_name().unwrap().to_string_lossy().into_owned();
             let config: ExperimentConfig = toml::from_str(config).unwrap();
             let spec = OverlaySpec::default();
             let e = analyse_clip_keeping(&clip, &config, Decoding::Whole, Some(&spec), &|_, _| {})
@@ -909,6 +916,7 @@ mod tests {
                 .fold(0.0, f64::max);
             let layout = Layout::new(&e.plan, z_max);
             let kept = e.kept.as_ref().expect("frames kept");
+            assert_eq!(kept.recodes(), fixture == "full-range.mp4", "{fixture}");
             let frames = kept
                 .span((span[0], span[span.len() - 1]), &layout)
                 .expect("the span kept");
@@ -943,5 +951,42 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A 480×320 clip rendered here (0.5 s to the halt), stored as full-range
+    /// 8-bit samples (JPEG style): not the overlay video's coding.
+    fn full_range_clip(dir: &Path) -> std::path::PathBuf {
+        use crate::model::params::Preset;
+        use crate::render::{
+            DEFAULT_CRF, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, SampleStorage,
+            Timing, power_law_motion, write_clip,
+        };
+        let timing = Timing {
+            fps: 480.0,
+            halt_time: 0.5,
+            after_halt: 0.15,
+            jitter: None,
+        };
+        let spin = PostFlatSpin {
+            beta_dot0: -2.8,
+            mu: 0.134,
+        };
+        let motion = power_law_motion(
+            &Preset::EulerDisk.params(),
+            &PowerLaw::thesis(0.5),
+            &timing,
+            spin,
+        )
+        .unwrap();
+        let mut spec = RenderSpec::thesis(Plate::Dark, false);
+        (spec.width, spec.height) = (480, 320);
+        spec.storage = SampleStorage {
+            ten_bit: false,
+            full_range: true,
+            hdr: None,
+        };
+        let renderer = Renderer::new(&spec, &motion).unwrap();
+        let path = dir.join("full-range.mp4");
+        write_clip(&renderer, &path, DEFAULT_CRF).unwrap().clip
     }
 }
