@@ -1110,7 +1110,6 @@ pub fn analyse_clip_keeping(
             }
             repeats.push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
             if let Some(keeper) = &mut keeper {
-                let moving = z_rim_px.is_some_and(|z| z >= crate::overlay::MOVING_PX);
                 // The strip as measured, with its mask for the outline (made
                 // only for the frames kept).
                 let mark = || {
@@ -1120,7 +1119,7 @@ pub fn analyse_clip_keeping(
                         mask: finder.strip_mask(),
                     })
                 };
-                keeper.offer(frames.len() - 1, moving, &mut source, mark)?;
+                keeper.offer(frames.len() - 1, z_rim_px, &mut source, mark)?;
             }
             if let Some((z_rim_px, edge_row)) = new_highest {
                 // The diagnostic shows the whole side view: convert the other columns.

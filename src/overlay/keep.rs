@@ -8,7 +8,9 @@
 //! margin of [`MARGIN_S`] either side for where the halt falls against that
 //! frame, in a ring of at most that many frames: frames older than the span
 //! before the last moving frame are dropped, and frames later than the span
-//! after it are not kept. The contact sheet's frames (the last peaks) lie in the
+//! after it are not kept, nor frames while the disk is still far from its halt
+//! ([`FarFromHalt`]: its rim no lower than 0.941 of what it was a quarter of a
+//! second before). The contact sheet's frames (the last peaks) lie in the
 //! span on every clip measured so far (0.11 s before the halt at most); when a
 //! frame the overlay needs was not kept, the overlay decodes the clip again as
 //! before ([`super::measured`]).
@@ -19,8 +21,11 @@
 //! resolution over the side window's rows, and on two-view clips the plan
 //! window as the side one with the strip `analyse` measured in it (its mask
 //! packed a bit a pixel), as 8-bit YUV copied from the decoder before any
-//! colour conversion; a frame folder's RGB block means. Colour is
-//! converted only for the frames drawn. A 720×1280 clip at 480 fps keeps about
+//! colour conversion; a frame folder's RGB block means. `overlay.mp4`'s frames
+//! are painted from these samples as they are, on the encoder's own 4:2:0
+//! samples ([`KeptFrames::paint_yuv`]; recoded first if the clip's matrix or
+//! range is not the video's), and only the contact sheet's few frames are
+//! converted to colour ([`KeptFrames::paint`]). A 720×1280 clip at 480 fps keeps about
 //! 0.3 MB a frame, 101 MB for the default span (BENCHMARKS.md).
 //!
 //! Videos not in 8-bit planar 4:2:0, videos turned by a display matrix, and
@@ -31,9 +36,9 @@
 use std::collections::VecDeque;
 use std::ops::Range;
 
-use image::RgbImage;
+use image::{Rgb, RgbImage};
 
-use super::canvas::Window;
+use super::canvas::{U_OF_RGB, V_OF_RGB, Window, YuvCanvas, YuvPicture, means_2x2, yuv_of};
 use super::measured::{BACKGROUND, Layout, LayoutGeometry, OverlaySpec, StripMark};
 use crate::footage::{ChannelOrder, FootageError, FrameSource, FrameView, VideoSignal, Yuv420};
 use crate::vision::Strip;
@@ -45,6 +50,15 @@ pub const MOVING_PX: f64 = 0.5;
 /// Margin on either side of the span, for where the halt falls against the last
 /// moving frame [s].
 pub const MARGIN_S: f64 = 0.05;
+/// Blocks of frames whose highest raw rim tells whether the disk is far from
+/// its halt ([`FarFromHalt`]) [s].
+const BLOCK_S: f64 = 0.25;
+/// A block whose highest rim is at least this share of the block's before (and
+/// not above it) is far from the halt: see [`FarFromHalt`].
+const FAR_RATIO: f64 = 0.941;
+/// ... and at least this high [px, raw pass-2 height]: below it (a disk filmed
+/// small, or at rest) every frame is kept.
+const FAR_MIN_PX: f64 = 4.0;
 /// The most the kept frames may take [bytes]; a longer span or a larger clip is
 /// decoded again instead. The side view is kept at most 360 px wide (the
 /// overlay's context views) with a chroma sample per pixel when shrunk: about
@@ -93,6 +107,9 @@ struct YuvMatrix {
     b_cb: [i32; 256],
     /// See [`Self::greys`].
     greys: (u8, u8),
+    /// The overlay videos' own coding (BT.601, limited range): the samples are
+    /// painted on their canvas as they are ([`YuvCanvas`]).
+    canvas_coding: bool,
 }
 
 impl YuvMatrix {
@@ -124,7 +141,29 @@ impl YuvMatrix {
             } else {
                 (16, 235)
             },
+            canvas_coding: (kr, kb) == (0.299, 0.114) && !signal.full_range,
         }
+    }
+
+    /// Y, Cb and Cr of one sample in the overlay videos' coding ([`yuv_of`]):
+    /// luma from its colour clamped to 0–255, as the RGB canvas had it; chroma
+    /// from the sample's chroma alone (the conversion is affine and the luma's
+    /// share of a chroma sample cancels, clamping aside).
+    fn recode(&self, y: u8, u: u8, v: u8) -> [u8; 3] {
+        let [luma, ..] = yuv_of(Rgb(self.rgb(y, u, v)));
+        let (u, v) = (usize::from(u), usize::from(v));
+        let rgb = [self.r_cr[v], self.g_cb[u] + self.g_cr[v], self.b_cb[u]]
+            .map(|c| f64::from(c) / 65536.0);
+        let chroma = |k: [f64; 3]| {
+            (128.0 + (k[0] * rgb[0] + k[1] * rgb[1] + k[2] * rgb[2]) / 65536.0)
+                .round()
+                .clamp(0.0, 255.0) as u8
+        };
+        [
+            luma,
+            chroma(U_OF_RGB.map(f64::from)),
+            chroma(V_OF_RGB.map(f64::from)),
+        ]
     }
 
     /// The luma samples that convert to greys within 0–255 (16–235 at limited
@@ -258,32 +297,21 @@ impl Picture {
         let (w, h) = r.size();
         let s = r.shrink;
         let (luma, stride) = yuv.planes[0];
-        self.y.clear();
-        self.y.reserve(w * h);
-        if s == 1 {
+        if s == 2 {
+            // A frame's buffers are reused at the same size: resized (zeroed)
+            // once, then written over.
+            self.y.resize(w * h, 0);
+            let origin = r.y * stride + r.x;
+            shrink_by_2(&luma[origin..], stride, (&mut self.y, w), (black, white));
+        } else if s == 1 {
+            self.y.clear();
             for row in r.y..r.y + h {
                 self.y
                     .extend_from_slice(&luma[row * stride + r.x..row * stride + r.x + w]);
             }
-        } else if s == 2 {
-            // Vertical sums first, then pairs of them: both loops vectorise.
-            let mut column_sums = vec![0u16; 2 * w];
-            for j in 0..h {
-                let row = (r.y + 2 * j) * stride + r.x;
-                let (a, b) = (
-                    &luma[row..row + 2 * w],
-                    &luma[row + stride..row + stride + 2 * w],
-                );
-                for ((sum, &a), &b) in column_sums.iter_mut().zip(a).zip(b) {
-                    *sum = u16::from(a.clamp(black, white)) + u16::from(b.clamp(black, white));
-                }
-                self.y.extend(
-                    column_sums
-                        .chunks_exact(2)
-                        .map(|pair| ((pair[0] + pair[1] + 2) >> 2) as u8),
-                );
-            }
         } else {
+            self.y.clear();
+            self.y.reserve(w * h);
             let mut sums = vec![0u32; w];
             let rounding = (s * s / 2) as u32;
             let area = (s * s) as u32;
@@ -390,6 +418,60 @@ impl Picture {
             for ((pixel, &y), &i) in line.chunks_exact_mut(3).zip(luma).zip(at) {
                 pixel.copy_from_slice(&m.rgb(y, u[i], v[i]));
             }
+        }
+    }
+}
+
+/// The 2 × 2 means of the luma samples from `luma`'s first (rows `stride`
+/// apart), each clamped to `black..=white` first, into `out`'s rows of `width`
+/// means ([`means_2x2`]).
+fn shrink_by_2(luma: &[u8], stride: usize, (out, width): (&mut [u8], usize), greys: (u8, u8)) {
+    let mut sums = Vec::new();
+    for (j, out) in out.chunks_exact_mut(width.max(1)).enumerate() {
+        let row = 2 * j * stride;
+        let (a, b) = (&luma[row..], &luma[row + stride..]);
+        means_2x2((a, b), out, greys, &mut sums);
+    }
+}
+
+impl Picture {
+    /// The YUV picture in the overlay videos' coding ([`YuvMatrix::recode`]),
+    /// into `out`; the picture is `width` pixels a row.
+    fn recode_into(&self, width: usize, m: &YuvMatrix, chroma: &ChromaMap, out: &mut Picture) {
+        let cw = chroma.columns.len();
+        out.y.clear();
+        for (j, row) in self.y.chunks_exact(width.max(1)).enumerate() {
+            let c = chroma.rows.at[j] * cw;
+            out.y.extend(
+                row.iter()
+                    .zip(&chroma.columns.at)
+                    .map(|(&y, &i)| m.recode(y, self.u[c + i], self.v[c + i])[0]),
+            );
+        }
+        out.u.clear();
+        out.v.clear();
+        for (&u, &v) in self.u.iter().zip(&self.v) {
+            let [_, u, v] = m.recode(128, u, v);
+            out.u.push(u);
+            out.v.push(v);
+        }
+    }
+
+    /// The picture's pixels `columns` × `rows` for [`YuvCanvas::paint`]; the
+    /// picture is `width` pixels a row.
+    fn yuv<'a>(
+        &'a self,
+        width: usize,
+        chroma: &'a ChromaMap,
+        (columns, rows): (Range<usize>, Range<usize>),
+    ) -> YuvPicture<'a> {
+        YuvPicture {
+            luma: &self.y[rows.start * width + columns.start..],
+            luma_stride: width,
+            chroma: [&self.u, &self.v],
+            chroma_stride: chroma.columns.len(),
+            columns: &chroma.columns.at[columns],
+            rows: &chroma.rows.at[rows],
         }
     }
 }
@@ -541,6 +623,64 @@ impl KeptFrames {
         window.paint(&rgb_view(&rgb, band.width, band.height), &mut image);
         image
     }
+
+    /// Whether the kept samples are recoded to the video's coding when painted
+    /// ([`Self::paint_yuv`]).
+    #[cfg(test)]
+    pub(crate) fn recodes(&self) -> bool {
+        self.matrix.as_ref().is_some_and(|m| !m.canvas_coding)
+    }
+
+    /// [`Self::paint`] on the encoder's samples: the kept YUV samples painted
+    /// on `canvas` as they are (recoded first if the clip's matrix or range is
+    /// not the video's), without converting them to colour; a frame folder's
+    /// RGB pictures painted and converted.
+    pub(crate) fn paint_yuv(&self, frame: &KeptFrame, layout: &Layout, canvas: &mut YuvCanvas) {
+        let Some(m) = &self.matrix else {
+            canvas.set_rgb(&self.paint(frame, layout));
+            return;
+        };
+        canvas.fill(layout.width, layout.height, BACKGROUND);
+        let recoded;
+        let frame = if m.canvas_coding {
+            frame
+        } else {
+            let mut out = KeptFrame::default();
+            let (side_w, band_w) = (self.side.size().0, self.band.size().0);
+            frame
+                .side
+                .recode_into(side_w, m, &self.side_chroma, &mut out.side);
+            frame
+                .band
+                .recode_into(band_w, m, &self.band_chroma, &mut out.band);
+            if let (Some(region), Some(chroma)) = (&self.plan, &self.plan_chroma) {
+                let plan_w = region.size().0;
+                frame.plan.recode_into(plan_w, m, chroma, &mut out.plan);
+            }
+            recoded = out;
+            &recoded
+        };
+        let whole = |r: &Region| {
+            let (w, h) = r.size();
+            (0..w, 0..h)
+        };
+        let side = &layout.side;
+        let picture = frame
+            .side
+            .yuv(self.side.size().0, &self.side_chroma, whole(&self.side));
+        canvas.paint(&picture, (side.dst_x, side.dst_y), side.zoom);
+        if let (Some(region), Some(chroma), Some(window)) =
+            (&self.plan, &self.plan_chroma, &layout.plan)
+        {
+            let picture = frame.plan.yuv(region.size().0, chroma, whole(region));
+            canvas.paint(&picture, (window.dst_x, window.dst_y), window.zoom);
+        }
+        let band = &layout.band;
+        let (x, y) = (band.src_x - self.band.x, band.src_y - self.band.y);
+        let shown = (x..x + band.width, y..y + band.height);
+        let picture = frame.band.yuv(self.band.size().0, &self.band_chroma, shown);
+        canvas.paint(&picture, (band.dst_x, band.dst_y), band.zoom);
+    }
 }
 
 /// Paints the whole kept `picture` of `region` into `window` of the canvas
@@ -602,10 +742,74 @@ pub struct FrameKeeper {
     after: usize,
     capacity: usize,
     last_moving: Option<usize>,
+    far: FarFromHalt,
     /// Frames dropped from the ring, whose buffers the next ones reuse.
     spare: Vec<KeptFrame>,
     /// The source stopped lending YUV samples: nothing is kept.
     off: bool,
+}
+
+/// Whether the disk is far enough from its halt that the frames being read
+/// cannot be in the overlay's span, from the highest raw rim height of each
+/// block of [`BLOCK_S`] (several turns of Euler's disk within a second of its
+/// halt): the frames of the next block are not kept
+/// when the last block's highest rim is at least [`FAR_RATIO`] of the block's
+/// before, and not above it, and at least [`FAR_MIN_PX`] high.
+///
+/// **Why this is safe.** It only saves work: a frame of the span that was not
+/// kept leaves a gap in the kept frames, and [`KeptFrames::span`] then declines
+/// them, so the overlay decodes the span again as it does when nothing was
+/// kept; what the overlay shows does not depend on this rule. It is also
+/// meant never to drop a frame of the span: the rim's height falls as a power
+/// of the time left, z ∝ (t_φ − t)^m, whose exponent is the energy's (E ∝ φ
+/// near the halt); block maxima M at the blocks' starts, the last one τ + T
+/// before the halt, give M_k / M_{k−1} = ((τ + T)/(τ + 2T))^m, at least 0.941
+/// for m ≥ 1/3 (Moffatt's viscous law, the lowest the thesis meets) only when
+/// τ ≥ 1 s, so the frames of the next block (τ − T = 0.75 s before the halt at
+/// the latest) lie before the span (0.5 s, with the margin 0.55 s). A rim that
+/// rose, or a block short of a turn (its peak missed), reads as near. On
+/// rendered 3 s clips it skipped 240 of 1 441 frames (n = 0.5), 720 (n = 0.35,
+/// the last 0.85 s before the halt), 0 (n = 0.8), and never a frame of the
+/// span.
+#[derive(Debug, Clone)]
+struct FarFromHalt {
+    /// Frames a block.
+    block: usize,
+    /// Frames of the current block read, and its highest rim [px].
+    read: usize,
+    highest: f64,
+    /// The last complete block's highest rim [px].
+    last: Option<f64>,
+    /// The current block's frames are not kept.
+    far: bool,
+}
+
+impl FarFromHalt {
+    fn new(fps: f64) -> Self {
+        Self {
+            block: ((BLOCK_S * fps).round() as usize).max(1),
+            read: 0,
+            highest: 0.0,
+            last: None,
+            far: false,
+        }
+    }
+
+    /// Reads the next frame's raw rim height; whether that frame need not be
+    /// kept.
+    fn skip(&mut self, z_rim_px: Option<f64>) -> bool {
+        let skip = self.far;
+        self.highest = z_rim_px.map_or(self.highest, |z| self.highest.max(z));
+        self.read += 1;
+        if self.read == self.block {
+            let m = self.highest;
+            self.far = self
+                .last
+                .is_some_and(|before| m >= FAR_MIN_PX && m <= before && m >= FAR_RATIO * before);
+            (self.last, self.read, self.highest) = (Some(m), 0, 0.0);
+        }
+        skip
+    }
 }
 
 impl FrameKeeper {
@@ -673,31 +877,33 @@ impl FrameKeeper {
             after,
             capacity,
             last_moving: None,
+            far: FarFromHalt::new(fps),
             spare: Vec::new(),
             off: false,
         })
     }
 
     /// Offers the frame last read from `source`, at `position` of the measured
-    /// frames, moving or not; keeps it if the overlay may need it.
+    /// frames, with its raw rim height [px] (moving at [`MOVING_PX`] or more);
+    /// keeps it if the overlay may need it.
     ///
     /// # Errors
     /// A frame folder's frame cannot be lent whole.
     pub(crate) fn offer(
         &mut self,
         position: usize,
-        moving: bool,
+        z_rim_px: Option<f64>,
         source: &mut FrameSource,
         strip: impl FnOnce() -> Option<StripMark>,
     ) -> Result<(), FootageError> {
         if self.off {
             return Ok(());
         }
-        if moving {
+        if z_rim_px.is_some_and(|z| z >= MOVING_PX) {
             self.last_moving = Some(position);
         }
         let anchor = self.last_moving.unwrap_or(position);
-        if position > anchor + self.after {
+        if self.far.skip(z_rim_px) || position > anchor + self.after {
             return Ok(());
         }
         let ring = &mut self.kept.frames;
@@ -812,6 +1018,53 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The far-from-the-halt rule on rims rising and falling with the turns of a
+    /// power-law motion, z = A τ^m |sin(π n)| with n = 24 τ^(3/4) turns left τ
+    /// before the halt (15 a second 2 s before it, 32 a second 0.1 s before):
+    /// for exponents from 1/3
+    /// to 1 and several amplitudes, frames far from the halt are skipped only
+    /// more than 0.6 s before it (the span and its margin start 0.55 s before);
+    /// a steady rim is skipped after two blocks; a disk at rest or filmed small
+    /// (below 4 px) is never skipped.
+    #[test]
+    fn frames_are_skipped_only_far_from_the_halt() {
+        let fps = 480.0;
+        let skipped = |z: &dyn Fn(f64) -> f64, seconds: f64| -> Vec<f64> {
+            let mut far = FarFromHalt::new(fps);
+            let n = (seconds * fps) as usize;
+            (0..n)
+                .map(|k| seconds - k as f64 / fps)
+                .filter(|&tau| far.skip(Some(z(tau))))
+                .collect()
+        };
+        let mut any = 0;
+        for m in [1.0 / 3.0, 0.5, 1.0] {
+            for amplitude in [6.0, 12.0, 40.0] {
+                let z = |tau: f64| {
+                    let turns = 24.0 * tau.powf(0.75);
+                    amplitude * tau.powf(m) * (std::f64::consts::PI * turns).sin().abs()
+                };
+                let far = skipped(&z, 3.0);
+                if let Some(closest) = far.iter().copied().reduce(f64::min) {
+                    assert!(
+                        closest > 0.6,
+                        "m = {m}, A = {amplitude}: {closest} s skipped"
+                    );
+                }
+                any += far.len();
+            }
+        }
+        assert!(any > 0, "nothing skipped on any motion");
+        let steady = skipped(&|_| 10.0, 1.0);
+        assert_eq!(
+            steady.len(),
+            480 - 2 * 120,
+            "a steady rim: after two blocks"
+        );
+        assert!(skipped(&|_| 0.3, 3.0).is_empty(), "at rest");
+        assert!(skipped(&|_| 3.5, 3.0).is_empty(), "filmed small");
     }
 
     /// On the committed H.264 fixture, `analyse` keeps every frame of the default

@@ -6,7 +6,9 @@
 //! The frames come from what `analyse` kept while it read the clip
 //! ([`super::keep`]); when it kept none of them (some formats, a span not kept)
 //! the span is decoded again ([`FrameSource`], seeked to the span,
-//! one frame in memory at a time). Each shows:
+//! one frame in memory at a time). The video's frames are drawn on the
+//! encoder's 4:2:0 samples ([`YuvCanvas`]), the contact sheet's in RGB, with the
+//! same marks. Each shows:
 //!
 //! * the side view around the disk and, enlarged, the centre band around the rim
 //!   edge (the rows z_rim is read on);
@@ -25,11 +27,11 @@ use image::{Rgb, RgbImage};
 use serde::Serialize;
 
 use super::OverlayError;
-use super::canvas::{Window, text_lines, yuv420_of};
+use super::canvas::{Canvas, Window, YuvCanvas, text_lines};
 use crate::analyse::{Experiment, ExperimentPlan};
 use crate::footage::Orientation;
 use crate::footage::{FrameSource, FrameView};
-use crate::render::{ChromaFilter, H264Settings, H264Writer, SampleStorage};
+use crate::render::{ChromaFilter, H264Settings, H264Writer, RateControl, SampleStorage};
 use crate::report::{write_atomic, write_json};
 use crate::signal::FrameFlag;
 use crate::vision::{self, StripFinder};
@@ -87,11 +89,13 @@ impl Default for OverlaySpec {
 
 /// H.264 settings of the overlays: libx264's fastest preset (the overlays are
 /// looked at, not measured, and this keeps them a small part of `analyse`'s
-/// time) at crf 20 (marks one pixel wide stay sharp). The overlays hand the
-/// writer 4:2:0 samples (`overlay::canvas::yuv420_of`), so the chroma filter is
+/// time) at a constant quantiser of 20 (marks one pixel wide stay sharp; about
+/// crf 20's size, without crf's per-frame complexity estimate, which took a
+/// third of x264's time here). The overlays hand the
+/// writer 4:2:0 samples (`overlay::canvas::YuvCanvas`), so the chroma filter is
 /// libswscale's only for a frame given as RGB.
 pub const OVERLAY_H264: H264Settings = H264Settings {
-    crf: 20,
+    rate: RateControl::Qp(20),
     preset: "ultrafast",
     chroma: ChromaFilter::FastBilinear,
     storage: SampleStorage {
@@ -297,6 +301,30 @@ struct FrameMarks<'a> {
     flags: Vec<&'a FrameFlag>,
 }
 
+impl<'a> FrameMarks<'a> {
+    /// The marks of the frame at `position` of `e.frames`; `peak_frames` as
+    /// [`peak_positions`] gives them.
+    fn of(e: &'a Experiment, position: usize, peak_frames: &[usize]) -> Self {
+        let peaks = &e.series.peaks.peaks;
+        Self {
+            position,
+            peaks: peak_frames
+                .iter()
+                .enumerate()
+                .filter(|&(_, &k)| k == position)
+                .map(|(n, _)| (n + 1, peaks[n].z, peaks[n].phi))
+                .collect(),
+            halt: position == e.series.halt.index,
+            flags: e
+                .series
+                .flags
+                .iter()
+                .filter(|f| f.index == e.frames[position].index)
+                .collect(),
+        }
+    }
+}
+
 /// Draws the span of the clip (from the frames `analyse` kept, else decoded
 /// again) and writes `overlay.mp4`, `last-turns.png` and `overlay.json` into `dir`.
 ///
@@ -340,24 +368,32 @@ pub fn write_measurement_overlays(
     };
     // Frames are encoded on a second thread while the next ones are decoded and
     // drawn, handed over in batches (a thread woken for every frame cost 2 % of
-    // `analyse`); two batches wait in the channel at most.
-    let (frames_out, frames_in) = std::sync::mpsc::sync_channel::<Vec<RgbImage>>(2);
+    // `analyse`); two batches wait in the channel at most. The encoded canvases
+    // come back to be drawn on again (new ones cost page faults).
+    let (frames_out, frames_in) = std::sync::mpsc::sync_channel::<Vec<YuvCanvas>>(2);
+    let (spent_out, spent_in) = std::sync::mpsc::channel::<Vec<YuvCanvas>>();
     let encoder = std::thread::spawn({
         let video = video.clone();
         let (width, height, fps) = (layout.width, layout.height, spec.playback_fps);
         move || -> Result<usize, String> {
             let mut writer = H264Writer::create(&video, width, height, fps, OVERLAY_H264)?;
-            let mut planes = Default::default();
-            for image in frames_in.iter().flatten() {
-                yuv420_of(&image, &mut planes);
-                let [y, u, v] = &planes;
-                writer.push_yuv420([y, u, v])?;
+            for batch in frames_in.iter() {
+                for canvas in &batch {
+                    writer.push_yuv420(canvas.planes())?;
+                }
+                // The drawing may have ended: the canvases are then dropped.
+                let _ = spent_out.send(batch);
             }
             writer.finish()
         }
     });
-    let drawn = draw_span(e, &layout, spec, (start, first, last), &frames_out);
-    drop(frames_out);
+    let video_out = VideoOut {
+        frames: frames_out,
+        spent: spent_in,
+        batch: Vec::with_capacity(BATCH),
+        free: Vec::new(),
+    };
+    let drawn = draw_span(e, &layout, spec, (start, first, last), video_out);
     let encoded = encoder
         .join()
         .unwrap_or_else(|_| Err("the encoder thread panicked".into()))
@@ -423,61 +459,88 @@ pub(crate) struct StripMark {
     pub mask: Option<(Vec<bool>, usize)>,
 }
 
+/// The drawing side of the encoder's thread: batches of canvases to encode,
+/// and the canvases it encoded, to draw on again.
+struct VideoOut {
+    frames: std::sync::mpsc::SyncSender<Vec<YuvCanvas>>,
+    spent: std::sync::mpsc::Receiver<Vec<YuvCanvas>>,
+    batch: Vec<YuvCanvas>,
+    free: Vec<YuvCanvas>,
+}
+
+impl VideoOut {
+    /// A canvas to draw the next frame on: one the encoder is done with, else a
+    /// new one.
+    fn canvas(&mut self) -> YuvCanvas {
+        if self.free.is_empty() {
+            while let Ok(spent) = self.spent.try_recv() {
+                self.free.extend(spent);
+            }
+        }
+        self.free.pop().unwrap_or_default()
+    }
+
+    /// Queues a drawn frame; `false` if the encoder stopped (its error is the one
+    /// to report).
+    fn push(&mut self, canvas: YuvCanvas) -> bool {
+        self.batch.push(canvas);
+        self.batch.len() < BATCH || self.flush()
+    }
+
+    fn flush(&mut self) -> bool {
+        let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
+        self.frames.send(batch).is_ok()
+    }
+}
+
 /// Draws the frames at positions `start..=last`, from the frames `analyse` kept
-/// or else decoded again, sends those from `first` on to `video`, and keeps the
-/// contact sheet's.
+/// or else decoded again, sends those from `first` on to `video` (drawn on its
+/// 4:2:0 samples), and keeps the contact sheet's (drawn in RGB).
 fn draw_span(
     e: &Experiment,
     layout: &Layout,
     spec: &OverlaySpec,
     (start, first, last): (usize, usize, usize),
-    video: &std::sync::mpsc::SyncSender<Vec<RgbImage>>,
+    mut video: VideoOut,
 ) -> Result<DrawnSpan, OverlayError> {
     let plan = &e.plan;
     let clip = &plan.clip;
-    let peaks = &e.series.peaks.peaks;
     let peak_frames = peak_positions(e);
     let turns = last_turns(e, &peak_frames, spec.last_turns);
     let slow_down = plan.fps.fps / spec.playback_fps;
     let mut tiles = Vec::new();
     let mut shown = Vec::new();
-    let mut batch = Vec::with_capacity(BATCH);
-    let mut each = |position: usize, image: RgbImage, strip: Option<StripMark>| {
-        let marks = FrameMarks {
-            position,
-            peaks: peak_frames
-                .iter()
-                .enumerate()
-                .filter(|&(_, &k)| k == position)
-                .map(|(n, _)| (n + 1, peaks[n].z, peaks[n].phi))
-                .collect(),
-            halt: position == e.series.halt.index,
-            flags: e
-                .series
-                .flags
-                .iter()
-                .filter(|f| f.index == e.frames[position].index)
-                .collect(),
+    // Draws the frame at `position` on the video's canvas (`paint_video`) and,
+    // for the contact sheet, on an RGB image (`paint_tile`); `false` once the
+    // encoder stopped.
+    let mut each = |position: usize,
+                    paint_video: &mut dyn FnMut(&mut YuvCanvas),
+                    paint_tile: &mut dyn FnMut() -> RgbImage,
+                    strip: Option<StripMark>|
+     -> Result<bool, OverlayError> {
+        let marks = FrameMarks::of(e, position, &peak_frames);
+        let draw_err = |reason: String| OverlayError::Draw {
+            clip: clip.clone(),
+            frame: e.frames[position].index,
+            reason,
         };
-        let image = draw_frame(e, layout, image, &marks, strip, slow_down).map_err(|reason| {
-            OverlayError::Draw {
-                clip: clip.clone(),
-                frame: e.frames[position].index,
-                reason,
-            }
-        })?;
         let record = OverlayFrame {
             index: e.frames[position].index,
             t: e.frames[position].t,
         };
         if turns.contains(&position) {
-            tiles.push((record, image.clone()));
+            let mut image = paint_tile();
+            draw_frame(e, layout, &mut image, &marks, strip.as_ref(), slow_down)
+                .map_err(draw_err)?;
+            tiles.push((record, image));
         }
         if position >= first {
-            batch.push(image);
+            let mut canvas = video.canvas();
+            paint_video(&mut canvas);
+            draw_frame(e, layout, &mut canvas, &marks, strip.as_ref(), slow_down)
+                .map_err(draw_err)?;
             shown.push(record);
-            // The encoder stopped: its error is the one to report.
-            if batch.len() == BATCH && video.send(std::mem::take(&mut batch)).is_err() {
+            if !video.push(canvas) {
                 return Ok(false);
             }
         }
@@ -487,11 +550,9 @@ fn draw_span(
         && let Some(frames) = kept.span((start, last), layout)
     {
         for frame in frames {
-            if !each(
-                frame.position,
-                kept.paint(frame, layout),
-                frame.strip_mark(),
-            )? {
+            let paint_video = &mut |canvas: &mut YuvCanvas| kept.paint_yuv(frame, layout, canvas);
+            let paint_tile = &mut || kept.paint(frame, layout);
+            if !each(frame.position, paint_video, paint_tile, frame.strip_mark())? {
                 break;
             }
         }
@@ -508,11 +569,14 @@ fn draw_span(
                     }),
                 _ => None,
             };
-            each(position, layout.paint(view), strip)
+            let image = layout.paint(view);
+            let paint_video = &mut |canvas: &mut YuvCanvas| canvas.set_rgb(&image);
+            let paint_tile = &mut || image.clone();
+            each(position, paint_video, paint_tile, strip)
         })?;
     }
     // An encoder that stopped reports its own error.
-    let _ = video.send(batch);
+    video.flush();
     Ok((shown, tiles))
 }
 
@@ -681,15 +745,15 @@ impl FrameMatcher {
     }
 }
 
-/// One overlay frame: the windows, the marks and the header.
+/// Draws one overlay frame's marks and header on `image`, its windows painted.
 fn draw_frame(
     e: &Experiment,
     layout: &Layout,
-    mut image: RgbImage,
+    image: &mut impl Canvas,
     marks: &FrameMarks,
-    strip: Option<StripMark>,
+    strip: Option<&StripMark>,
     slow_down: f64,
-) -> Result<RgbImage, String> {
+) -> Result<(), String> {
     let plan = &e.plan;
     let c = &plan.calibration.calibration;
     let record = &e.frames[marks.position];
@@ -704,25 +768,25 @@ fn draw_frame(
     for (window, line) in [(&layout.side, 1.0), (&layout.band, 2.0)] {
         let top = window.src_y as f64;
         let bottom = top + window.height as f64;
-        window.column_line(&mut image, b0, (top, bottom), line, BAND);
-        window.column_line(&mut image, b1, (top, bottom), line, BAND);
+        window.column_line(image, b0, (top, bottom), line, BAND);
+        window.column_line(image, b1, (top, bottom), line, BAND);
         let plate = c.z_base + oy;
-        window.row_line(&mut image, plate, (c.x_l + ox, b0 - 1.0), line, PLATE);
-        window.row_line(&mut image, plate, (b1 + 1.0, c.x_r + ox), line, PLATE);
+        window.row_line(image, plate, (c.x_l + ox, b0 - 1.0), line, PLATE);
+        window.row_line(image, plate, (b1 + 1.0, c.x_r + ox), line, PLATE);
         if let Some(z) = record.z_rim_px {
             let row = plan.rim_edge_row(z) + oy;
-            window.row_line(&mut image, row, (b0 - 2.0, b1 + 2.0), line, RIM);
+            window.row_line(image, row, (b0 - 2.0, b1 + 2.0), line, RIM);
         }
         for &(_, z, _) in &marks.peaks {
             let z_px = (z + e.series.halt.rest_level) / plan.metres_per_px;
             let at = (c.x_centre() + ox, plan.rim_edge_row(z_px) + oy);
-            window.cross(&mut image, at, 4.0 * line, PEAK);
+            window.cross(image, at, 4.0 * line, PEAK);
         }
     }
     let mut beta = None;
     if let (Some(window), Some(StripMark { strip, mask })) = (&layout.plan, strip) {
         if let Some((mask, w)) = mask {
-            window.outline(&mut image, (&mask, w), (window.src_x, window.src_y), STRIP);
+            window.outline(image, (mask, *w), (window.src_x, window.src_y), STRIP);
         }
         // The principal axis through the centroid, β counter-clockwise from
         // the image's x axis with image up (eq. 3.24), 1.2 strip lengths long.
@@ -733,7 +797,7 @@ fn draw_frame(
         );
         let [cx, cy] = strip.centroid_px;
         let (cx, cy) = (cx + window.src_x as f64, cy + window.src_y as f64);
-        window.segment(&mut image, (cx - dx, cy - dy), (cx + dx, cy + dy), AXIS);
+        window.segment(image, (cx - dx, cy - dy), (cx + dx, cy + dy), AXIS);
         beta = Some(strip.beta);
     }
 
@@ -784,7 +848,7 @@ fn draw_frame(
             LEGEND,
         )),
     }
-    text_lines(&mut image, (8, 4), TEXT_PX, &lines)?;
+    text_lines(image, (8, 4), TEXT_PX, &lines)?;
     let border = if !marks.flags.is_empty() {
         Some(FLAG)
     } else if marks.halt {
@@ -793,14 +857,136 @@ fn draw_frame(
         None
     };
     if let Some(colour) = border {
-        let (w, h) = image.dimensions();
-        for y in 0..h {
-            for x in 0..w {
-                if x < 4 || y < 4 || x + 4 >= w || y + 4 >= h {
-                    image.put_pixel(x, y, colour);
+        let (w, h) = image.size();
+        let (w, h) = (f64::from(w), f64::from(h));
+        image.fill_box((0.0, w), (0.0, 4.0), colour);
+        image.fill_box((0.0, w), (h - 4.0, h), colour);
+        image.fill_box((0.0, 4.0), (4.0, h - 4.0), colour);
+        image.fill_box((w - 4.0, w), (4.0, h - 4.0), colour);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::analyse::{Decoding, analyse_clip_keeping};
+    use crate::config::ExperimentConfig;
+    use crate::overlay::canvas::yuv420_of;
+
+    /// `overlay.mp4`'s frames, painted from the kept samples and drawn on the
+    /// encoder's 4:2:0 samples, are the RGB canvas (painted and drawn as the
+    /// contact sheet's tiles are) converted, on the committed fixtures' spans:
+    /// all but 1 in 10⁴ luma samples within 2 levels (the rest where x264's
+    /// ringing puts the red strip's edge out of gamut, which RGB clamps channel
+    /// by channel: 13 levels at most), all but 1 in 200 chroma samples within 2
+    /// levels. The rest are where a mark covers part of a 2 × 2 block whose
+    /// pixels differ in colour (the strip's outline on its red edge, the rim
+    /// line across the plate line): the samples blend the block's mean colour by
+    /// the mark's mean coverage, RGB blends each pixel, up to a quarter of the
+    /// colours' difference apart (50 levels of Cr at the outline). The same on a
+    /// rendered clip stored at full range, whose samples are recoded to the
+    /// video's limited range first.
+    #[test]
+    fn frames_drawn_in_yuv_are_the_rgb_canvas_converted() {
+        let dir = tempfile::tempdir().unwrap();
+        let full_range = full_range_clip(dir.path());
+        let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+        for (clip, config) in [
+            (fixtures.join("side-dark-n050.mp4"), "fps = 480"),
+            (
+                fixtures.join("two-view-n045.mp4"),
+                "fps = 480\ntwo_view = true",
+            ),
+            (full_range, "fps = 480"),
+        ] {
+            let fixture = clip.file_name().unwrap().to_string_lossy().into_owned();
+            let config: ExperimentConfig = toml::from_str(config).unwrap();
+            let spec = OverlaySpec::default();
+            let e = analyse_clip_keeping(&clip, &config, Decoding::Whole, Some(&spec), &|_, _| {})
+                .unwrap();
+            let span: Vec<usize> = (0..e.frames.len())
+                .filter(|&k| (spec.span_s.0..=spec.span_s.1).contains(&e.frames[k].t))
+                .collect();
+            let z_max = span
+                .iter()
+                .filter_map(|&k| e.frames[k].z_rim_px)
+                .fold(0.0, f64::max);
+            let layout = Layout::new(&e.plan, z_max);
+            let kept = e.kept.as_ref().expect("frames kept");
+            assert_eq!(kept.recodes(), fixture == "full-range.mp4", "{fixture}");
+            let frames = kept
+                .span((span[0], span[span.len() - 1]), &layout)
+                .expect("the span kept");
+            let peak_frames = peak_positions(&e);
+            let (mut planes, mut canvas) = (Default::default(), YuvCanvas::default());
+            let mut histogram = [[0usize; 256]; 3];
+            for frame in frames {
+                let marks = FrameMarks::of(&e, frame.position, &peak_frames);
+                let strip = frame.strip_mark();
+                let mut image = kept.paint(frame, &layout);
+                draw_frame(&e, &layout, &mut image, &marks, strip.as_ref(), 16.0).unwrap();
+                yuv420_of(&image, &mut planes);
+                kept.paint_yuv(frame, &layout, &mut canvas);
+                draw_frame(&e, &layout, &mut canvas, &marks, strip.as_ref(), 16.0).unwrap();
+                for (k, (a, b)) in planes.iter().zip(canvas.planes()).enumerate() {
+                    assert_eq!(a.len(), b.len());
+                    for (&a, &b) in a.iter().zip(b) {
+                        histogram[k][usize::from(a.abs_diff(b))] += 1;
+                    }
                 }
+            }
+            for (k, h) in histogram.iter().enumerate() {
+                let total: usize = h.iter().sum();
+                let worst = h.iter().rposition(|&n| n > 0).unwrap();
+                let within_2 = h[..=2].iter().sum::<usize>() as f64 / total as f64;
+                eprintln!("{fixture}, plane {k}: {within_2:.5} within 2 levels, worst {worst}");
+                let (share, most) = if k == 0 { (0.9999, 16) } else { (0.995, 64) };
+                assert!(
+                    within_2 >= share && worst <= most,
+                    "{fixture}, plane {k}: {within_2:.5} of the samples within 2 levels, \
+                     the worst {worst} levels off"
+                );
             }
         }
     }
-    Ok(image)
+
+    /// A 480×320 clip rendered here (0.5 s to the halt), stored as full-range
+    /// 8-bit samples (JPEG style): not the overlay video's coding.
+    fn full_range_clip(dir: &Path) -> std::path::PathBuf {
+        use crate::model::params::Preset;
+        use crate::render::{
+            DEFAULT_CRF, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, SampleStorage,
+            Timing, power_law_motion, write_clip,
+        };
+        let timing = Timing {
+            fps: 480.0,
+            halt_time: 0.5,
+            after_halt: 0.15,
+            jitter: None,
+        };
+        let spin = PostFlatSpin {
+            beta_dot0: -2.8,
+            mu: 0.134,
+        };
+        let motion = power_law_motion(
+            &Preset::EulerDisk.params(),
+            &PowerLaw::thesis(0.5),
+            &timing,
+            spin,
+        )
+        .unwrap();
+        let mut spec = RenderSpec::thesis(Plate::Dark, false);
+        (spec.width, spec.height) = (480, 320);
+        spec.storage = SampleStorage {
+            ten_bit: false,
+            full_range: true,
+            hdr: None,
+        };
+        let renderer = Renderer::new(&spec, &motion).unwrap();
+        let path = dir.join("full-range.mp4");
+        write_clip(&renderer, &path, DEFAULT_CRF).unwrap().clip
+    }
 }

@@ -6,8 +6,9 @@
 //! Experiment (plan, per-frame z_rim, peaks, halt, flags) ─┐
 //! kept frames (keep.rs), else the clip's span decoded ───┴► canvas: windows of
 //!         the frame enlarged, marks at their sub-pixel rows, a header of text
-//!   ├─► render::H264Writer → overlay.mp4 (slowed down), overlay.json (frame map)
-//!   └─► the frames at the last peaks → last-turns.png
+//!   ├─► on 4:2:0 samples → render::H264Writer → overlay.mp4 (slowed down),
+//!   │   overlay.json (frame map)
+//!   └─► in RGB, the frames at the last peaks → last-turns.png
 //! compare's Comparison (trajectory) + pose from the calibration (pose.rs)
 //!   └─► the model's outline on the same frames → model-overlay.mp4,
 //!       model-last-turns.png, model-overlay.csv (rim-edge distance per frame)

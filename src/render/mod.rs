@@ -160,8 +160,8 @@ use scene::{
 };
 use std::f64::consts::PI;
 pub use write::{
-    ChromaFilter, ClipFormat, DEFAULT_CRF, H264Settings, H264Writer, HdrTransfer, SampleStorage,
-    truth_path, write_clip,
+    ChromaFilter, ClipFormat, DEFAULT_CRF, H264Settings, H264Writer, HdrTransfer, RateControl,
+    SampleStorage, truth_path, write_clip,
 };
 
 /// Errors of the render stage; file errors name the file.
