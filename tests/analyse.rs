@@ -361,40 +361,18 @@ fn bad_input_fails_with_the_file_and_the_reason() {
 /// the scale: measured +0.25 %, and z_rim 0.09 px RMS from the truth.
 #[test]
 fn a_rounded_rim_is_scaled_from_the_plate_line() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = util::eulerdisk(
-        dir.path(),
-        &[
-            "render",
-            "--n",
-            "0.5",
-            "--halt",
-            "0.8",
-            "--size",
-            "480x270",
-            "--edge-radius",
-            "0.6",
-            "--noise",
-            "1",
-            "-o",
-            "rounded.mp4",
-        ],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let truth: Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.path().join("rounded.truth.json")).unwrap(),
-    )
-    .unwrap();
-    let e = analyse_clip(
-        &dir.path().join("rounded.mp4"),
-        &config("fps = 480\n"),
-        &|_, _| {},
-    )
-    .expect("analyse");
+    let (e, truth) = render_and_analyse(&[
+        "--n",
+        "0.5",
+        "--halt",
+        "0.8",
+        "--size",
+        "480x270",
+        "--edge-radius",
+        "0.6",
+        "--noise",
+        "1",
+    ]);
     let plan = &e.plan;
     assert!(plan.rim.starts_with("mirror-edge model"), "{}", plan.rim);
     // Rows: the truth's on pixel centres at integers, ours at half-integers.
@@ -429,42 +407,20 @@ fn a_rounded_rim_is_scaled_from_the_plate_line() {
 /// lies 2–3 px higher, so eq. 3.10's scale at the near rim holds.
 #[test]
 fn a_thin_top_face_gives_the_near_top_rim() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = util::eulerdisk(
-        dir.path(),
-        &[
-            "render",
-            "--n",
-            "0.5",
-            "--halt",
-            "0.8",
-            "--size",
-            "240x160",
-            "--camera-distance",
-            "0.25",
-            "--elevation",
-            "3",
-            "--noise",
-            "1",
-            "-o",
-            "close.mp4",
-        ],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let truth: Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.path().join("close.truth.json")).unwrap(),
-    )
-    .unwrap();
-    let e = analyse_clip(
-        &dir.path().join("close.mp4"),
-        &config("fps = 480\n"),
-        &|_, _| {},
-    )
-    .expect("analyse");
+    let (e, truth) = render_and_analyse(&[
+        "--n",
+        "0.5",
+        "--halt",
+        "0.8",
+        "--size",
+        "240x160",
+        "--camera-distance",
+        "0.25",
+        "--elevation",
+        "3",
+        "--noise",
+        "1",
+    ]);
     // Rows: the truth's on pixel centres at integers, ours at half-integers.
     let near = f(&truth["calibration"]["z_t"]) + 0.5;
     let far = f(&truth["camera"]["z_t_far"]) + 0.5;
@@ -477,4 +433,29 @@ fn a_thin_top_face_gives_the_near_top_rim() {
     let scale = f(&truth["camera"]["near_rim_metres_per_px"]);
     let error = e.plan.metres_per_px / scale - 1.0;
     assert!(error.abs() < 0.02, "scale error {:+.2} %", 100.0 * error);
+}
+
+/// Renders a clip with `eulerdisk render ARGS` and analyses it at 480 fps: the
+/// experiment and the render's truth.
+fn render_and_analyse(args: &[&str]) -> (Experiment, Value) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut render = vec!["render"];
+    render.extend_from_slice(args);
+    render.extend_from_slice(&["-o", "clip.mp4"]);
+    let out = util::eulerdisk(dir.path(), &render);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let truth: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("clip.truth.json")).unwrap())
+            .unwrap();
+    let e = analyse_clip(
+        &dir.path().join("clip.mp4"),
+        &config("fps = 480\n"),
+        &|_, _| {},
+    )
+    .expect("analyse");
+    (e, truth)
 }
