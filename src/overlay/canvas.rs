@@ -935,18 +935,24 @@ mod tests {
             let column: Vec<f64> = (0..90)
                 .map(|r| f64::from(image.get_pixel(20, r)[1]) / 255.0)
                 .collect();
-            let mass: f64 = column.iter().sum();
-            let centre: f64 = column
-                .iter()
-                .enumerate()
-                .map(|(r, w)| (r as f64 + 0.5) * w)
-                .sum::<f64>()
-                / mass;
+            let (mass, centre) = mass_and_centre(&column);
             // 8-bit levels: 1/255 of a canvas px per row touched.
             assert!((mass - 2.0).abs() < 0.02, "mass {mass}");
             let (_, drawn) = window.to_frame(0.0, centre);
             assert!((drawn - y).abs() < 0.01, "row {y}: drawn at {drawn}");
         }
+    }
+
+    /// The total of a column's coverages [canvas px] and their centroid, each
+    /// row's at its centre r + ½ [canvas rows].
+    fn mass_and_centre(column: &[f64]) -> (f64, f64) {
+        let mass: f64 = column.iter().sum();
+        let moment: f64 = column
+            .iter()
+            .enumerate()
+            .map(|(r, w)| (r as f64 + 0.5) * w)
+            .sum();
+        (mass, moment / mass)
     }
 
     /// On the encoder's samples too: the luma of a row line at a fractional row
@@ -975,13 +981,7 @@ mod tests {
             let column: Vec<f64> = (0..90)
                 .map(|r| f64::from(luma[r * 80 + 20] - black) / f64::from(green[0] - black))
                 .collect();
-            let mass: f64 = column.iter().sum();
-            let centre: f64 = column
-                .iter()
-                .enumerate()
-                .map(|(r, w)| (r as f64 + 0.5) * w)
-                .sum::<f64>()
-                / mass;
+            let (mass, centre) = mass_and_centre(&column);
             // 8-bit levels of a 129-level luma step: 1/129 of a canvas px a row.
             assert!((mass - 2.0).abs() < 0.03, "mass {mass}");
             let (_, drawn) = window.to_frame(0.0, centre);

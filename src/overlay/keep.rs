@@ -1101,14 +1101,7 @@ mod tests {
             analyse_clip_keeping(&clip, &config, Decoding::Whole, Some(&spec), &|_, _| {}).unwrap();
         let kept = e.kept.as_ref().expect("frames kept");
         let m = kept.matrix.as_ref().expect("YUV kept");
-        let span: Vec<usize> = (0..e.frames.len())
-            .filter(|&k| (spec.span_s.0..=spec.span_s.1).contains(&e.frames[k].t))
-            .collect();
-        let z_max = span
-            .iter()
-            .filter_map(|&k| e.frames[k].z_rim_px)
-            .fold(0.0, f64::max);
-        let layout = Layout::new(&e.plan, z_max);
+        let (span, layout) = super::super::measured::span_and_layout(&e, &spec);
         let (first, last) = (span[0], span[span.len() - 1]);
         let frames = kept.span((first, last), &layout).expect("the span kept");
         assert_eq!(frames.len(), span.len());

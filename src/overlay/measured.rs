@@ -867,6 +867,21 @@ fn draw_frame(
     Ok(())
 }
 
+/// For tests: the positions in `e.frames` of the frames in `spec`'s span, and the
+/// layout for the span's highest rim.
+#[cfg(test)]
+pub(super) fn span_and_layout(e: &Experiment, spec: &OverlaySpec) -> (Vec<usize>, Layout) {
+    let span: Vec<usize> = (0..e.frames.len())
+        .filter(|&k| (spec.span_s.0..=spec.span_s.1).contains(&e.frames[k].t))
+        .collect();
+    let z_max = span
+        .iter()
+        .filter_map(|&k| e.frames[k].z_rim_px)
+        .fold(0.0, f64::max);
+    let layout = Layout::new(&e.plan, z_max);
+    (span, layout)
+}
+
 #[cfg(test)]
 mod tests {
     use std::path::Path;
@@ -907,14 +922,7 @@ mod tests {
             let spec = OverlaySpec::default();
             let e = analyse_clip_keeping(&clip, &config, Decoding::Whole, Some(&spec), &|_, _| {})
                 .unwrap();
-            let span: Vec<usize> = (0..e.frames.len())
-                .filter(|&k| (spec.span_s.0..=spec.span_s.1).contains(&e.frames[k].t))
-                .collect();
-            let z_max = span
-                .iter()
-                .filter_map(|&k| e.frames[k].z_rim_px)
-                .fold(0.0, f64::max);
-            let layout = Layout::new(&e.plan, z_max);
+            let (span, layout) = span_and_layout(&e, &spec);
             let kept = e.kept.as_ref().expect("frames kept");
             assert_eq!(kept.recodes(), fixture == "full-range.mp4", "{fixture}");
             let frames = kept
@@ -956,28 +964,10 @@ mod tests {
     /// A 480×320 clip rendered here (0.5 s to the halt), stored as full-range
     /// 8-bit samples (JPEG style): not the overlay video's coding.
     fn full_range_clip(dir: &Path) -> std::path::PathBuf {
-        use crate::model::params::Preset;
         use crate::render::{
-            DEFAULT_CRF, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, SampleStorage,
-            Timing, power_law_motion, write_clip,
+            DEFAULT_CRF, Plate, RenderSpec, Renderer, SampleStorage, test_motion, write_clip,
         };
-        let timing = Timing {
-            fps: 480.0,
-            halt_time: 0.5,
-            after_halt: 0.15,
-            jitter: None,
-        };
-        let spin = PostFlatSpin {
-            beta_dot0: -2.8,
-            mu: 0.134,
-        };
-        let motion = power_law_motion(
-            &Preset::EulerDisk.params(),
-            &PowerLaw::thesis(0.5),
-            &timing,
-            spin,
-        )
-        .unwrap();
+        let motion = test_motion(480.0, 0.5, 0.15);
         let mut spec = RenderSpec::thesis(Plate::Dark, false);
         (spec.width, spec.height) = (480, 320);
         spec.storage = SampleStorage {

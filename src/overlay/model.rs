@@ -572,29 +572,9 @@ mod tests {
     }
 
     fn cast_through_a_close_pinhole(elevation_deg: f64) {
-        use crate::model::params::Preset;
-        use crate::render::{
-            DEFAULT_CRF, Plate, PostFlatSpin, PowerLaw, RenderSpec, Renderer, Timing,
-            power_law_motion, write_clip,
-        };
+        use crate::render::{DEFAULT_CRF, Plate, RenderSpec, Renderer, test_motion, write_clip};
         let dir = tempfile::tempdir().unwrap();
-        let timing = Timing {
-            fps: 480.0,
-            halt_time: 0.5,
-            after_halt: 0.15,
-            jitter: None,
-        };
-        let spin = PostFlatSpin {
-            beta_dot0: -2.8,
-            mu: 0.134,
-        };
-        let motion = power_law_motion(
-            &Preset::EulerDisk.params(),
-            &PowerLaw::thesis(0.5),
-            &timing,
-            spin,
-        )
-        .unwrap();
+        let motion = test_motion(480.0, 0.5, 0.15);
         let mut spec = RenderSpec::thesis(Plate::Dark, false);
         (spec.width, spec.height) = (480, 320);
         spec.camera_distance_m = Some(0.25);

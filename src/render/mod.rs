@@ -1770,31 +1770,34 @@ fn gaussian_blur<const N: usize>(buf: &mut [[f32; N]], w: usize, h: usize, sigma
     });
 }
 
+/// For tests: Euler's disk on the thesis's n = 0.5 power law at `fps`, halting at
+/// `halt` [s] and filmed `after` [s] more, spinning down on stainless steel.
+#[cfg(test)]
+pub(crate) fn test_motion(fps: f64, halt: f64, after: f64) -> Motion {
+    let timing = Timing {
+        fps,
+        halt_time: halt,
+        after_halt: after,
+        jitter: None,
+    };
+    let spin = PostFlatSpin {
+        beta_dot0: -2.8,
+        mu: 0.134,
+    };
+    power_law_motion(
+        &crate::model::params::Preset::EulerDisk.params(),
+        &PowerLaw::thesis(0.5),
+        &timing,
+        spin,
+    )
+    .expect("motion")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::model::params::Preset;
     use std::f64::consts::PI;
-
-    fn motion(fps: f64, halt: f64, after: f64) -> Motion {
-        let timing = Timing {
-            fps,
-            halt_time: halt,
-            after_halt: after,
-            jitter: None,
-        };
-        let spin = PostFlatSpin {
-            beta_dot0: -2.8,
-            mu: 0.134,
-        };
-        power_law_motion(
-            &Preset::EulerDisk.params(),
-            &PowerLaw::thesis(0.5),
-            &timing,
-            spin,
-        )
-        .expect("motion")
-    }
 
     fn small_spec(plate: Plate, two_view: bool) -> RenderSpec {
         let mut spec = RenderSpec::thesis(plate, two_view);
@@ -1869,7 +1872,7 @@ mod tests {
         for elevation_deg in [0.5, 3.0, 8.0] {
             let mut spec = small_spec(Plate::Dark, false);
             spec.elevation_deg = elevation_deg;
-            let r = Renderer::new(&spec, &motion(480.0, 0.05, 0.0)).expect("renderer");
+            let r = Renderer::new(&spec, &test_motion(480.0, 0.05, 0.0)).expect("renderer");
             let truth = r.truth();
             for phi in [0.002, 0.0243, 0.1, 0.3] {
                 let z = |psi: f64| {
@@ -1932,7 +1935,7 @@ mod tests {
     /// both plates (orthographic camera).
     #[test]
     fn rendered_bottom_edge_matches_truth_z_rim() {
-        let m = motion(480.0, 0.4, 0.05);
+        let m = test_motion(480.0, 0.4, 0.05);
         for plate in [Plate::Dark, Plate::Light] {
             let r = Renderer::new(&small_spec(plate, false), &m).expect("renderer");
             check_bottom_edge_against_truth(&r, plate);
@@ -1943,7 +1946,7 @@ mod tests {
     /// by threshold crossings match the truth, and δ = 2H/(z_base − z_t) = s/cos ε.
     #[test]
     fn rest_frame_calibration_points_match_truth() {
-        let m = motion(480.0, 0.02, 0.1);
+        let m = test_motion(480.0, 0.02, 0.1);
         for plate in [Plate::Dark, Plate::Light] {
             let r = Renderer::new(&small_spec(plate, false), &m).expect("renderer");
             let truth = r.truth();
@@ -1991,7 +1994,7 @@ mod tests {
     /// spin (eq. 3.20).
     #[test]
     fn strip_angle_from_moments_matches_truth_beta() {
-        let m = motion(480.0, 0.2, 0.06);
+        let m = test_motion(480.0, 0.2, 0.06);
         let r = Renderer::new(&small_spec(Plate::Dark, true), &m).expect("renderer");
         let truth = r.truth();
         let split = truth.split_row.expect("two views");
@@ -2040,7 +2043,7 @@ mod tests {
     /// keeps the true capture times; the truth JSON reads back unchanged.
     #[test]
     fn dropped_frames_are_absent_and_listed() {
-        let m = motion(60.0, 0.2, 0.1);
+        let m = test_motion(60.0, 0.2, 0.1);
         let mut spec = small_spec(Plate::Dark, false);
         (spec.width, spec.height) = (96, 64);
         spec.dropped = vec![7, 3];
@@ -2083,7 +2086,7 @@ mod tests {
     /// lower crf decodes closer to the rendered frames.
     #[test]
     fn mp4_bytes_repeat_and_crf_sets_the_quality() {
-        let m = motion(240.0, 0.4, 0.1);
+        let m = test_motion(240.0, 0.4, 0.1);
         let mut spec = small_spec(Plate::Dark, false);
         (spec.width, spec.height) = (160, 96);
         spec.effects.noise_sigma = 1.0;
@@ -2135,7 +2138,7 @@ mod tests {
     /// last frame's z_rim is 0.
     #[test]
     fn pinhole_rest_calibration_matches_rendered_edges() {
-        let m = motion(480.0, 0.02, 0.1);
+        let m = test_motion(480.0, 0.02, 0.1);
         for (plate, d) in [(Plate::Dark, 0.2), (Plate::Light, 0.35), (Plate::Dark, 1.0)] {
             let r = Renderer::new(&pinhole_spec(plate, d), &m).expect("renderer");
             let truth = r.truth();
@@ -2191,7 +2194,7 @@ mod tests {
     /// column, as for the orthographic camera.
     #[test]
     fn pinhole_rendered_bottom_edge_matches_truth_z_rim() {
-        let m = motion(480.0, 0.4, 0.05);
+        let m = test_motion(480.0, 0.4, 0.05);
         for (plate, d) in [(Plate::Dark, 0.25), (Plate::Light, 0.5)] {
             let r = Renderer::new(&pinhole_spec(plate, d), &m).expect("renderer");
             check_bottom_edge_against_truth(&r, plate);
@@ -2207,7 +2210,7 @@ mod tests {
     fn pinhole_scales_and_the_orthographic_limit() {
         let params = Preset::EulerDisk.params();
         let (r_m, h_m) = (params.radius, params.half_thickness);
-        let m = motion(480.0, 0.02, 0.05);
+        let m = test_motion(480.0, 0.02, 0.05);
         for d in [0.2, 0.3, 0.5, 1.0] {
             let r = Renderer::new(&pinhole_spec(Plate::Dark, d), &m).expect("renderer");
             let truth = r.truth();
@@ -2258,7 +2261,7 @@ mod tests {
     /// gain, at 100 Hz and 50 Hz with their amplitudes and phases.
     #[test]
     fn flicker_gain_is_in_the_truth_and_in_the_frames() {
-        let m = motion(480.0, 0.05, 0.05);
+        let m = test_motion(480.0, 0.05, 0.05);
         let mut spec = small_spec(Plate::Light, false);
         (spec.width, spec.height) = (96, 64);
         let steady = Renderer::new(&spec, &m).expect("steady");
@@ -2295,7 +2298,7 @@ mod tests {
     /// σ_read² + k² v, on a dark plate and a light one.
     #[test]
     fn shot_noise_grows_with_the_level() {
-        let m = motion(480.0, 0.02, 0.0);
+        let m = test_motion(480.0, 0.02, 0.0);
         for plate in [Plate::Dark, Plate::Light] {
             let mut spec = small_spec(plate, false);
             (spec.width, spec.height) = (160, 120);
@@ -2332,7 +2335,7 @@ mod tests {
     /// z_rim follows the true φ (its peaks, closed form at ψ = −π/2, at the true φ).
     #[test]
     fn nutation_modulates_phi_and_the_truth_follows() {
-        let plain = motion(480.0, 0.3, 0.05);
+        let plain = test_motion(480.0, 0.3, 0.05);
         let mut nutating = plain.clone();
         let nutation = Nutation {
             amplitude: 0.05,
@@ -2405,7 +2408,7 @@ mod tests {
     /// shadow and its mirror image.
     #[test]
     fn textured_plate_has_no_seams() {
-        let m = motion(480.0, 0.3, 0.05);
+        let m = test_motion(480.0, 0.3, 0.05);
         for (plate, d) in [(Plate::Light, Some(0.3)), (Plate::Dark, None)] {
             let mut spec = small_spec(plate, false);
             spec.height = 480;
@@ -2441,7 +2444,7 @@ mod tests {
     /// line is wider.
     #[test]
     fn reflection_blur_spreads_only_the_mirror_image() {
-        let m = motion(480.0, 0.1, 0.05);
+        let m = test_motion(480.0, 0.1, 0.05);
         let mut spec = small_spec(Plate::Dark, false);
         spec.scenery.reflectivity = Some(0.5);
         let sharp = Renderer::new(&spec, &m).expect("sharp");
@@ -2483,7 +2486,7 @@ mod tests {
     /// gives the instantaneous frames.
     #[test]
     fn exposure_smear_averages_moving_frames_only() {
-        let m = motion(480.0, 0.2, 0.1);
+        let m = test_motion(480.0, 0.2, 0.1);
         let mut spec = small_spec(Plate::Dark, false);
         (spec.width, spec.height) = (160, 96);
         let sharp = Renderer::new(&spec, &m).expect("sharp");
@@ -2501,7 +2504,7 @@ mod tests {
     /// Bad options are refused with their units.
     #[test]
     fn new_options_are_validated_with_units() {
-        let m = motion(480.0, 0.05, 0.05);
+        let m = test_motion(480.0, 0.05, 0.05);
         let check = |edit: &dyn Fn(&mut RenderSpec), unit: &str| {
             let mut spec = small_spec(Plate::Dark, false);
             edit(&mut spec);
@@ -2526,7 +2529,7 @@ mod tests {
     /// in the timestamps. Overlapping or empty sections are refused.
     #[test]
     fn a_slowed_section_stretches_the_container_clock_over_its_span() {
-        let m = motion(480.0, 0.1, 0.05);
+        let m = test_motion(480.0, 0.1, 0.05);
         let mut spec = small_spec(Plate::Dark, false);
         spec.slowed_sections = vec![SlowedSection {
             start_s: 0.025,
