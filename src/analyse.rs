@@ -1166,11 +1166,13 @@ pub fn analyse_clip_keeping(
                          the frames with an open gap; edge at rest {:.2} px, the zero of z_rim; \
                          plate line {:.2} px, where the rounded rim meets its mirror image \
                          (z_b of eq. 3.10's scale), reflectivity {:.2}; rest fit RMS {:.1} % \
-                         of the disk's level",
+                         of the disk's level; a rounded rim: the frames near contact put the \
+                         plate line {:.2} px below the edge",
                         model.rest_edge,
                         model.plate_row,
                         model.reflectivity,
-                        100.0 * model.rest_rms
+                        100.0 * model.rest_rms,
+                        model.near_contact_offset
                     );
                     (description, model.rest_edge, Some(model.plate_row))
                 }),
@@ -1189,6 +1191,7 @@ pub fn analyse_clip_keeping(
                             );
                             (description, model.rest_edge, None)
                         })
+                        .map_err(String::from)
                 }
             };
                 match refit {

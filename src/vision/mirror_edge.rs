@@ -44,7 +44,16 @@
 //!    edge at rest lies 0.8–2.3 px above it. It is the bottom of the disk's
 //!    thickness in eq. 3.10's scale (`analyse::ScaleReport`); z_rim's zero stays
 //!    the edge at rest, the same edge definition as every lifted frame's.
-//! 3. **Every frame** is fitted for e (and g) with ρ and y_p known, and
+//! 3. **Sharp or rounded.** The rest frames alone cannot tell a sharp edge
+//!    meeting its mirror image (c = y_p − e_rest = 0) from a slightly higher edge
+//!    over a thin blurred gap (c ≈ 0.5 px): our blurred sharp renders gave
+//!    c = 0.44–0.67 px, and the model then read their lifted heights 0.12–0.19 px
+//!    high. The frames near contact can, as the gap 2 (c + z) opens through the
+//!    blur: c fitted to them and the rest frames together
+//!    ([`MirrorEdgeModel::plate_offset_near_contact`]) is −0.05 … +0.15 px on
+//!    those renders and 0.74–2.03 px on the open footage's rounded rims. Below
+//!    [`SHARP_RIM_PX`] the rim is sharp and the first pass is kept.
+//! 4. **Every frame** is fitted for e (and g) with ρ and y_p known, and
 //!    z_rim = e_rest − e: one edge definition, the same at rest and lifted, near
 //!    touching or not.
 //!
@@ -52,6 +61,8 @@
 //! slight extra blur of D, the same in every fit; it does not move e_rest − e.
 
 use std::ops::Range;
+
+use rayon::prelude::*;
 
 use super::band_window::{BandWindow, ROWS_ABOVE, ROWS_BELOW};
 
@@ -66,12 +77,16 @@ pub const MIRROR_REACH_PX: f64 = 3.0;
 pub const MIN_TEMPLATE_FRAMES: usize = 20;
 /// How far from its first-pass edge a frame's fitted edge may lie [px].
 const SEARCH_PX: f64 = 2.0;
-/// The rim is sharp at this resolution when the fitted plate line lies less than
-/// this below the edge at rest [px]: a rim rounded over less than half a pixel.
-/// Then the first pass reads the edge exactly, and the rest fit, which sees one
-/// step for two parameters (edge and plate line), is ill-determined (our own
-/// renders: c = −0.17 to +0.37 px; the open footage's rounded rims: 0.96–1.85 px).
+/// The rim is sharp at this resolution when the plate line lies less than this
+/// below the edge at rest [px]: a rim rounded over less than half a pixel. Then the
+/// first pass reads the edge exactly. Decided on c as the frames near contact fit
+/// it ([`MirrorEdgeModel::plate_offset_near_contact`]): our own sharp renders,
+/// blurred or not, −0.05 … +0.10 px; the open footage's rounded rims 0.75–2.05 px.
 pub const SHARP_RIM_PX: f64 = 0.5;
+/// The frames that decide c with the rest frames: first-pass lifts up to this
+/// [px], over which the gap between the rim and its mirror image (2 (c + z) wide)
+/// opens through the blur ([`MIRROR_REACH_PX`]).
+const NEAR_CONTACT_PX: f64 = MIRROR_REACH_PX;
 /// Rows below the rest frames' first-pass edge that the rest fit reads [px]: a
 /// rounded band of 2 px (the open footage's is 1–2.6 px) and the mirror's blur
 /// ([`MIRROR_REACH_PX`]).
@@ -81,12 +96,13 @@ const REST_ROWS_BELOW_PX: f64 = 2.0 + MIRROR_REACH_PX;
 const PLATE_OFFSET_PX: Range<f64> = -1.0..(ROWS_BELOW as f64 - 3.0);
 
 /// D(u): the disk's bottom-edge profile divided by the disk's level, at offsets u
-/// from the edge [px], tabulated in [`BIN_PX`] bins.
+/// from the edge [px], tabulated every [`BIN_PX`] (bins with too few samples
+/// between two others interpolated linearly).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EdgeTemplate {
-    /// Bin centres, increasing.
-    offsets: Vec<f64>,
-    /// Mean normalised level per bin.
+    /// The first bin's centre [px].
+    first: f64,
+    /// Mean normalised level per bin, one every [`BIN_PX`] from `first`.
     levels: Vec<f64>,
 }
 
@@ -122,25 +138,40 @@ impl EdgeTemplate {
         if used < MIN_TEMPLATE_FRAMES {
             return None;
         }
-        let (offsets, levels): (Vec<f64>, Vec<f64>) = (0..bins)
-            .filter(|&b| count[b] >= MIN_BIN_SAMPLES)
-            .map(|b| (lo + (b as f64 + 0.5) * BIN_PX, sum[b] / count[b] as f64))
-            .unzip();
-        (offsets.last().is_some_and(|&u| u > 1.0)).then_some(Self { offsets, levels })
+        let centre = |b: usize| lo + (b as f64 + 0.5) * BIN_PX;
+        let filled: Vec<usize> = (0..bins).filter(|&b| count[b] >= MIN_BIN_SAMPLES).collect();
+        let (&b0, &b1) = (filled.first()?, filled.last()?);
+        if centre(b1) <= 1.0 {
+            return None;
+        }
+        let mean = |b: usize| sum[b] / count[b] as f64;
+        let mut levels = Vec::with_capacity(b1 - b0 + 1);
+        for pair in filled.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            levels.extend(
+                (a..b).map(|k| mean(a) + (k - a) as f64 / (b - a) as f64 * (mean(b) - mean(a))),
+            );
+        }
+        levels.push(mean(b1));
+        Some(Self {
+            first: centre(b0),
+            levels,
+        })
     }
 
     /// D(u), linear between bins, constant beyond the first and last.
     pub fn at(&self, u: f64) -> f64 {
-        let k = self.offsets.partition_point(|&o| o < u);
-        if k == 0 {
+        let x = (u - self.first) / BIN_PX;
+        let last = self.levels.len() - 1;
+        if x <= 0.0 {
             return self.levels[0];
         }
-        if k == self.offsets.len() {
-            return self.levels[k - 1];
+        if x >= last as f64 {
+            return self.levels[last];
         }
-        let (u0, u1) = (self.offsets[k - 1], self.offsets[k]);
-        let w = (u - u0) / (u1 - u0);
-        self.levels[k - 1] + w * (self.levels[k] - self.levels[k - 1])
+        let k = x as usize;
+        let w = x - k as f64;
+        self.levels[k] + w * (self.levels[k + 1] - self.levels[k])
     }
 
     /// The gap's level f: D far below the edge.
@@ -162,23 +193,17 @@ pub struct MirrorEdgeModel {
     pub rest_edge: f64,
     /// RMS of the rest fit relative to the disk's level.
     pub rest_rms: f64,
+    /// c = y_p − e_rest as the rest frames and the frames near contact fit it
+    /// together ([`MirrorEdgeModel::plate_offset_near_contact`]), which decides
+    /// whether the rim is rounded ([`SHARP_RIM_PX`]); NaN until [`remeasure`] sets it.
+    pub near_contact_offset: f64,
 }
 
 impl MirrorEdgeModel {
     /// Fits ρ, y_p and e_rest to the rest frames' mean window, `rest_edge0` their
     /// first-pass edge (or the calibrated plate line when they read contact).
     pub fn fit(template: EdgeTemplate, rest: &BandWindow, rest_edge0: f64) -> Self {
-        let level = rest.level();
-        // Rows down to [`REST_ROWS_BELOW_PX`] below the first-pass edge: further down
-        // the mirror image shows the plate's own texture and the disk's shadow on it
-        // (a 13-level step 5 rows down on our renders), which the model does not
-        // describe and which pulled y_p by 0.3 px.
-        let last = rest_edge0 + REST_ROWS_BELOW_PX;
-        let samples: Vec<(f64, f64)> = rest
-            .samples()
-            .filter(|&(y, _)| y <= last)
-            .map(|(y, v)| (y, v / level))
-            .collect();
+        let samples = rest_samples(rest, rest_edge0);
         let cost = |e: f64, c: f64, rho: f64| {
             let model = |y: f64| model_value(&template, y, e, e + c, rho);
             best_gain_ssr(&samples, model)
@@ -224,29 +249,123 @@ impl MirrorEdgeModel {
             reflectivity: rho,
             rest_edge: e,
             rest_rms: (ssr / samples.len() as f64).sqrt(),
+            near_contact_offset: f64::NAN,
         }
+    }
+
+    /// c = y_p − e_rest fitted to the rest frames and the frames near contact
+    /// together (first-pass lifts up to [`NEAR_CONTACT_PX`], `near`: window and
+    /// first-pass edge), each frame with its own edge and light, ρ and e_rest
+    /// refitted to the rest frames at each c.
+    ///
+    /// The rest frames alone see one step where the rim meets its mirror image,
+    /// which a sharp edge with c = 0 and a slightly lower edge with a thin blurred
+    /// gap (c ≈ 0.4–0.7 px) explain alike; the frames near contact do not, as the
+    /// gap 2 (c + z) opens through the blur. On our own sharp renders, blurred or
+    /// not, this gives c = −0.05 … +0.10 px where the rest frames alone gave
+    /// −0.46 … +0.67. A rounded rim's mirror image shows the rounding from below,
+    /// lit unlike D, so for it this c is only a test (0.75–2.05 px on the open
+    /// footage) and the rest frames' own fit is kept ([`remeasure`]).
+    pub fn plate_offset_near_contact(&self, rest: &BandWindow, near: &[(&BandWindow, f64)]) -> f64 {
+        let rest_samples = rest_samples(rest, self.rest_edge);
+        let total = |c: f64| -> f64 {
+            let (rest_ssr, e_rest, rho) = self.rest_fit_at(&rest_samples, c);
+            let at_c = Self {
+                template: self.template.clone(),
+                plate_row: e_rest + c,
+                reflectivity: rho,
+                rest_edge: e_rest,
+                rest_rms: 0.0,
+                near_contact_offset: f64::NAN,
+            };
+            rest_ssr
+                + near
+                    .par_iter()
+                    .map(|(window, edge0)| at_c.edge_fit(window, *edge0, true, 0.1).1)
+                    .sum::<f64>()
+        };
+        let mut best = (f64::INFINITY, 0.0);
+        for c in steps((PLATE_OFFSET_PX.start, PLATE_OFFSET_PX.end, 0.25)) {
+            let ssr = total(c);
+            if ssr < best.0 {
+                best = (ssr, c);
+            }
+        }
+        golden_section(total, best.1 - 0.25, best.1 + 0.25, 0.01)
+    }
+
+    /// The rest fit with c fixed: (SSR, e_rest, ρ), on grids of 0.05, 0.01 and
+    /// 0.001 about the last best.
+    fn rest_fit_at(&self, samples: &[(f64, f64)], c: f64) -> (f64, f64, f64) {
+        let mut best = (f64::INFINITY, self.rest_edge, self.reflectivity);
+        let search = |best: &mut (f64, f64, f64), e_range, rho_range| {
+            for rho in steps(rho_range) {
+                for e in steps(e_range) {
+                    let ssr =
+                        best_gain_ssr(samples, |y| model_value(&self.template, y, e, e + c, rho));
+                    if ssr < best.0 {
+                        *best = (ssr, e, rho);
+                    }
+                }
+            }
+        };
+        search(
+            &mut best,
+            (self.rest_edge - SEARCH_PX, self.rest_edge + SEARCH_PX, 0.05),
+            (0.0, 1.0, 0.05),
+        );
+        for step in [0.01, 0.001] {
+            let (_, e, rho) = best;
+            search(
+                &mut best,
+                (e - 5.0 * step, e + 5.0 * step, step),
+                (
+                    (rho - 5.0 * step).max(0.0),
+                    (rho + 5.0 * step).min(1.0),
+                    step,
+                ),
+            );
+        }
+        best
     }
 
     /// The edge row of one frame's window, fitted within ±[`SEARCH_PX`] of its
     /// first-pass edge `edge0`: a 0.05 px grid, then golden-section search.
     pub fn edge(&self, window: &BandWindow, edge0: f64) -> f64 {
+        self.edge_fit(window, edge0, false, 0.05).0
+    }
+
+    /// The fitted edge row and its SSR, the window's values divided by its disk's
+    /// level when `normalised` (so that frames in different light weigh alike): a
+    /// grid of `step` [px], then golden-section search.
+    fn edge_fit(&self, window: &BandWindow, edge0: f64, normalised: bool, step: f64) -> (f64, f64) {
         // Rows down to the mirror image's edge, 2 y_p − e, and its blur (as at rest).
         let mirror = 2.0 * self.plate_row - edge0;
         let last = edge0.max(mirror) + MIRROR_REACH_PX;
-        let samples: Vec<(f64, f64)> = window.samples().filter(|&(y, _)| y <= last).collect();
+        let scale = if normalised {
+            1.0 / window.level()
+        } else {
+            1.0
+        };
+        let samples: Vec<(f64, f64)> = window
+            .samples()
+            .filter(|&(y, _)| y <= last)
+            .map(|(y, v)| (y, v * scale))
+            .collect();
         let cost = |e: f64| {
             best_gain_ssr(&samples, |y| {
                 model_value(&self.template, y, e, self.plate_row, self.reflectivity)
             })
         };
         let mut best = (f64::INFINITY, edge0);
-        for e in steps((edge0 - SEARCH_PX, edge0 + SEARCH_PX, 0.05)) {
+        for e in steps((edge0 - SEARCH_PX, edge0 + SEARCH_PX, step)) {
             let ssr = cost(e);
             if ssr < best.0 {
                 best = (ssr, e);
             }
         }
-        golden_section(cost, best.1 - 0.05, best.1 + 0.05, 1e-4)
+        let e = golden_section(cost, best.1 - step, best.1 + step, 1e-4);
+        (e, cost(e))
     }
 
     /// z_rim [px] of one frame: e_rest − e.
@@ -267,7 +386,7 @@ pub fn remeasure(
     z_base: f64,
     rest: &BandWindow,
     rest_edge0: f64,
-) -> Result<MirrorEdgeModel, &'static str> {
+) -> Result<MirrorEdgeModel, String> {
     let template = EdgeTemplate::learn(
         heights
             .iter()
@@ -275,11 +394,24 @@ pub fn remeasure(
             .filter_map(|(z, w)| Some((w.as_ref()?, z_base - (*z)?, (*z)?))),
     )
     .ok_or("too few frames lift the rim far enough to learn its profile")?;
-    let model = MirrorEdgeModel::fit(template, rest, rest_edge0);
-    if model.plate_row - model.rest_edge < SHARP_RIM_PX {
-        return Err(
-            "the rim at rest meets its mirror image within half a pixel of its edge (a sharp rim)",
-        );
+    let mut model = MirrorEdgeModel::fit(template, rest, rest_edge0);
+    let near: Vec<(&BandWindow, f64)> = heights
+        .iter()
+        .zip(windows)
+        .filter_map(|(z, w)| {
+            let z = (*z)?;
+            (z > 0.0 && z <= NEAR_CONTACT_PX).then_some((w.as_ref()?, z_base - z))
+        })
+        .filter(|(w, _)| w.level() > 0.0)
+        .collect();
+    model.near_contact_offset = model.plate_offset_near_contact(rest, &near);
+    if model.near_contact_offset < SHARP_RIM_PX {
+        return Err(format!(
+            "the rim at rest meets its mirror image {:.2} px below its edge, as the rest \
+             frames and {} frames near contact fit it: a sharp rim (under {SHARP_RIM_PX} px)",
+            model.near_contact_offset,
+            near.len()
+        ));
     }
     for (z, w) in heights.iter_mut().zip(windows) {
         if let (Some(height), Some(window)) = (z.as_mut(), w) {
@@ -287,6 +419,20 @@ pub fn remeasure(
         }
     }
     Ok(model)
+}
+
+/// The rest frames' rows down to [`REST_ROWS_BELOW_PX`] below their edge
+/// `rest_edge0`, divided by the disk's level. Further down the mirror image shows
+/// the plate's own texture and the disk's shadow on it (a 13-level step 5 rows
+/// down on our renders), which the model does not describe and which pulled y_p by
+/// 0.3 px.
+fn rest_samples(rest: &BandWindow, rest_edge0: f64) -> Vec<(f64, f64)> {
+    let level = rest.level();
+    let last = rest_edge0 + REST_ROWS_BELOW_PX;
+    rest.samples()
+        .filter(|&(y, _)| y <= last)
+        .map(|(y, v)| (y, v / level))
+        .collect()
 }
 
 /// The model's normalised value at row centre `y` (module docs).
@@ -450,6 +596,60 @@ mod tests {
         for (k, (&z, w)) in lifts.iter().zip(&windows).enumerate().step_by(7) {
             let found = model.z_rim_px(w, first_pass(z, k));
             assert!((found - z).abs() < 0.05, "lift {z}: found {found}");
+        }
+        // The frames near contact agree on the rounded rim's plate line: the
+        // mirror image here is D reflected, as the model has it.
+        let near: Vec<(&BandWindow, f64)> = windows
+            .iter()
+            .zip(&lifts)
+            .enumerate()
+            .filter(|(_, (_, z))| **z <= NEAR_CONTACT_PX)
+            .map(|(k, (w, &z))| (w, first_pass(z, k)))
+            .collect();
+        let c = model.plate_offset_near_contact(&rest, &near);
+        let c_rest = model.plate_row - model.rest_edge;
+        assert!(
+            c > SHARP_RIM_PX && (c - c_rest).abs() < 0.1,
+            "c {c} vs {c_rest}"
+        );
+    }
+
+    /// A sharp rim under a 0.8 px blur, its first-pass heights off by up to
+    /// ±0.3 px (which blurs the template D a little): the rest frame alone leaves
+    /// its edge and the plate line free to trade (edge up to 0.16 px off and c from
+    /// −0.17 to +0.08 px here; c = 0.44–0.67 px on our blurred renders); the frames
+    /// near contact put the plate line at the edge.
+    #[test]
+    fn the_frames_near_contact_find_a_sharp_rims_plate_line() {
+        let plate = 60.3;
+        let lifts: Vec<f64> = (0..200).map(|k| 0.02 + 0.07 * k as f64).collect();
+        let windows: Vec<BandWindow> = lifts
+            .iter()
+            .map(|&z| lifted(plate, 0.05, 0.3, z, 1.0))
+            .collect();
+        let rest = lifted(plate, 0.05, 0.3, 0.0, 1.0);
+        for error in [0.0, 0.15, 0.3] {
+            let first_pass: Vec<f64> = lifts
+                .iter()
+                .enumerate()
+                .map(|(k, &z)| z + error * (k as f64 * 2.39).sin())
+                .collect();
+            let template = EdgeTemplate::learn(
+                windows
+                    .iter()
+                    .zip(&first_pass)
+                    .map(|(w, &z)| (w, plate - z, z)),
+            )
+            .expect("template");
+            let model = MirrorEdgeModel::fit(template, &rest, plate);
+            let near: Vec<(&BandWindow, f64)> = windows
+                .iter()
+                .zip(&first_pass)
+                .filter(|(_, z)| **z > 0.0 && **z <= NEAR_CONTACT_PX)
+                .map(|(w, &z)| (w, plate - z))
+                .collect();
+            let c = model.plate_offset_near_contact(&rest, &near);
+            assert!(c.abs() < 0.1, "first-pass error {error}: c {c}");
         }
     }
 
