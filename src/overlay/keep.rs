@@ -576,10 +576,11 @@ impl KeptFrames {
             return None;
         }
         let start = self.frames.front()?.position;
-        let frames: Vec<&KeptFrame> = self
-            .frames
-            .range(first.checked_sub(start)?..=last.checked_sub(start)?)
-            .collect();
+        let (from, to) = (first.checked_sub(start)?, last.checked_sub(start)?);
+        if from > to || to >= self.frames.len() {
+            return None;
+        }
+        let frames: Vec<&KeptFrame> = self.frames.range(from..=to).collect();
         let contiguous = frames
             .iter()
             .enumerate()
@@ -1105,6 +1106,10 @@ mod tests {
         let (first, last) = (span[0], span[span.len() - 1]);
         let frames = kept.span((first, last), &layout).expect("the span kept");
         assert_eq!(frames.len(), span.len());
+        // A span reaching past the last frame kept is not kept (the overlay then
+        // decodes it again).
+        let after = kept.frames.back().unwrap().position + 1;
+        assert!(kept.span((first, after), &layout).is_none());
 
         // A channel of a frame pixel before clamping, from its samples as kept
         // (luma clamped to the greys' range) and as decoded.
