@@ -413,8 +413,9 @@ pub struct ExperimentPlan {
     /// How the scale was found: both estimates and the perspective they imply.
     pub scale: ScaleReport,
     pub band_half_width_px: usize,
-    /// How z_rim was measured: the mirror-edge model with its fitted plate line
-    /// and reflectivity, or the edge alone and why.
+    /// How z_rim was measured: the mirror-edge model with its fitted plate line,
+    /// reflectivity and whether the rim is sharp, the light plate's shadow-edge
+    /// contour, or the edge alone and why.
     #[serde(default)]
     pub rim: String,
     /// The side view's row where z_rim = 0 [px]: the rim edge at rest (the
@@ -472,11 +473,12 @@ pub struct ScaleReport {
     /// 2H/(z_b − z_t) [m/px] (eq. 3.10 with ERRATA).
     pub thickness_metres_per_px: f64,
     /// z_b [px]: the row where the near bottom rim meets the plate. The calibration's
-    /// z_base, the edge of the side at rest, unless the mirror-edge model found the
-    /// rim rounded: then the plate line where the rim meets its mirror image (on the
-    /// open footage z_base lies 0.8–2.3 px above the true rim, the plate line within
-    /// 0.5 px of it, and eq. 3.10's scale was 1.0–1.4 % large). `None` in results
-    /// written before it was recorded (then z_base).
+    /// z_base, the edge of the side at rest, unless the mirror-edge model measured
+    /// the rim (a dark plate): then the plate line where the rim meets its mirror
+    /// image (on the open footage's rounded rims z_base lies 0.8–2.3 px above the
+    /// true rim, the plate line within 0.5 px of it, and eq. 3.10's scale was
+    /// 1.0–1.4 % large; a sharp rim's plate line lies within 0.15 px of its edge).
+    /// `None` in results written before it was recorded (then z_base).
     #[serde(default)]
     pub bottom_rim_row_px: Option<f64>,
     /// diameter ÷ thickness scale: 1 for a distant (orthographic) camera.
@@ -1161,13 +1163,18 @@ pub fn analyse_clip_keeping(
                     *edge0,
                 )
                 .map(|model| {
+                    let rim = if model.is_sharp() {
+                        "a sharp rim: the frames near contact put the plate line"
+                    } else {
+                        "a rounded rim (the plate line from the rest frames): the frames near \
+                         contact put it"
+                    };
                     let description = format!(
                         "mirror-edge model (vision::mirror_edge): the rim's profile learned from \
                          the frames with an open gap; edge at rest {:.2} px, the zero of z_rim; \
-                         plate line {:.2} px, where the rounded rim meets its mirror image \
-                         (z_b of eq. 3.10's scale), reflectivity {:.2}; rest fit RMS {:.1} % \
-                         of the disk's level; a rounded rim: the frames near contact put the \
-                         plate line {:.2} px below the edge",
+                         plate line {:.2} px, where the rim meets its mirror image (z_b of eq. \
+                         3.10's scale), reflectivity {:.2}; rest fit RMS {:.1} % of the disk's \
+                         level; {rim} {:.2} px below the edge",
                         model.rest_edge,
                         model.plate_row,
                         model.reflectivity,
