@@ -469,9 +469,10 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
 const HEADER: &str = "| scene | conditions | worst cal. point, err px | scale err % / tol | z_rim RMS px | peaks found/true ≥0.5 px, spurious | φ med abs (signed) err % / tol | Δn peaks (95 % CI covers?) / per frame / tol | t_φ err frames | fitted t0 err ms | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|";
 
 #[test]
-#[ignore = "7 of 24 scenes miss a target (BENCHMARKS.md, \"Robustness scenes\"): φ low at the \
-            peaks on some light plates (H.264's frozen rest edge) and one two-view scene, a \
-            top face thinner than the blur; run with --ignored"]
+#[ignore = "8 of 24 scenes miss a target (BENCHMARKS.md, \"Robustness scenes\"): φ low at the \
+            peaks where H.264's still picture puts the zero low (light plates, one dark), a \
+            top face thinner than the blur, n just past its tolerance on two; run with \
+            --ignored"]
 fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
     let scenes = draw_scenes();
     assert!(scenes.len() >= 24);
