@@ -292,7 +292,7 @@ impl MirrorEdgeModel {
             rest_ssr
                 + near
                     .par_iter()
-                    .map(|(window, edge0)| at_c.edge_fit(window, *edge0, true, 0.1).1)
+                    .map(|(window, edge0)| at_c.edge_fit(window, *edge0, true, 0.2).1)
                     .sum::<f64>()
         };
         let mut best = (f64::INFINITY, 0.0);
