@@ -18,7 +18,7 @@
 //! On a sharp rim the step reads the edge without bias, but from three rows of
 //! one frame, and heights below 2 px from the gap's darkness
 //! ([`GapGauge`](super::GapGauge)); the model reads every row of the band with the
-//! profile the whole clip taught. On the 14 dark robustness scenes
+//! profile the whole clip taught. On 14 dark robustness scenes
 //! (`tests/robustness.rs`) that halved the peaks fit's mean |Δn| (0.022 → 0.011)
 //! and the per-frame fit's (0.019 → 0.013).
 //!
@@ -269,10 +269,10 @@ impl MirrorEdgeModel {
     /// refitted to the rest frames at each c.
     ///
     /// The rest frames alone see one step where the rim meets its mirror image,
-    /// which a sharp edge with c = 0 and a slightly lower edge with a thin blurred
+    /// which a sharp edge with c = 0 and a slightly higher edge over a thin blurred
     /// gap (c ≈ 0.4–0.7 px) explain alike; the frames near contact do not, as the
     /// gap 2 (c + z) opens through the blur. On our own sharp renders, blurred or
-    /// not, this gives c = −0.05 … +0.10 px where the rest frames alone gave
+    /// not, this gives c = −0.05 … +0.15 px where the rest frames alone gave
     /// −0.46 … +0.67. A rounded rim's mirror image shows the rounding from below,
     /// lit unlike D, so for it this c is only a test (0.74–2.03 px on the open
     /// footage, where taking it moved o06's and o08's n by 0.01–0.02 and lost a
