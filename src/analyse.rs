@@ -1149,7 +1149,8 @@ pub fn analyse_clip_keeping(
             Plate::Light => "edge (vision::rim): the second edge from the bottom on a light plate",
         };
         let mut rim_zero_row_px = cal.z_base;
-        // z_b of eq. 3.10: the plate line under a rounded rim (ScaleReport).
+        // z_b of eq. 3.10: the plate line where the mirror-edge model finds the rim
+        // meets its mirror image (ScaleReport), else z_base.
         let mut bottom_rim_row = cal.z_base;
         let rim = match &rest_window {
             Some((rest_window, edge0)) => {
@@ -1163,23 +1164,32 @@ pub fn analyse_clip_keeping(
                     *edge0,
                 )
                 .map(|model| {
-                    let rim = if model.is_sharp() {
-                        "a sharp rim: the frames near contact put the plate line"
+                    let kind = if model.is_sharp() {
+                        "a sharp rim (the plate line from the test)"
                     } else {
-                        "a rounded rim (the plate line from the rest frames): the frames near \
-                         contact put it"
+                        "a rounded rim (the plate line from the rest frames)"
+                    };
+                    let test = match model.near_contact_frames {
+                        0 => "too few frames near contact: the rest frames alone put the plate \
+                              line"
+                            .to_string(),
+                        frames => format!(
+                            "the rest frames and {frames} frames near contact put the plate line"
+                        ),
                     };
                     let description = format!(
                         "mirror-edge model (vision::mirror_edge): the rim's profile learned from \
                          the frames with an open gap; edge at rest {:.2} px, the zero of z_rim; \
                          plate line {:.2} px, where the rim meets its mirror image (z_b of eq. \
                          3.10's scale), reflectivity {:.2}; rest fit RMS {:.1} % of the disk's \
-                         level; {rim} {:.2} px below the edge",
+                         level; {kind}: {test} {:+.2} px below the edge (sharp under {sharp} \
+                         px)",
                         model.rest_edge,
                         model.plate_row,
                         model.reflectivity,
                         100.0 * model.rest_rms,
-                        model.near_contact_offset
+                        model.plate_offset_test,
+                        sharp = vision::SHARP_RIM_PX,
                     );
                     (description, model.rest_edge, Some(model.plate_row))
                 }),

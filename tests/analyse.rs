@@ -439,7 +439,7 @@ fn a_thin_top_face_gives_the_near_top_rim() {
 /// 0.56 px below the edge, which took this rim for a rounded one, and the
 /// mirror-edge model then read the lifted heights of the last 0.5 s 0.12 px high
 /// (n −0.08 from the per-frame fit). The frames near contact put the plate line at
-/// the edge (0.04 px), and the model is fitted there.
+/// the edge (0.03 px), and the model is fitted there.
 #[test]
 fn a_blurred_sharp_rim_is_not_taken_for_a_rounded_one() {
     let (e, truth) = render_and_analyse(&[

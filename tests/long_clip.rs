@@ -121,8 +121,9 @@ fn a_span_near_the_end_measures_as_the_whole_clip() {
     // span, so its rim heights differ by the models' spread, measured 0.005 px on
     // average here. The span lifts the rim past 6 px on few frames, so the model's
     // profile far below the edge is learned from few: single frames lifted 6–12 px,
-    // 3–5 s before the halt, differ by up to 0.07 px. Within the widest fit window
-    // (the last 1 s) every frame agrees within the 0.05 px of the 10-bit test.
+    // 3–5 s before the halt, differ by up to 0.07 px (0.1 px allowed there). Within
+    // the widest fit window (the last 1 s) every frame agrees within the 0.05 px of
+    // the 10-bit test.
     let differences: Vec<(f64, f64)> = span
         .frames
         .iter()
@@ -130,8 +131,9 @@ fn a_span_near_the_end_measures_as_the_whole_clip() {
         .collect();
     let mean = differences.iter().map(|d| d.1).sum::<f64>() / differences.len() as f64;
     assert!(mean.abs() < 0.01, "mean difference {mean} px");
-    for &(t, d) in differences.iter().filter(|(t, _)| *t >= -1.0) {
-        assert!(d.abs() < 0.05, "t = {t} s: {d:+} px");
+    for &(t, d) in &differences {
+        let limit = if t >= -1.0 { 0.05 } else { 0.1 };
+        assert!(d.abs() < limit, "t = {t} s: {d:+} px");
     }
     // Both recover the true n; measured 0.496 and 0.498.
     let true_n = truth["true_n"].as_f64().unwrap();

@@ -470,9 +470,9 @@ const HEADER: &str = "| scene | conditions | worst cal. point, err px | scale er
 
 #[test]
 #[ignore = "8 of 24 scenes miss a target (BENCHMARKS.md, \"Robustness scenes\"): φ low at the \
-            peaks where H.264's still picture puts the zero low (light plates, one dark), a \
-            top face thinner than the blur, n past its tolerance on s09, s17 and s18; run with \
-            --ignored"]
+            peaks where the edge at rest reads high (three light plates, one dark), a top \
+            face thinner than the blur, a last small peak, n past its tolerance on s09, s17 \
+            and s18; run with --ignored"]
 fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
     let scenes = draw_scenes();
     assert!(scenes.len() >= 24);

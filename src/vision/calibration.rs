@@ -103,8 +103,8 @@ impl Calibration {
 
     /// Scale δ = 2H / (z_b − z_t), m/px: thesis eq. 3.10 as corrected in
     /// ERRATA, with H the disk's half-thickness in metres and z_b the row where the
-    /// near bottom rim meets the plate, `bottom_rim_row` (z_base for a sharp rim;
-    /// see `analyse::ScaleReport` for a rounded one).
+    /// near bottom rim meets the plate, `bottom_rim_row` (z_base, or the plate line
+    /// the mirror-edge model fits on a dark plate; see `analyse::ScaleReport`).
     pub fn metres_per_px(&self, half_thickness_m: f64, bottom_rim_row: f64) -> f64 {
         2.0 * half_thickness_m / (bottom_rim_row - self.z_t)
     }

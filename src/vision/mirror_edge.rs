@@ -19,8 +19,8 @@
 //! one frame, and heights below 2 px from the gap's darkness
 //! ([`GapGauge`](super::GapGauge)); the model reads every row of the band with the
 //! profile the whole clip taught. On 14 dark robustness scenes
-//! (`tests/robustness.rs`) that halved the peaks fit's mean |Δn| (0.022 → 0.011)
-//! and the per-frame fit's (0.019 → 0.013).
+//! (`tests/robustness.rs`) the peaks fit's mean |Δn| went from 0.022 to 0.011 and
+//! the per-frame fit's from 0.019 to 0.013 (one scene's per-frame n got worse).
 //!
 //! # The model
 //!
@@ -53,12 +53,13 @@
 //!    the edge at rest, the same edge definition as every lifted frame's.
 //! 3. **Sharp or rounded.** The rest frames alone cannot tell a sharp edge
 //!    meeting its mirror image (c = y_p − e_rest = 0) from a slightly higher edge
-//!    over a thin blurred gap (c ≈ 0.5 px): our blurred sharp renders gave
-//!    c = 0.44–0.67 px, and the model then read their lifted heights 0.12–0.19 px
-//!    high. The frames near contact can, as the gap 2 (c + z) opens through the
+//!    over a thin blurred gap (c ≈ 0.5 px): on six of our sharp renders the rest
+//!    frames alone gave c = −0.46 … +0.67 px (0.56–0.67 on three blurred ones,
+//!    which the model then took for rounded and read 0.12–0.19 px high when
+//!    lifted). The frames near contact can, as the gap 2 (c + z) opens through the
 //!    blur: c fitted to them and the rest frames together
-//!    ([`MirrorEdgeModel::plate_offset_near_contact`]) is −0.05 … +0.15 px on
-//!    those renders and 0.74–2.03 px on the open footage's rounded rims. Below
+//!    ([`MirrorEdgeModel::plate_offset_near_contact`]) is +0.03 … +0.16 px on
+//!    those renders and 0.75–2.51 px on the open footage's rounded rims. Below
 //!    [`SHARP_RIM_PX`] the rim is sharp: its mirror image is D reflected, and the
 //!    model takes that c, with e_rest and ρ refitted to the rest frames. A
 //!    rounded rim keeps the rest frames' own fit: its mirror image shows the
@@ -91,12 +92,18 @@ const SEARCH_PX: f64 = 2.0;
 /// below the edge at rest [px]: a rim rounded over less than half a pixel. Decided
 /// on c as the frames near contact fit it
 /// ([`MirrorEdgeModel::plate_offset_near_contact`]): our own sharp renders, blurred
-/// or not, −0.05 … +0.15 px; the open footage's rounded rims 0.74–2.03 px.
+/// or not, +0.03 … +0.16 px; the open footage's rounded rims 0.75–2.51 px.
 pub const SHARP_RIM_PX: f64 = 0.5;
 /// The frames that decide c with the rest frames: first-pass lifts up to this
 /// [px], over which the gap between the rim and its mirror image (2 (c + z) wide)
 /// opens through the blur ([`MIRROR_REACH_PX`]).
 const NEAR_CONTACT_PX: f64 = MIRROR_REACH_PX;
+/// Frames near contact the test needs; with fewer the rest frames' own c decides.
+const MIN_NEAR_CONTACT_FRAMES: usize = MIN_TEMPLATE_FRAMES;
+/// The lowest c the test searches [px]: a plate line above the edge at rest is not
+/// physical (the mirror image would overlap the disk); half a pixel is left for
+/// noise.
+const MIN_PLATE_OFFSET_PX: f64 = -0.5;
 /// Rows below the rest frames' first-pass edge that the rest fit reads [px]: a
 /// rounded band of 2 px (the open footage's is 1–2.6 px) and the mirror's blur
 /// ([`MIRROR_REACH_PX`]).
@@ -203,10 +210,13 @@ pub struct MirrorEdgeModel {
     pub rest_edge: f64,
     /// RMS of the rest fit relative to the disk's level.
     pub rest_rms: f64,
-    /// c = y_p − e_rest as the rest frames and the frames near contact fit it
-    /// together ([`MirrorEdgeModel::plate_offset_near_contact`]), which decides
-    /// whether the rim is rounded ([`SHARP_RIM_PX`]); NaN until [`remeasure`] sets it.
-    pub near_contact_offset: f64,
+    /// c = y_p − e_rest as the test of a sharp rim ([`SHARP_RIM_PX`]) has it: fitted
+    /// with the frames near contact ([`MirrorEdgeModel::plate_offset_near_contact`])
+    /// when there are enough, else the rest frames' own.
+    pub plate_offset_test: f64,
+    /// The frames near contact that fitted `plate_offset_test` (0: the rest frames
+    /// alone did).
+    pub near_contact_frames: usize,
 }
 
 impl MirrorEdgeModel {
@@ -259,26 +269,53 @@ impl MirrorEdgeModel {
             reflectivity: rho,
             rest_edge: e,
             rest_rms: (ssr / samples.len() as f64).sqrt(),
-            near_contact_offset: f64::NAN,
+            plate_offset_test: c,
+            near_contact_frames: 0,
         }
     }
 
     /// c = y_p − e_rest fitted to the rest frames and the frames near contact
-    /// together (first-pass lifts up to [`NEAR_CONTACT_PX`], `near`: window and
-    /// first-pass edge), each frame with its own edge and light, ρ and e_rest
-    /// refitted to the rest frames at each c.
+    /// together (first-pass lifts up to [`NEAR_CONTACT_PX`]; `near`: window,
+    /// first-pass edge and lift), each frame with its own edge and light, ρ and
+    /// e_rest refitted to the rest frames at each c. Each frame is read down to
+    /// [`REST_ROWS_BELOW_PX`] below its mirror image's rest position (its
+    /// first-pass edge + 2 × lift), the same rows for every c, as the rest frames
+    /// are. The rest frames are one window among the hundreds near contact, so c
+    /// comes mostly from those. `None` with fewer than
+    /// [`MIN_NEAR_CONTACT_FRAMES`] frames, or no finite fit; c is searched from
+    /// [`MIN_PLATE_OFFSET_PX`].
     ///
     /// The rest frames alone see one step where the rim meets its mirror image,
     /// which a sharp edge with c = 0 and a slightly higher edge over a thin blurred
     /// gap (c ≈ 0.4–0.7 px) explain alike; the frames near contact do not, as the
     /// gap 2 (c + z) opens through the blur. On our own sharp renders, blurred or
-    /// not, this gives c = −0.05 … +0.15 px where the rest frames alone gave
+    /// not, this gives c = +0.03 … +0.16 px where the rest frames alone gave
     /// −0.46 … +0.67. A rounded rim's mirror image shows the rounding from below,
-    /// lit unlike D, so for it this c is only a test (0.74–2.03 px on the open
-    /// footage, where taking it moved o06's and o08's n by 0.01–0.02 and lost a
-    /// peak) and the rest frames' own fit is kept ([`remeasure`]).
-    pub fn plate_offset_near_contact(&self, rest: &BandWindow, near: &[(&BandWindow, f64)]) -> f64 {
+    /// lit unlike D, so for it this c is only a test (0.75–2.51 px on the open
+    /// footage; taking it as the plate line lost o06 and o08 in an earlier
+    /// version) and the rest frames' own fit is kept ([`remeasure`]).
+    pub fn plate_offset_near_contact(
+        &self,
+        rest: &BandWindow,
+        near: &[(&BandWindow, f64, f64)],
+    ) -> Option<f64> {
+        if near.len() < MIN_NEAR_CONTACT_FRAMES {
+            return None;
+        }
         let rest_samples = rest_samples(rest, self.rest_edge);
+        let near_samples: Vec<(Vec<(f64, f64)>, f64)> = near
+            .iter()
+            .map(|&(window, edge0, lift)| {
+                let last = edge0 + 2.0 * lift + REST_ROWS_BELOW_PX;
+                let level = window.level();
+                let samples = window
+                    .samples()
+                    .filter(|&(y, _)| y <= last)
+                    .map(|(y, v)| (y, v / level))
+                    .collect();
+                (samples, edge0)
+            })
+            .collect();
         let total = |c: f64| -> f64 {
             let (rest_ssr, e_rest, rho) = self.rest_fit_at(&rest_samples, c);
             let at_c = Self {
@@ -287,22 +324,33 @@ impl MirrorEdgeModel {
                 reflectivity: rho,
                 rest_edge: e_rest,
                 rest_rms: 0.0,
-                near_contact_offset: f64::NAN,
+                plate_offset_test: c,
+                near_contact_frames: 0,
             };
-            rest_ssr
-                + near
-                    .par_iter()
-                    .map(|(window, edge0)| at_c.edge_fit(window, *edge0, true, 0.2).1)
-                    .sum::<f64>()
+            // Collected in order and summed in order: the same c on every run.
+            let frames: Vec<f64> = near_samples
+                .par_iter()
+                .map(|(samples, edge0)| at_c.edge_fit(samples, *edge0, 0.2).1)
+                .collect();
+            rest_ssr + frames.iter().sum::<f64>()
         };
-        let mut best = (f64::INFINITY, 0.0);
-        for c in steps((PLATE_OFFSET_PX.start, PLATE_OFFSET_PX.end, 0.25)) {
+        let mut best = (f64::INFINITY, f64::NAN);
+        for c in steps((MIN_PLATE_OFFSET_PX, PLATE_OFFSET_PX.end, 0.25)) {
             let ssr = total(c);
             if ssr < best.0 {
                 best = (ssr, c);
             }
         }
-        golden_section(total, best.1 - 0.25, best.1 + 0.25, 0.01)
+        if !best.1.is_finite() {
+            return None;
+        }
+        let c = golden_section(
+            total,
+            (best.1 - 0.25).max(MIN_PLATE_OFFSET_PX),
+            best.1 + 0.25,
+            0.01,
+        );
+        c.is_finite().then_some(c)
     }
 
     /// The rest fit with c fixed: (SSR, e_rest, ρ), on grids of 0.05, 0.01 and
@@ -343,28 +391,19 @@ impl MirrorEdgeModel {
     /// The edge row of one frame's window, fitted within ±[`SEARCH_PX`] of its
     /// first-pass edge `edge0`: a 0.05 px grid, then golden-section search.
     pub fn edge(&self, window: &BandWindow, edge0: f64) -> f64 {
-        self.edge_fit(window, edge0, false, 0.05).0
-    }
-
-    /// The fitted edge row and its SSR, the window's values divided by its disk's
-    /// level when `normalised` (so that frames in different light weigh alike): a
-    /// grid of `step` [px], then golden-section search.
-    fn edge_fit(&self, window: &BandWindow, edge0: f64, normalised: bool, step: f64) -> (f64, f64) {
         // Rows down to the mirror image's edge, 2 y_p − e, and its blur (as at rest).
         let mirror = 2.0 * self.plate_row - edge0;
         let last = edge0.max(mirror) + MIRROR_REACH_PX;
-        let scale = if normalised {
-            1.0 / window.level()
-        } else {
-            1.0
-        };
-        let samples: Vec<(f64, f64)> = window
-            .samples()
-            .filter(|&(y, _)| y <= last)
-            .map(|(y, v)| (y, v * scale))
-            .collect();
+        let samples: Vec<(f64, f64)> = window.samples().filter(|&(y, _)| y <= last).collect();
+        self.edge_fit(&samples, edge0, 0.05).0
+    }
+
+    /// The edge row fitted to one frame's (row centre, value) `samples` within
+    /// ±[`SEARCH_PX`] of `edge0`, and its SSR: a grid of `step` [px], then
+    /// golden-section search.
+    fn edge_fit(&self, samples: &[(f64, f64)], edge0: f64, step: f64) -> (f64, f64) {
         let cost = |e: f64| {
-            best_gain_ssr(&samples, |y| {
+            best_gain_ssr(samples, |y| {
                 model_value(&self.template, y, e, self.plate_row, self.reflectivity)
             })
         };
@@ -379,10 +418,11 @@ impl MirrorEdgeModel {
         (e, cost(e))
     }
 
-    /// Whether the rim is sharp at this resolution: the frames near contact put
-    /// the plate line less than [`SHARP_RIM_PX`] below the edge at rest.
+    /// Whether the rim is sharp at this resolution: the test's c
+    /// (`plate_offset_test`) puts the plate line less than [`SHARP_RIM_PX`] below
+    /// the edge at rest.
     pub fn is_sharp(&self) -> bool {
-        self.near_contact_offset < SHARP_RIM_PX
+        self.plate_offset_test < SHARP_RIM_PX
     }
 
     /// z_rim [px] of one frame: e_rest − e.
@@ -411,20 +451,23 @@ pub fn remeasure(
     )
     .ok_or("too few frames lift the rim far enough to learn its profile")?;
     let mut model = MirrorEdgeModel::fit(template, rest, rest_edge0);
-    let near: Vec<(&BandWindow, f64)> = heights
+    let near: Vec<(&BandWindow, f64, f64)> = heights
         .iter()
         .zip(windows)
         .filter_map(|(z, w)| {
             let z = (*z)?;
-            (z > 0.0 && z <= NEAR_CONTACT_PX).then_some((w.as_ref()?, z_base - z))
+            (z > 0.0 && z <= NEAR_CONTACT_PX).then_some((w.as_ref()?, z_base - z, z))
         })
-        .filter(|(w, _)| w.level() > 0.0)
+        .filter(|(w, _, _)| w.level() > 0.0)
         .collect();
-    let c = model.plate_offset_near_contact(rest, &near);
-    model.near_contact_offset = c;
+    if let Some(c) = model.plate_offset_near_contact(rest, &near) {
+        model.plate_offset_test = c;
+        model.near_contact_frames = near.len();
+    }
     if model.is_sharp() {
         // The mirror image of a sharp rim is D reflected, as the model has it, and
         // the frames near contact fix c where the rest frames alone cannot.
+        let c = model.plate_offset_test;
         let samples = rest_samples(rest, model.rest_edge);
         let (ssr, e, rho) = model.rest_fit_at(&samples, c);
         model.rest_edge = e;
@@ -581,7 +624,8 @@ mod tests {
             .collect();
         let rest = lifted(plate, 0.05, 0.4, 0.0, 1.0);
         let model = remeasure(&mut heights, &windows, plate, &rest, plate).expect("model");
-        assert!(model.is_sharp(), "c {}", model.near_contact_offset);
+        assert!(model.is_sharp(), "c {}", model.plate_offset_test);
+        assert!(model.near_contact_frames >= MIN_NEAR_CONTACT_FRAMES);
         assert!((model.plate_row - plate).abs() < 0.1, "{}", model.plate_row);
         for (z, found) in lifts.iter().zip(&heights) {
             let found = found.expect("a height");
@@ -626,14 +670,14 @@ mod tests {
         }
         // The frames near contact agree on the rounded rim's plate line: the
         // mirror image here is D reflected, as the model has it.
-        let near: Vec<(&BandWindow, f64)> = windows
+        let near: Vec<(&BandWindow, f64, f64)> = windows
             .iter()
             .zip(&lifts)
             .enumerate()
             .filter(|(_, (_, z))| **z <= NEAR_CONTACT_PX)
-            .map(|(k, (w, &z))| (w, first_pass(z, k)))
+            .map(|(k, (w, &z))| (w, first_pass(z, k), plate - 1.1 - first_pass(z, k)))
             .collect();
-        let c = model.plate_offset_near_contact(&rest, &near);
+        let c = model.plate_offset_near_contact(&rest, &near).expect("c");
         let c_rest = model.plate_row - model.rest_edge;
         assert!(
             c > SHARP_RIM_PX && (c - c_rest).abs() < 0.1,
@@ -644,7 +688,7 @@ mod tests {
     /// A sharp rim under a 0.8 px blur, its first-pass heights off by up to
     /// ±0.3 px (which blurs the template D a little): the rest frame alone leaves
     /// its edge and the plate line free to trade (edge up to 0.16 px off and c from
-    /// −0.17 to +0.08 px here; c = 0.44–0.67 px on our blurred renders); the frames
+    /// −0.17 to +0.08 px here; −0.46 … +0.67 px on six of our renders); the frames
     /// near contact put the plate line at the edge.
     #[test]
     fn the_frames_near_contact_find_a_sharp_rims_plate_line() {
@@ -669,13 +713,13 @@ mod tests {
             )
             .expect("template");
             let model = MirrorEdgeModel::fit(template, &rest, plate);
-            let near: Vec<(&BandWindow, f64)> = windows
+            let near: Vec<(&BandWindow, f64, f64)> = windows
                 .iter()
                 .zip(&first_pass)
                 .filter(|(_, z)| **z > 0.0 && **z <= NEAR_CONTACT_PX)
-                .map(|(w, &z)| (w, plate - z))
+                .map(|(w, &z)| (w, plate - z, z))
                 .collect();
-            let c = model.plate_offset_near_contact(&rest, &near);
+            let c = model.plate_offset_near_contact(&rest, &near).expect("c");
             assert!(c.abs() < 0.1, "first-pass error {error}: c {c}");
         }
     }

@@ -59,7 +59,9 @@ pub use calibration::{
 };
 pub use error::VisionError;
 pub use gap::{GapGauge, GapSample};
-pub use mirror_edge::{EdgeTemplate, MirrorEdgeModel, remeasure as remeasure_dark_rim};
+pub use mirror_edge::{
+    EdgeTemplate, MirrorEdgeModel, SHARP_RIM_PX, remeasure as remeasure_dark_rim,
+};
 pub use rim::{RimGauge, RimHeight};
 pub use shadow_edge::{ShadowEdgeModel, remeasure as remeasure_light_rim};
 pub use threshold::{GammaSource, INTENSITY_SCALE, Threshold};
