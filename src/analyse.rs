@@ -477,7 +477,7 @@ pub struct ScaleReport {
     /// the rim (a dark plate): then the plate line where the rim meets its mirror
     /// image (on the open footage's rounded rims z_base lies 0.8–2.3 px above the
     /// true rim, the plate line within 0.5 px of it, and eq. 3.10's scale was
-    /// 1.0–1.4 % large; a sharp rim's plate line lies within 0.15 px of its edge).
+    /// 1.0–1.4 % large; a sharp rim's plate line lies within 0.2 px of its edge).
     /// `None` in results written before it was recorded (then z_base).
     #[serde(default)]
     pub bottom_rim_row_px: Option<f64>,

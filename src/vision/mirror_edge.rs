@@ -224,25 +224,11 @@ impl MirrorEdgeModel {
     /// first-pass edge (or the calibrated plate line when they read contact).
     pub fn fit(template: EdgeTemplate, rest: &BandWindow, rest_edge0: f64) -> Self {
         let samples = rest_samples(rest, rest_edge0);
-        let cost = |e: f64, c: f64, rho: f64| {
-            let model = |y: f64| model_value(&template, y, e, e + c, rho);
-            best_gain_ssr(&samples, model)
-        };
         // Coarse grid over (ρ, c, e), then two finer ones about the best.
-        let grid = |best: &mut (f64, f64, f64, f64), e_range, c_range, rho_range| {
-            for rho in steps(rho_range) {
-                for c in steps(c_range) {
-                    for e in steps(e_range) {
-                        let ssr = cost(e, c, rho);
-                        if ssr < best.0 {
-                            *best = (ssr, e, c, rho);
-                        }
-                    }
-                }
-            }
-        };
         let mut best = (f64::INFINITY, rest_edge0, 0.0, 0.0);
-        grid(
+        rest_grid(
+            &template,
+            &samples,
             &mut best,
             (rest_edge0 - SEARCH_PX, rest_edge0 + SEARCH_PX, 0.1),
             (PLATE_OFFSET_PX.start, PLATE_OFFSET_PX.end, 0.1),
@@ -251,15 +237,13 @@ impl MirrorEdgeModel {
         for step in [0.01, 0.001] {
             let (_, e, c, rho) = best;
             let span = 10.0 * step;
-            grid(
+            rest_grid(
+                &template,
+                &samples,
                 &mut best,
                 (e - span, e + span, step),
                 (c - span, c + span, step),
-                (
-                    (rho - 5.0 * step).max(0.0),
-                    (rho + 5.0 * step).min(1.0),
-                    step,
-                ),
+                rho_about(rho, step),
             );
         }
         let (ssr, e, c, rho) = best;
@@ -356,36 +340,29 @@ impl MirrorEdgeModel {
     /// The rest fit with c fixed: (SSR, e_rest, ρ), on grids of 0.05, 0.01 and
     /// 0.001 about the last best.
     fn rest_fit_at(&self, samples: &[(f64, f64)], c: f64) -> (f64, f64, f64) {
-        let mut best = (f64::INFINITY, self.rest_edge, self.reflectivity);
-        let search = |best: &mut (f64, f64, f64), e_range, rho_range| {
-            for rho in steps(rho_range) {
-                for e in steps(e_range) {
-                    let ssr =
-                        best_gain_ssr(samples, |y| model_value(&self.template, y, e, e + c, rho));
-                    if ssr < best.0 {
-                        *best = (ssr, e, rho);
-                    }
-                }
-            }
-        };
-        search(
+        let at_c = (c, c, 1.0);
+        let mut best = (f64::INFINITY, self.rest_edge, c, self.reflectivity);
+        rest_grid(
+            &self.template,
+            samples,
             &mut best,
             (self.rest_edge - SEARCH_PX, self.rest_edge + SEARCH_PX, 0.05),
+            at_c,
             (0.0, 1.0, 0.05),
         );
         for step in [0.01, 0.001] {
-            let (_, e, rho) = best;
-            search(
+            let (_, e, _, rho) = best;
+            rest_grid(
+                &self.template,
+                samples,
                 &mut best,
                 (e - 5.0 * step, e + 5.0 * step, step),
-                (
-                    (rho - 5.0 * step).max(0.0),
-                    (rho + 5.0 * step).min(1.0),
-                    step,
-                ),
+                at_c,
+                rho_about(rho, step),
             );
         }
-        best
+        let (ssr, e, _, rho) = best;
+        (ssr, e, rho)
     }
 
     /// The edge row of one frame's window, fitted within ±[`SEARCH_PX`] of its
@@ -495,6 +472,38 @@ fn rest_samples(rest: &BandWindow, rest_edge0: f64) -> Vec<(f64, f64)> {
         .filter(|&(y, _)| y <= last)
         .map(|(y, v)| (y, v / level))
         .collect()
+}
+
+/// The rest fit's grid search: every (ρ, c, e) of the three (start, end, step)
+/// ranges, keeping in `best` = (SSR, e, c, ρ) the least SSR of the model (edge e,
+/// plate line e + c, reflectivity ρ) against the rest frames' `samples`.
+fn rest_grid(
+    template: &EdgeTemplate,
+    samples: &[(f64, f64)],
+    best: &mut (f64, f64, f64, f64),
+    e_range: (f64, f64, f64),
+    c_range: (f64, f64, f64),
+    rho_range: (f64, f64, f64),
+) {
+    for rho in steps(rho_range) {
+        for c in steps(c_range) {
+            for e in steps(e_range) {
+                let ssr = best_gain_ssr(samples, |y| model_value(template, y, e, e + c, rho));
+                if ssr < best.0 {
+                    *best = (ssr, e, c, rho);
+                }
+            }
+        }
+    }
+}
+
+/// ρ ± 5 `step`s, within [0, 1].
+fn rho_about(rho: f64, step: f64) -> (f64, f64, f64) {
+    (
+        (rho - 5.0 * step).max(0.0),
+        (rho + 5.0 * step).min(1.0),
+        step,
+    )
 }
 
 /// The model's normalised value at row centre `y` (module docs).
