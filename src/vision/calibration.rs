@@ -31,6 +31,8 @@
 //! sub-pixel by the area of its step (`profile::area_edge`), and averaged over
 //! the rest frames.
 
+use std::ops::Range;
+
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -301,41 +303,66 @@ pub fn calibrate_at_rest(
         super::RimHeight::Edge { edge_row, .. } => Some(*edge_row),
         _ => None,
     };
-    let mut rest_edges = vec![edge_row(&ref_rim)];
-    // Detected points summed over the rest frames: their mean is the calibration.
-    let mut sum = detected.map(|d| [d.x_l, d.x_r, d.z_t, d.z_base]);
+    // Every frame's detected points and rim height, the reference frame last. Mains
+    // flicker scales the whole picture by a gain (±10 %), which moves a fixed level's
+    // crossing of a blurred edge by tenths of a pixel: each frame is read at the
+    // reference's level times its gain, the ratio of its disk side's brightness to the
+    // reference's.
+    let side = SideLevel::new(&calibration, reference);
+    let mut points = Vec::with_capacity(frames.len());
+    let mut rims = Vec::with_capacity(frames.len());
     for (k, f) in others.iter().enumerate() {
         let index = first_index + k;
-        if let Some(d) = detected {
+        let threshold = side.gain(f).map_or(threshold, |gain| Threshold {
+            gamma: (threshold.gamma * gain).clamp(MIN_GAMMA, 1.0 - MIN_GAMMA),
+            ..threshold
+        });
+        if detected.is_some() {
             let here = calibrate_frame(f, index, &threshold, config)?;
-            let pairs = [
-                (here.x_l, d.x_l),
-                (here.x_r, d.x_r),
-                (here.z_t, d.z_t),
-                (here.z_base, d.z_base),
-            ];
-            for (p, ((a, b), is_given)) in pairs.iter().zip(given_flags).enumerate() {
-                if !is_given && (a - b).abs() > tol {
-                    return Err(not_at_rest(index, ref_index, POINT_NAMES[p], a - b, tol));
-                }
-            }
-            if let Some(sum) = sum.as_mut() {
-                for (s, (a, _)) in sum.iter_mut().zip(pairs) {
-                    *s += a;
-                }
-            }
+            points.push([here.x_l, here.x_r, here.z_t, here.z_base]);
         }
-        let rim = gauge.measure(f, index)?;
-        rest_edges.push(edge_row(&rim));
-        let shift = match (rim.z_rim_px(), ref_rim.z_rim_px()) {
-            (Some(a), Some(b)) => a - b,
-            (None, None) => 0.0,
-            _ => f64::INFINITY,
-        };
-        if shift.abs() > tol {
-            return Err(not_at_rest(index, ref_index, "the rim edge", shift, tol));
+        let gauge = RimGauge::new(&calibration, &threshold, config, f.width, f.height)?;
+        rims.push(gauge.measure(f, index)?);
+    }
+    if let Some(d) = detected {
+        points.push([d.x_l, d.x_r, d.z_t, d.z_base]);
+    }
+    rims.push(ref_rim);
+    // At rest every frame shows the same picture up to sensor and coding noise: each
+    // point must stay within the tolerance of its median over the frames. The median,
+    // not one frame, is the reference, so that one frame's coding noise (a codec's
+    // copy refreshed between them) does not make the others look moved.
+    let last = first_index + others.len();
+    for p in (0..4).filter(|&p| !given_flags[p]) {
+        let values: Vec<f64> = points.iter().map(|q| q[p]).collect();
+        check_still(&values, first_index, last, POINT_NAMES[p], tol)?;
+    }
+    let heights: Option<Vec<f64>> = rims.iter().map(|r| r.z_rim_px()).collect();
+    match heights {
+        Some(heights) => check_still(&heights, first_index, last, "the rim edge", tol)?,
+        // The rim is found in some frames and not in others.
+        None => {
+            if let Some(k) = rims.iter().position(|r| r.z_rim_px().is_some()) {
+                return Err(not_at_rest(
+                    first_index + k,
+                    first_index,
+                    last,
+                    "the rim edge",
+                    f64::INFINITY,
+                    tol,
+                ));
+            }
         }
     }
+    let rest_edges: Vec<Option<f64>> = rims.iter().map(edge_row).collect();
+    let sum = detected.map(|_| {
+        points.iter().fold([0.0; 4], |mut s, q| {
+            for (s, q) in s.iter_mut().zip(q) {
+                *s += q;
+            }
+            s
+        })
+    });
     // The frames agree within the tolerance; their mean beats the sensor noise
     // and the coding noise of one frame (tenths of a pixel on a noisy MP4).
     let calibration = match sum {
@@ -379,16 +406,92 @@ pub fn calibrate_at_rest(
     })
 }
 
+/// Smallest γ a gain-scaled rest threshold may take (and 1 − it the largest).
+const MIN_GAMMA: f64 = 1e-3;
+
+/// The brightness of the disk's side in a rest frame: the middle half of the rows
+/// between the top rim and the plate line, over the middle half of the disk's width.
+/// At rest only the light changes between frames, so the ratio of two frames' side
+/// levels is the ratio of their light.
+struct SideLevel {
+    rows: Range<usize>,
+    columns: Range<usize>,
+    reference: f64,
+}
+
+impl SideLevel {
+    fn new(calibration: &Calibration, reference: &FrameView) -> Self {
+        let quarter = 0.25 * calibration.disk_height_px();
+        let rows = (calibration.z_t + quarter).ceil().max(0.0) as usize
+            ..((calibration.z_base - quarter).floor().max(0.0) as usize).min(reference.height);
+        let half = 0.25 * (calibration.x_r - calibration.x_l);
+        let columns = (calibration.x_centre() - half).ceil().max(0.0) as usize
+            ..((calibration.x_centre() + half).floor().max(0.0) as usize).min(reference.width);
+        let mut side = Self {
+            rows,
+            columns,
+            reference: f64::NAN,
+        };
+        side.reference = side.level(reference);
+        side
+    }
+
+    fn level(&self, frame: &FrameView) -> f64 {
+        let (x0, x1) = (self.columns.start, self.columns.end);
+        if self.rows.is_empty() || x0 >= x1 {
+            return f64::NAN;
+        }
+        let sum: f64 = self
+            .rows
+            .clone()
+            .map(|y| f64::from(row_band_mean(frame, y, x0, x1)))
+            .sum();
+        sum / self.rows.len() as f64
+    }
+
+    /// The light of `frame` relative to the reference frame's; `None` when either
+    /// side is black (nothing to compare).
+    fn gain(&self, frame: &FrameView) -> Option<f64> {
+        let gain = self.level(frame) / self.reference;
+        (gain.is_finite() && gain > 0.0).then_some(gain)
+    }
+}
+
+/// Checks that `values`, one per rest frame (frames `first`…`last`), all lie within
+/// `tol` of their median; names the first frame that does not.
+fn check_still(
+    values: &[f64],
+    first: usize,
+    last: usize,
+    point: &'static str,
+    tol: f64,
+) -> Result<(), VisionError> {
+    let median = crate::signal::median(values);
+    match values.iter().position(|v| (v - median).abs() > tol) {
+        Some(k) => Err(not_at_rest(
+            first + k,
+            first,
+            last,
+            point,
+            values[k] - median,
+            tol,
+        )),
+        None => Ok(()),
+    }
+}
+
 fn not_at_rest(
     frame: usize,
-    reference: usize,
+    first: usize,
+    last: usize,
     point: &'static str,
     shift: f64,
     tol: f64,
 ) -> VisionError {
     VisionError::NotAtRest {
         frame,
-        reference,
+        first,
+        last,
         point,
         shift_px: shift.abs(),
         tolerance_px: tol,
@@ -1042,6 +1145,42 @@ mod tests {
     }
 
     #[test]
+    fn flicker_at_rest_is_not_motion() {
+        // A still disk under a lens blur of σ = 2.5 px, lit with mains flicker of
+        // up to ±12 %: at a fixed level, the blurred edges' crossings would move by
+        // ±0.5 px between these frames.
+        let s = SideScene::standard();
+        let gains = [1.0, 0.88, 1.12, 0.94, 1.0];
+        let frames: Vec<Vec<u8>> = gains
+            .iter()
+            .map(|&g| {
+                let mut c = s.dark_plate(0.0, 0.55);
+                c.blur(2.5);
+                c.scale(g);
+                c.to_bgr(0)
+            })
+            .collect();
+        let canvas = s.dark_plate(0.0, 0.55);
+        let views: Vec<FrameView> = frames.iter().map(|b| canvas.view(b, 0)).collect();
+        let config = SideViewConfig::default();
+        let all = calibrate_at_rest(&views, 0, &config, None).expect("a still disk is at rest");
+        // The rest frames' mean points are those of a frame at the reference's light.
+        let one = calibrate_at_rest(&views[4..], 4, &config, None).unwrap();
+        let (a, b) = (all.calibration, one.calibration);
+        for (name, x, y) in [
+            ("x_l", a.x_l, b.x_l),
+            ("x_r", a.x_r, b.x_r),
+            ("z_t", a.z_t, b.z_t),
+            ("z_base", a.z_base, b.z_base),
+        ] {
+            assert!(
+                (x - y).abs() < 0.05,
+                "{name}: {x} over the flicker, {y} in one frame"
+            );
+        }
+    }
+
+    #[test]
     fn rest_check_passes_still_frames_and_fails_moving_ones() {
         let s = SideScene::standard();
         let config = SideViewConfig::default();
@@ -1072,7 +1211,8 @@ mod tests {
                 err,
                 VisionError::NotAtRest {
                     frame: 100,
-                    reference: 102,
+                    first: 100,
+                    last: 102,
                     ..
                 }
             ),

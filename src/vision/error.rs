@@ -61,12 +61,14 @@ pub enum VisionError {
 
     /// The frames meant to show the disk at rest after the halt differ.
     #[error(
-        "frame {frame}: the disk is not at rest: {point} moved {shift_px:.2} px from frame \
-         {reference} (tolerance {tolerance_px:.2} px); calibrate on later frames"
+        "frame {frame}: the disk is not at rest: {point} lies {shift_px:.2} px from its median \
+         over the rest frames {first}–{last} (tolerance {tolerance_px:.2} px); calibrate on \
+         later frames"
     )]
     NotAtRest {
         frame: usize,
-        reference: usize,
+        first: usize,
+        last: usize,
         point: &'static str,
         shift_px: f64,
         tolerance_px: f64,

@@ -115,6 +115,40 @@ impl Canvas {
         }
     }
 
+    /// Multiplies every channel by `gain` (a change of the light).
+    pub fn scale(&mut self, gain: f64) {
+        for v in self.px.iter_mut().flatten() {
+            *v *= gain;
+        }
+    }
+
+    /// Blurs with a Gaussian of standard deviation `sigma` px (separable, kernel
+    /// cut at 4σ, edges clamped): a lens out of focus.
+    pub fn blur(&mut self, sigma: f64) {
+        let reach = (4.0 * sigma).ceil() as isize;
+        let kernel: Vec<f64> = (-reach..=reach)
+            .map(|k| (-0.5 * (k as f64 / sigma).powi(2)).exp())
+            .collect();
+        let total: f64 = kernel.iter().sum();
+        let (w, h) = (self.w as isize, self.h as isize);
+        for (dx, dy) in [(1, 0), (0, 1)] {
+            let src = self.px.clone();
+            for r in 0..h {
+                for c in 0..w {
+                    let mut acc = [0.0; 3];
+                    for (k, weight) in (-reach..=reach).zip(&kernel) {
+                        let (cc, rr) = ((c + k * dx).clamp(0, w - 1), (r + k * dy).clamp(0, h - 1));
+                        let p = src[(rr * w + cc) as usize];
+                        for j in 0..3 {
+                            acc[j] += weight * p[j];
+                        }
+                    }
+                    self.px[(r * w + c) as usize] = acc.map(|v| v / total);
+                }
+            }
+        }
+    }
+
     /// 8-bit bytes in BGR order (as OpenCV delivers frames), with `pad` spare
     /// bytes at the end of every row.
     pub fn to_bgr(&self, pad: usize) -> Vec<u8> {
