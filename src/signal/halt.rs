@@ -3,7 +3,9 @@
 //!
 //! A disk that has fallen flat does not rise again, and before that its rim rises
 //! once per precession turn, a turn that shortens towards the halt (to a few ms at
-//! 480 fps). So a span as long as the rest tail with no rise means the disk lies flat:
+//! 480 fps), with an amplitude that only decays. So a span with no rise as long as
+//! the rest tail, or as three of the final turns (two turns missed, whatever the
+//! sampling's phase), means the disk lies flat or moves below the threshold for good:
 //! t_φ is the last rise before the first such span, and a later lone excursion
 //! (an H.264 refresh frame, 50 frames on, read 0.15 px high on the open footage) is
 //! noise, not motion resumed. After its last rise the rim comes down to the plate:
@@ -56,6 +58,14 @@ const OSCILLATION_TROUGH: f64 = -0.45;
 /// sensor noise) and refreshes a few, which read up to 0.2 px off: the band covers
 /// those.
 const BAND_WIDENING: f64 = 1.5;
+/// Turns over which the final precession period is taken (the median interval).
+const PERIOD_TURNS: usize = 3;
+/// A span without a rise this many final turns long ends the motion (below the rest
+/// tail's span): the oscillation's amplitude only decays towards the halt, so once
+/// it has stayed below the threshold for whole turns, a later rise is the codec's or
+/// the sensor's, not the disk's. Two turns missed, with the sampling's phase: three
+/// periods from one rise to the next.
+const MISSED_TURNS: f64 = 3.0;
 /// Re-measurements of the rest segment before t_φ is taken as settled.
 const MAX_HALT_ITERATIONS: usize = 8;
 /// Fewest rim heights a rest tail needs to measure its noise.
@@ -73,11 +83,13 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    oscillation (autocorrelation below −0.45 at some lag and above 0.6 at a
 ///    later one, up to 24 frames, checked
 ///    when the tail's spread exceeds twice `noise_floor`).
-/// 3. t_φ is the last frame of motion, the last rise before the first span of
-///    `rest_tail_s` with none (module docs); the noise is then re-measured over
+/// 3. t_φ is the last frame of motion, the last rise before the first span with
+///    none as long as `rest_tail_s` or [`MISSED_TURNS`] final turns (the median
+///    interval of the last [`PERIOD_TURNS`] turns' peaks; module docs); the noise is
+///    then re-measured over
 ///    every frame after t_φ, the threshold raised to [`BAND_WIDENING`] × the deepest
 ///    reading below the rest level there (noise: the rim is never below its rest)
-///    and × the highest reading more than a rest span after t_φ (noise: a flat disk
+///    and × the highest reading more than that span after t_φ (noise: a flat disk
 ///    does not rise again), and t_φ found again, until it settles.
 /// 4. t_φ then follows the final descent: each next frame that lies lower than the
 ///    one before and more than σ above the rest level is still motion.
@@ -130,27 +142,46 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             correlation,
         });
     }
-    // The last frame of motion: the last rise before the first span of
-    // `rest_tail_s` without one (module docs: a disk lying flat does not rise again).
+    // The last frame of motion: the last rise before the first span without one
+    // that is as long as the rest tail or as [`MISSED_TURNS`] turns (module docs: a
+    // disk lying flat does not rise again, and a decaying oscillation that stays below
+    // the threshold for whole turns does not rise above it again either).
     let last_moving = |level: f64, threshold: f64| {
-        let mut rises = samples
-            .iter()
-            .copied()
-            .filter(|&i| moving(i, level, threshold));
-        let mut last = rises.next()?;
-        for i in rises {
-            if t[i] - t[last] >= config.rest_tail_s {
+        let first = samples.iter().position(|&i| moving(i, level, threshold))?;
+        let mut last = samples[first];
+        // The times of the turns' peaks so far: a rise higher than its neighbours that
+        // stands more than the threshold above the lowest reading since the last one.
+        let mut turns: Vec<f64> = Vec::new();
+        let mut low = level;
+        let span = |turns: &[f64]| {
+            turn_period(turns).map_or(config.rest_tail_s, |p| {
+                (MISSED_TURNS * p).min(config.rest_tail_s)
+            })
+        };
+        for (n, &i) in samples.iter().enumerate().skip(first + 1) {
+            if !moving(i, level, threshold) {
+                low = low.min(z_rim[i]);
+                continue;
+            }
+            if t[i] - t[last] >= span(&turns) {
                 break;
             }
+            let before = z_rim[samples[n - 1]];
+            let after = samples.get(n + 1).map_or(f64::NEG_INFINITY, |&j| z_rim[j]);
+            if z_rim[i] >= before && z_rim[i] > after && z_rim[i] - low > threshold {
+                turns.push(t[i]);
+                low = z_rim[i];
+            }
+            low = low.min(z_rim[i]);
             last = i;
         }
-        Some(last)
+        Some((last, span(&turns)))
     };
     let max_deviation = samples
         .iter()
         .map(|&i| z_rim[i] - level)
         .fold(0.0, f64::max);
-    let Some(first_guess) = last_moving(level, threshold) else {
+    let Some((first_guess, first_span)) = last_moving(level, threshold) else {
         return Err(SignalError::NoMotion {
             threshold,
             max_deviation,
@@ -161,30 +192,30 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // segment is noise: the deepest one, widened as the tail's band is, bounds the
     // noise's own excursions (H.264 refresh frames, 4–6 σ of the copied frames, in
     // either direction) wherever they fall in the segment, not only in the tail.
-    let mut index = first_guess;
+    let (mut index, mut span) = (first_guess, first_span);
     let (mut level, mut noise, mut threshold) = (level, noise, threshold);
     for _ in 0..MAX_HALT_ITERATIONS {
         let rest: Vec<usize> = samples.iter().copied().filter(|&i| i > index).collect();
         (level, noise) = rest_statistics(z_rim, &rest, config.noise_floor);
         let below = BAND_WIDENING * rest.iter().map(|&i| level - z_rim[i]).fold(0.0, f64::max);
-        // A frame more than a rest span after t_φ is rest by the definition of t_φ
-        // (a disk lying flat does not rise again), so its rise, a lone excursion
-        // above the threshold included, is noise too.
+        // A frame more than the span that ends the motion after t_φ is rest by the
+        // definition of t_φ (a disk lying flat does not rise again), so its rise, a
+        // lone excursion above the threshold included, is noise too.
         let lone = BAND_WIDENING
             * rest
                 .iter()
-                .filter(|&&i| t[i] - t[index] >= config.rest_tail_s)
+                .filter(|&&i| t[i] - t[index] >= span)
                 .map(|&i| z_rim[i] - level)
                 .fold(0.0, f64::max);
         threshold = (config.motion_sigmas * noise)
             .max(band)
             .max(below)
             .max(lone);
-        let next = last_moving(level, threshold).unwrap_or(index);
+        let (next, next_span) = last_moving(level, threshold).unwrap_or((index, span));
         if next == index {
             break;
         }
-        index = next;
+        (index, span) = (next, next_span);
     }
     // The last rise is the last peak or a frame on its way up; the rim then comes
     // down to the plate, and frames that continue that descent by more than the
@@ -209,6 +240,15 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         rest_frames: samples.iter().filter(|&&i| i > index).count(),
         shifted_t: t.iter().map(|&x| x - t_phi).collect(),
     })
+}
+
+/// The precession turn near the end of the motion: the median interval between the
+/// starts of the last [`PERIOD_TURNS`] + 1 runs of rises (each turn lifts the rim
+/// once), or `None` before there are that many.
+fn turn_period(turn_starts: &[f64]) -> Option<f64> {
+    let recent = turn_starts.get(turn_starts.len().checked_sub(PERIOD_TURNS + 1)?..)?;
+    let intervals: Vec<f64> = recent.windows(2).map(|w| w[1] - w[0]).collect();
+    Some(median(&intervals))
 }
 
 /// Median and robust σ of `z` over `indices`, at least `floor`: the root mean square

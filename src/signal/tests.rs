@@ -226,6 +226,31 @@ fn a_late_lone_excursion_sizes_the_noise_near_the_halt() {
     assert!(halt.threshold > 1.5 * 1.5 * before.threshold * 0.99);
 }
 
+/// A lone excursion within a rest span of the halt but more than three final turns
+/// after it (an H.264 refresh 45 frames after the halt on o08 of the open footage
+/// re-encoded at crf 16, which set t_φ 53 frames late) is noise: the oscillation
+/// only decays, and once it has stayed below the threshold for whole turns it does
+/// not rise above it again.
+#[test]
+fn an_excursion_turns_after_the_halt_is_not_motion() {
+    let (t, z, truth) = clip(NOISE, 1);
+    let config = SignalConfig::default();
+    let before = halt_time(&t, &z, &config).expect("halt");
+    let last = before.index;
+    let rest_span = (config.rest_tail_s / (t[1] - t[0])).ceil() as usize;
+    let turn = 2.0 * std::f64::consts::PI / truth.psi_dot(t[last]);
+    let after = rest_span - 5;
+    assert!(
+        t[last + after] - t[last] > 3.0 * turn,
+        "the excursion comes more than three final turns ({:.1} ms) after the halt",
+        3e3 * turn
+    );
+    let mut spike = z.clone();
+    spike[last + after] = before.rest_level + 2.0 * before.threshold;
+    let halt = halt_time(&t, &spike, &config).expect("halt");
+    assert_eq!(halt.index, last);
+}
+
 /// How far a peak time may be from the truth: a tenth of a frame by the local fit
 /// (observed < 0.05) while ψ̇ changes slowly; half a frame by the parabola (the last,
 /// tiny peak, 5 frames a turn), or in the last 0.03 s, where ψ̇ ∝ τ^{−1/4} changes by
