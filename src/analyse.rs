@@ -731,7 +731,6 @@ fn calibrate_detecting_plate(
 ) -> Result<(CalibrationReport, Plate, String), VisionError> {
     let (lo, hi) = PERSPECTIVE_FACTOR_RANGE;
     let mut fallback = None;
-    let mut first_error = None;
     let mut tried = Vec::new();
     for plate in [Plate::Dark, Plate::Light] {
         let config = SideViewConfig {
@@ -755,16 +754,15 @@ fn calibrate_detecting_plate(
                 ));
                 fallback.get_or_insert((report, plate));
             }
-            Err(e) => {
-                tried.push(format!("{}: {e}", plate_name(plate)));
-                first_error.get_or_insert(e);
-            }
+            Err(e) => tried.push(format!("{}: {e}", plate_name(plate))),
         }
     }
     match fallback {
         Some((report, plate)) => Ok((report, plate, tried.join("; "))),
-        // Every kind failed to calibrate, so the dark plate's error was kept.
-        None => Err(first_error.unwrap_or(VisionError::NoFrames)),
+        // Every kind failed to calibrate: each kind's reason.
+        None => Err(VisionError::PlateNotRecognised {
+            tried: tried.join("; "),
+        }),
     }
 }
 

@@ -58,6 +58,10 @@ const OSCILLATION_TROUGH: f64 = -0.45;
 /// sensor noise) and refreshes a few, which read up to 0.2 px off: the band covers
 /// those.
 const BAND_WIDENING: f64 = 1.5;
+/// The most new readings in a run of risen frames in the rest tail that is still read
+/// as a codec refresh rather than a disk moving at the clip's end: a refresh redraws
+/// the picture in one frame, and the next may still carry part of it.
+const REFRESH_FRAMES: usize = 2;
 /// Turns over which the final precession period is taken (the median interval).
 const PERIOD_TURNS: usize = 3;
 /// A span without a rise this many final turns long ends the motion (below the rest
@@ -79,7 +83,8 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    from 1.4826 × MAD (floored at `noise_floor`); the motion threshold is
 ///    `motion_sigmas` × σ, and at least [`BAND_WIDENING`] × the band of the still
 ///    disk.
-/// 2. The tail must be at rest: no rise in it above the threshold, and no
+/// 2. The tail must be at rest: no rise in it above the threshold but one short run
+///    (at most [`REFRESH_FRAMES`] new readings, a codec refresh), and no
 ///    oscillation (autocorrelation below −0.45 at some lag and above 0.6 at a
 ///    later one, up to 24 frames, checked
 ///    when the tail's spread exceeds twice `noise_floor`).
@@ -124,7 +129,26 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             .fold(0.0, f64::max);
     let threshold = (config.motion_sigmas * noise).max(band);
     let moving = |i: usize, level: f64, threshold: f64| z_rim[i] - level > threshold;
-    if let Some(&i) = tail.iter().rev().find(|&&i| moving(i, level, threshold)) {
+    // A disk still moving at the clip's end lifts its rim once a turn, turn after turn,
+    // or holds it up: the tail is refused for rises in two runs or more, or in one
+    // run of more than [`REFRESH_FRAMES`] readings. A frame that repeats the previous
+    // frame's reading exactly is the codec's copy of that picture (a moving rim, or a
+    // still one under sensor noise, never reads the same twice), no new reading: at
+    // crf 30 a still disk's picture is redrawn every 20–30 frames and held, 0.25 px
+    // up or down, in between. One short run alone is such a redraw, which the halt
+    // below then measures as noise.
+    let runs = rise_runs(&tail, |i| moving(i, level, threshold));
+    let readings = |run: &[usize]| {
+        run.iter()
+            .filter(|&&i| i == 0 || z_rim[i] != z_rim[i - 1])
+            .count()
+    };
+    if runs.len() > 1
+        || runs
+            .first()
+            .is_some_and(|run| readings(run) > REFRESH_FRAMES)
+    {
+        let i = *runs.last().and_then(|run| run.last()).expect("a rise");
         return Err(SignalError::TailNotAtRest {
             tail_start,
             t_moving: t[i],
@@ -249,6 +273,23 @@ fn turn_period(turn_starts: &[f64]) -> Option<f64> {
     let recent = turn_starts.get(turn_starts.len().checked_sub(PERIOD_TURNS + 1)?..)?;
     let intervals: Vec<f64> = recent.windows(2).map(|w| w[1] - w[0]).collect();
     Some(median(&intervals))
+}
+
+/// The runs of consecutive `indices` (consecutive within the slice) for which
+/// `rises` holds.
+fn rise_runs(indices: &[usize], rises: impl Fn(usize) -> bool) -> Vec<Vec<usize>> {
+    let mut runs: Vec<Vec<usize>> = Vec::new();
+    let mut previous_rose = false;
+    for &i in indices {
+        let rose = rises(i);
+        match (rose, previous_rose, runs.last_mut()) {
+            (true, true, Some(run)) => run.push(i),
+            (true, _, _) => runs.push(vec![i]),
+            _ => {}
+        }
+        previous_rose = rose;
+    }
+    runs
 }
 
 /// Median and robust σ of `z` over `indices`, at least `floor`: the root mean square

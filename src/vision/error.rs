@@ -74,6 +74,13 @@ pub enum VisionError {
         tolerance_px: f64,
     },
 
+    /// Neither plate kind could be calibrated on the rest frames.
+    #[error(
+        "the plate's kind was not recognised: {tried}; if you know it, give `plate` \
+         (\"dark\" or \"light\") in the config"
+    )]
+    PlateNotRecognised { tried: String },
+
     /// A rest check was asked for on no frames.
     #[error("no frames given for the calibration (at least one rest frame is needed)")]
     NoFrames,
