@@ -732,6 +732,7 @@ fn calibrate_detecting_plate(
     let (lo, hi) = PERSPECTIVE_FACTOR_RANGE;
     let mut fallback = None;
     let mut tried = Vec::new();
+    let mut errors = Vec::new();
     for plate in [Plate::Dark, Plate::Light] {
         let config = SideViewConfig {
             plate,
@@ -754,15 +755,28 @@ fn calibrate_detecting_plate(
                 ));
                 fallback.get_or_insert((report, plate));
             }
-            Err(e) => tried.push(format!("{}: {e}", plate_name(plate))),
+            Err(e) => {
+                tried.push(format!("{}: {e}", plate_name(plate)));
+                errors.push(e);
+            }
         }
     }
     match fallback {
         Some((report, plate)) => Ok((report, plate, tried.join("; "))),
-        // Every kind failed to calibrate: each kind's reason.
-        None => Err(VisionError::PlateNotRecognised {
-            tried: tried.join("; "),
-        }),
+        // Every kind failed to calibrate. For the same reason (a disk not yet at rest,
+        // say), that reason; for different ones, each kind's.
+        None => match &errors[..] {
+            [first, rest @ ..]
+                if rest
+                    .iter()
+                    .all(|e| std::mem::discriminant(e) == std::mem::discriminant(first)) =>
+            {
+                Err(first.clone())
+            }
+            _ => Err(VisionError::PlateNotRecognised {
+                tried: tried.join("; "),
+            }),
+        },
     }
 }
 

@@ -187,7 +187,10 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
                 low = low.min(z_rim[i]);
                 continue;
             }
-            if t[i] - t[last] >= span(&turns) {
+            // A gap ends the motion when it lasts the span and holds readings enough to
+            // show it (a run of frames without an edge is no evidence of rest).
+            let readings = samples[..n].iter().rev().take_while(|&&k| k > last).count();
+            if t[i] - t[last] >= span(&turns) && readings >= MIN_REST_FRAMES {
                 break;
             }
             let before = z_rim[samples[n - 1]];
@@ -195,8 +198,9 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             if z_rim[i] >= before && z_rim[i] > after && z_rim[i] - low > threshold {
                 turns.push(t[i]);
                 low = z_rim[i];
+            } else {
+                low = low.min(z_rim[i]);
             }
-            low = low.min(z_rim[i]);
             last = i;
         }
         Some((last, span(&turns)))
@@ -267,10 +271,10 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
 }
 
 /// The precession turn near the end of the motion: the median interval between the
-/// starts of the last [`PERIOD_TURNS`] + 1 runs of rises (each turn lifts the rim
-/// once), or `None` before there are that many.
-fn turn_period(turn_starts: &[f64]) -> Option<f64> {
-    let recent = turn_starts.get(turn_starts.len().checked_sub(PERIOD_TURNS + 1)?..)?;
+/// last [`PERIOD_TURNS`] + 1 turns' peaks (each turn lifts the rim once), or `None`
+/// before there are that many.
+fn turn_period(peaks: &[f64]) -> Option<f64> {
+    let recent = peaks.get(peaks.len().checked_sub(PERIOD_TURNS + 1)?..)?;
     let intervals: Vec<f64> = recent.windows(2).map(|w| w[1] - w[0]).collect();
     Some(median(&intervals))
 }

@@ -204,8 +204,8 @@ pub struct CalibrationReport {
     pub threshold: Threshold,
     /// Sources of x_l, x_r, z_t, z_base, in that order.
     pub sources: [PointSource; 4],
-    /// Index of the reference rest frame (the last one given); the detected
-    /// points are the mean over all the rest frames checked.
+    /// Index of the reference rest frame (the last one given); each detected
+    /// point is the mean over the rest frames that agree with its median.
     pub frame: usize,
     /// How many frames the rest check compared (including the rest frame).
     pub frames_checked: usize,
@@ -215,9 +215,12 @@ const POINT_NAMES: [&str; 4] = ["x_l", "x_r", "z_t", "z_base"];
 
 /// Calibrates on `frames` (frames from the end of the clip, after the halt;
 /// `frames[0]` has clip index `first_index`) and checks that all of them show
-/// the disk at rest: every detected point, and the rim edge on the centre line,
-/// must stay within `config.rest_tolerance_px` of the last frame's. Each
-/// detected point is then the mean over the frames.
+/// the disk at rest. Each frame is read at the last (reference) frame's level times
+/// its light gain; the rim edge on the centre line must stay within
+/// `config.rest_tolerance_px` of its median over the frames, and no frame may have
+/// two detected points (one, when only one is detected) farther than that from
+/// theirs ([`moved_frame`]). Each detected point is then the mean over the frames
+/// that agree with its median.
 ///
 /// γ is `config.gamma`, or Otsu's on the last frame.
 pub fn calibrate_at_rest(
@@ -348,7 +351,12 @@ pub fn calibrate_at_rest(
         Some(heights) => check_still(&heights, first_index, last, "the rim edge", tol)?,
         // The rim is found in some frames and not in others.
         None => {
-            if let Some(k) = rims.iter().position(|r| r.z_rim_px().is_some()) {
+            // Name the first frame that disagrees with the reference (the last).
+            let reference_found = rims.last().is_some_and(|r| r.z_rim_px().is_some());
+            if let Some(k) = rims
+                .iter()
+                .position(|r| r.z_rim_px().is_some() != reference_found)
+            {
                 return Err(not_at_rest(
                     first_index + k,
                     first_index,
@@ -367,6 +375,7 @@ pub fn calibrate_at_rest(
     let calibration = match detected {
         Some(_) => {
             let [x_l, x_r, z_t, z_base] = std::array::from_fn(|p| {
+                // The median itself agrees, so the mean is over one frame at least.
                 let agree: Vec<f64> = points
                     .iter()
                     .map(|q| q[p])
@@ -462,17 +471,28 @@ impl SideLevel {
     }
 }
 
-/// The median of each calibration point over the rest frames (NaN for none).
+/// The lower median of `values`: one of them (the middle one, or the lower of the
+/// two middle ones), so that with two frames the reference is one frame's reading
+/// and the tolerance is not in effect doubled; NaN for none.
+fn lower_median(values: &[f64]) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    v.get(v.len().saturating_sub(1) / 2)
+        .copied()
+        .unwrap_or(f64::NAN)
+}
+
+/// The lower median of each calibration point over the rest frames.
 fn point_medians(points: &[[f64; 4]]) -> [f64; 4] {
     std::array::from_fn(|p| {
         let values: Vec<f64> = points.iter().map(|q| q[p]).collect();
-        crate::signal::median(&values)
+        lower_median(&values)
     })
 }
 
 /// The first rest frame in which the disk moved, with the first point that moved and
 /// by how much: a frame moved when two or more of its detected points (not
-/// `given`) lie more than `tol` from their medians. A still disk's frames differ only
+/// `given`; one, when only one is detected) lie more than `tol` from their medians. A still disk's frames differ only
 /// by noise; a disk still rocking moves its top and its bottom together, one still
 /// sliding its left and right ends, while the codec's refresh of one frame's picture
 /// moves one point (0.76 px at z_base on a light plate at crf 30, the others within
@@ -483,11 +503,13 @@ fn moved_frame(
     given: [bool; 4],
     tol: f64,
 ) -> Option<(usize, usize, f64)> {
+    let needed = given.iter().filter(|&&g| !g).count().min(2);
     points.iter().enumerate().find_map(|(k, q)| {
         let moved: Vec<usize> = (0..4)
             .filter(|&p| !given[p] && (q[p] - medians[p]).abs() > tol)
             .collect();
-        (moved.len() >= 2).then(|| (k, moved[0], (q[moved[0]] - medians[moved[0]]).abs()))
+        (needed > 0 && moved.len() >= needed)
+            .then(|| (k, moved[0], (q[moved[0]] - medians[moved[0]]).abs()))
     })
 }
 
@@ -500,7 +522,7 @@ fn check_still(
     point: &'static str,
     tol: f64,
 ) -> Result<(), VisionError> {
-    let median = crate::signal::median(values);
+    let median = lower_median(values);
     match values.iter().position(|v| (v - median).abs() > tol) {
         Some(k) => Err(not_at_rest(
             first + k,
@@ -1198,6 +1220,16 @@ mod tests {
         let (frame, point, shift) = moved_frame(&points, &medians, [false; 4], 0.5).unwrap();
         assert_eq!((frame, point), (1, 0));
         assert!((shift - 0.8).abs() < 1e-12);
+        // With z_base the only point detected, its move alone is the disk's.
+        let only_base = [true, true, true, false];
+        assert_eq!(
+            moved_frame(&points, &medians, only_base, 0.5).map(|m| (m.0, m.1)),
+            Some((3, 3))
+        );
+        // Two frames: the reference is one frame's reading, not their midpoint, so two
+        // readings 0.8 px apart (0.4 from a midpoint) do not pass as still.
+        let two = [still, [100.8, 300.8, 50.0, 90.0]];
+        assert!(moved_frame(&two, &point_medians(&two), [false; 4], 0.5).is_some());
     }
 
     #[test]

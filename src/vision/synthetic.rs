@@ -125,6 +125,9 @@ impl Canvas {
     /// Blurs with a Gaussian of standard deviation `sigma` px (separable, kernel
     /// cut at 4σ, edges clamped): a lens out of focus.
     pub fn blur(&mut self, sigma: f64) {
+        if sigma <= 0.0 {
+            return;
+        }
         let reach = (4.0 * sigma).ceil() as isize;
         let kernel: Vec<f64> = (-reach..=reach)
             .map(|k| (-0.5 * (k as f64 / sigma).powi(2)).exp())
