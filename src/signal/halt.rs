@@ -90,9 +90,9 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    when the tail's spread exceeds twice `noise_floor`).
 /// 3. t_φ is the last frame of motion, the last rise before the first span with
 ///    none as long as `rest_tail_s` or [`MISSED_TURNS`] final turns (the median
-///    interval of the last [`PERIOD_TURNS`] turns' peaks; module docs); the noise is
-///    then re-measured over
-///    every frame after t_φ, the threshold raised to [`BAND_WIDENING`] × the deepest
+///    interval of the last [`PERIOD_TURNS`] turns' peaks; module docs) and holding
+///    [`MIN_REST_FRAMES`] readings; the noise is then re-measured over every frame
+///    after t_φ, the threshold raised to [`BAND_WIDENING`] × the deepest
 ///    reading below the rest level there (noise: the rim is never below its rest)
 ///    and × the highest reading more than that span after t_φ (noise: a flat disk
 ///    does not rise again), and t_φ found again, until it settles.
