@@ -172,7 +172,8 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // the threshold for whole turns does not rise above it again either).
     let last_moving = |level: f64, threshold: f64| {
         let first = samples.iter().position(|&i| moving(i, level, threshold))?;
-        let mut last = samples[first];
+        // The last rise, as a position in `samples` and as a frame index.
+        let (mut last_n, mut last) = (first, samples[first]);
         // The times of the turns' peaks so far: a rise higher than its neighbours that
         // stands more than the threshold above the lowest reading since the last one.
         let mut turns: Vec<f64> = Vec::new();
@@ -189,7 +190,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             }
             // A gap ends the motion when it lasts the span and holds readings enough to
             // show it (a run of frames without an edge is no evidence of rest).
-            let readings = samples[..n].iter().rev().take_while(|&&k| k > last).count();
+            let readings = n - last_n - 1;
             if t[i] - t[last] >= span(&turns) && readings >= MIN_REST_FRAMES {
                 break;
             }
@@ -201,7 +202,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             } else {
                 low = low.min(z_rim[i]);
             }
-            last = i;
+            (last_n, last) = (n, i);
         }
         Some((last, span(&turns)))
     };

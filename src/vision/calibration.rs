@@ -491,12 +491,13 @@ fn point_medians(points: &[[f64; 4]]) -> [f64; 4] {
 }
 
 /// The first rest frame in which the disk moved, with the first point that moved and
-/// by how much: a frame moved when two or more of its detected points (not
-/// `given`; one, when only one is detected) lie more than `tol` from their medians. A still disk's frames differ only
-/// by noise; a disk still rocking moves its top and its bottom together, one still
-/// sliding its left and right ends, while the codec's refresh of one frame's picture
-/// moves one point (0.76 px at z_base on a light plate at crf 30, the others within
-/// 0.2 px). The rim edge, the precise reading, is checked on its own.
+/// by how much: a frame moved when two or more of its detected points (not `given`;
+/// one, when only one is detected) lie more than `tol` from their medians. A still
+/// disk's frames differ only by noise; a disk still rocking moves its top and its
+/// bottom together, one still sliding its left and right ends, while the codec's
+/// refresh of one frame's picture moves one point (0.76 px at z_base on a light plate
+/// at crf 30, the others within 0.2 px). The rim edge, the precise reading, is
+/// checked on its own.
 fn moved_frame(
     points: &[[f64; 4]],
     medians: &[f64; 4],
