@@ -30,8 +30,9 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::config::{ExperimentConfig, HaltChoice, Plate};
-use crate::energy::{self, FitError, HaltTime, PowerLawFit};
+use crate::energy::{self, FitError, HaltSighting, HaltTime, PowerLawFit};
 use crate::footage::{self, CaptureFps, FootageError, FrameSource, FrameTiming, FrameView};
+use crate::model::closed_form;
 use crate::model::params::DiskParams;
 use crate::overlay::{FrameKeeper, KeptFrames, LayoutGeometry, OverlaySpec};
 use crate::report::diagnostics;
@@ -1447,6 +1448,9 @@ pub fn analyse_clip_keeping(
     let halt = match config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default() {
         HaltChoice::Measured => HaltTime::Fixed(0.0),
         HaltChoice::Free => HaltTime::Free,
+        HaltChoice::Combined => {
+            HaltTime::Sighted(halt_sighting(&params, series.halt.threshold, 1.0 / fps.fps))
+        }
     };
     let fit_err = |error| AnalyseError::Fit {
         path: clip.to_path_buf(),
@@ -1589,6 +1593,22 @@ fn png(image: &image::RgbImage) -> Vec<u8> {
 /// A difference across a timestamp gap counts one turn where the gap hid more (its
 /// peaks are missing): there the forward difference is used if it does not cross
 /// the gap, else the peak is left out.
+/// The halt as the footage shows it: motion last seen at t_φ (t = 0 on the fit's
+/// clock), one frame `frame_s` apart, down to a rim rise of `threshold_m` (the halt
+/// detector's), which a peak of stationary rolling reaches at sin φ = z/(2R).
+fn halt_sighting(params: &DiskParams, threshold_m: f64, frame_s: f64) -> HaltSighting {
+    let phi = (threshold_m / (2.0 * params.radius)).clamp(0.0, 1.0).asin();
+    let visible_energy = closed_form::stationary_rolling(params, phi)
+        .map_or(0.0, |(psi_dot, _)| {
+            energy::stationary_rolling_energy(params, phi, psi_dot)
+        });
+    HaltSighting {
+        t_phi: 0.0,
+        frame_s,
+        visible_energy,
+    }
+}
+
 fn peak_energies(params: &DiskParams, series: &StateSeries) -> Vec<EnergySample> {
     let precession = &series.peaks.precession;
     let peaks = &series.peaks.peaks;

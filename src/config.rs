@@ -36,7 +36,7 @@
 //!
 //! [fit]
 //! window_s = 0.5                 # fit the last 0.5 s before the halt
-//! halt = "free"                  # free (t0 fitted) | measured (t0 fixed at the halt)
+//! halt = "combined"              # combined (t0 fitted, with the halt seen) | free (fitted only) | measured (fixed at the halt)
 //! rim_zero_uncertainty_px = 0.08 # 1σ of z_rim's zero, in n's interval (0: left out)
 //! ```
 
@@ -77,10 +77,12 @@ pub enum HaltChoice {
     /// halt is the last frame with visible motion, which comes early by the time
     /// the last sub-threshold rocking takes, and that biases n low.
     Measured,
-    /// t0 a free parameter of the fit (the default): the fitted t0 recovers the
-    /// true halt within a few ms on rendered clips.
-    #[default]
+    /// t0 a free parameter of the fit, from the energy samples alone.
     Free,
+    /// t0 fitted, and combined with the halt seen in the footage as a second
+    /// measurement of it (the default; [`crate::energy::HaltSighting`]).
+    #[default]
+    Combined,
 }
 
 /// The disk: a preset, optionally with measured values overriding it.

@@ -24,7 +24,7 @@ use super::html::{page, png_figure, svg_figure, table, video_figure};
 use super::plot::{Panel, time_panels};
 use super::{ReportError, write_atomic, write_csv, write_json};
 use crate::analyse::{EnergyFit, Experiment};
-use crate::energy;
+use crate::energy::{self, SightingUse};
 use crate::overlay::{OverlayIndex, OverlaySpec, write_measurement_overlays};
 
 #[derive(Serialize)]
@@ -298,6 +298,30 @@ fn fit_row(f: &EnergyFit) -> Vec<String> {
     ]
 }
 
+/// How the halt seen in the footage entered the peaks fit's t0 (times from t_φ).
+fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
+    let seen = format!(
+        "The halt seen in the footage puts t0 at {:+.2} ± {:.2} ms after t_φ (one frame, and {:.2} ms \
+         of motion below the threshold); the energy alone at {:+.2} ± {:.2} ms",
+        1e3 * s.t0_seen,
+        1e3 * s.se_t0_seen,
+        1e3 * s.unseen_s,
+        1e3 * s.t0_fitted,
+        1e3 * s.se_t0_fitted
+    );
+    if s.combined {
+        format!(
+            "{seen}. Combined: t0 = {:+.2} ms, n moved with it.",
+            1e3 * t0
+        )
+    } else {
+        format!(
+            "{seen}. They disagree by more than 3 standard deviations, so t0 is the energy's \
+             alone: check the halt frame."
+        )
+    }
+}
+
 /// β̇ at t_φ and the energy eq. (3.6) keeps there, at φ = 0 with θ̇ = β̇ (eq. 3.22):
 /// C/2 β̇² + m/2 (R β̇)² [J].
 fn carried_spin_energy(e: &Experiment) -> Option<(f64, f64)> {
@@ -442,7 +466,7 @@ fn experiment_page(
         vec![
             "fit window".into(),
             format!(
-                "the {} s before the measured halt t_φ, to the last sample; t0 {:?}",
+                "the {} s before the measured halt t_φ, to the last sample; t0: {:?}",
                 plan.window_s, plan.halt
             ),
         ],
@@ -480,6 +504,9 @@ fn experiment_page(
                 made again with it moved by that much).",
                 e.peaks_fit.fit.ci95_n.0, e.peaks_fit.fit.ci95_n.1, e.peaks_fit.fit.points, plan.window_s,
                 1.96 * e.peaks_fit.fit.se_n_zero, plan.rim_zero_uncertainty_px))
+        }
+        @if let Some(s) = e.peaks_fit.fit.halt_sighting {
+            p { (sighting_sentence(&s, e.peaks_fit.fit.t0)) }
         }
         @if let Some(s) = strip {
             p { (format!("Strip stop t_β − t_φ = {:.4} s ({}).", s.rotation_after_flat,
