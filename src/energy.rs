@@ -172,8 +172,9 @@ pub struct SightingUse {
     pub se_t0_seen: f64,
     /// Δ, the time before t0 over which the motion is too small to see [s].
     pub unseen_s: f64,
-    /// t0 and its standard error from the energy alone [s].
+    /// t0 from the energy alone [s].
     pub t0_fitted: f64,
+    /// Standard error of `t0_fitted` [s].
     pub se_t0_fitted: f64,
     /// Whether it was combined: false when the two differ by more than
     /// 3 standard deviations of their difference.
