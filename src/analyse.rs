@@ -32,7 +32,6 @@ use serde::{Deserialize, Serialize};
 use crate::config::{ExperimentConfig, HaltChoice, Plate};
 use crate::energy::{self, FitError, HaltSighting, HaltTime, PowerLawFit};
 use crate::footage::{self, CaptureFps, FootageError, FrameSource, FrameTiming, FrameView};
-use crate::model::closed_form;
 use crate::model::params::DiskParams;
 use crate::overlay::{FrameKeeper, KeptFrames, LayoutGeometry, OverlaySpec};
 use crate::report::diagnostics;
@@ -1583,6 +1582,19 @@ fn png(image: &image::RgbImage) -> Vec<u8> {
     diagnostics::png_bytes(image).unwrap_or_default()
 }
 
+/// The halt as the footage shows it: motion last seen at t_φ (t = 0 on the fit's
+/// clock), one frame `frame_s` apart, down to a rim rise of `threshold_m` (the halt
+/// detector's), which a peak of stationary rolling reaches at sin φ = z/(2R).
+fn halt_sighting(params: &DiskParams, threshold_m: f64, frame_s: f64) -> HaltSighting {
+    let phi = (threshold_m / (2.0 * params.radius)).clamp(0.0, 1.0).asin();
+    let visible_energy = energy::stationary_energy_at(params, phi).unwrap_or(0.0);
+    HaltSighting {
+        t_phi: 0.0,
+        frame_s,
+        visible_energy,
+    }
+}
+
 /// Eq. 3.8 at each peak of the window, with ψ̇ by central differences over the
 /// neighbouring peaks, and by eq. 3.11 (the forward difference to the next peak) at
 /// the first. Eq. 3.11 is the mean rate over the following turn: as ψ̇ grows
@@ -1593,22 +1605,6 @@ fn png(image: &image::RgbImage) -> Vec<u8> {
 /// A difference across a timestamp gap counts one turn where the gap hid more (its
 /// peaks are missing): there the forward difference is used if it does not cross
 /// the gap, else the peak is left out.
-/// The halt as the footage shows it: motion last seen at t_φ (t = 0 on the fit's
-/// clock), one frame `frame_s` apart, down to a rim rise of `threshold_m` (the halt
-/// detector's), which a peak of stationary rolling reaches at sin φ = z/(2R).
-fn halt_sighting(params: &DiskParams, threshold_m: f64, frame_s: f64) -> HaltSighting {
-    let phi = (threshold_m / (2.0 * params.radius)).clamp(0.0, 1.0).asin();
-    let visible_energy = closed_form::stationary_rolling(params, phi)
-        .map_or(0.0, |(psi_dot, _)| {
-            energy::stationary_rolling_energy(params, phi, psi_dot)
-        });
-    HaltSighting {
-        t_phi: 0.0,
-        frame_s,
-        visible_energy,
-    }
-}
-
 fn peak_energies(params: &DiskParams, series: &StateSeries) -> Vec<EnergySample> {
     let precession = &series.peaks.precession;
     let peaks = &series.peaks.peaks;

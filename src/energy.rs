@@ -57,6 +57,7 @@
 //!   residuals with ρ = 0.8 it covers the true n in 92–97 % of trials where that
 //!   one covers 47 % (tested).
 
+use crate::model::closed_form;
 use crate::model::params::DiskParams;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -78,6 +79,14 @@ pub fn stationary_rolling_energy(params: &DiskParams, phi: f64, psi_dot: f64) ->
     params.inertia_c / 2.0 * spin_about_axis * spin_about_axis
         + params.inertia_a / 2.0 * (psi_dot * phi.sin()).powi(2)
         + potential_above_flat(params, phi)
+}
+
+/// Energy of stationary rolling at nutation φ [J]: eq. (3.8) with the stationary
+/// precession rate ψ̇(φ) of eq. (4.40) (the sense of ψ̇ does not change it). The error
+/// is [`closed_form::stationary_rolling`]'s, where no stationary rolling exists.
+pub fn stationary_energy_at(params: &DiskParams, phi: f64) -> Result<f64, String> {
+    closed_form::stationary_rolling(params, phi)
+        .map(|(psi_dot, _)| stationary_rolling_energy(params, phi, psi_dot))
 }
 
 /// Energy of the rolling disk in its full state, thesis eq. (3.6) [J], measured from
@@ -1416,9 +1425,9 @@ mod tests {
     /// all motion visible (Δ = 0). Combined with the fit, t0 is closer to the truth than
     /// the fit's own, and within 1.5 times the RMS error of two independent Gaussian
     /// measurements combined by their variances (the fit's t0 errors have heavier
-    /// tails, and the fits left alone keep theirs; 200 noisy series), and the intervals of t0 and of n, with
-    /// n moved by its covariance with t0, still cover the truth at least 90 % of the
-    /// time (binomial(200, 0.95): ≥ 180 is 3.2 sd below the mean). A fit whose t0 lies
+    /// tails, and the fits left alone keep theirs; 200 noisy series), and the
+    /// intervals of t0 and of n, with n moved by its covariance with t0, still cover
+    /// the truth at least 90 % of the time (binomial(200, 0.95): ≥ 180 is 3.2 sd below the mean). A fit whose t0 lies
     /// more than 3 sd of the difference away is left alone; with Gaussian errors that
     /// is 0.3 % of them, and at most 5 % may be.
     #[test]
@@ -1483,7 +1492,8 @@ mod tests {
 
     /// With the motion below the threshold for Δ before the halt, the sighting's t0 is
     /// later by Δ/2 and less certain: the law E = A_e (t0 − t)^n reaches the visible
-    /// energy E_v = A_e Δ^n exactly Δ before t0.
+    /// energy E_v = A_e Δ^n exactly Δ before t0. Exact energies fix t0 and n better
+    /// than any frame, so combining keeps them at the truth.
     #[test]
     fn motion_too_small_to_see_moves_the_sighting_later() {
         let (t, e, a_e, t0) = thesis_series(0.5);
@@ -1501,6 +1511,12 @@ mod tests {
         assert!((used.t0_seen - (sighting.t_phi + 0.5 * width)).abs() < 1e-12);
         let sd = (width * width / 12.0 + frame_s * frame_s).sqrt();
         assert!((used.se_t0_seen - sd).abs() < 1e-12);
+        // The true halt lies in the window the sighting assumes; on exact energies the
+        // fit knows t0 far better than one frame, so the combination leaves the truth.
+        assert!(sighting.t_phi < t0 && t0 < sighting.t_phi + width);
+        assert!(used.combined);
+        assert!((fit.t0 - t0).abs() < 1e-9, "t0 {} for {t0}", fit.t0);
+        assert!((fit.n - 0.5).abs() < 1e-9, "n {}", fit.n);
     }
 
     /// An offset every sample shares, as an error of the heights' zero makes, moves n

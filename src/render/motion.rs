@@ -18,7 +18,6 @@
 use serde::{Deserialize, Serialize};
 
 use super::RenderError;
-use crate::energy::stationary_rolling_energy;
 use crate::model::closed_form::{balancing_angle, stationary_divergence_angle, stationary_rolling};
 use crate::model::dynamics::strip_angle;
 use crate::model::params::DiskParams;
@@ -261,8 +260,7 @@ fn stationary_psi_dot(params: &DiskParams, phi: f64, sign: f64) -> Result<f64, R
 
 /// Energy of stationary rolling at nutation φ, eq. (3.8) with ψ̇ of eq. (4.40) [J].
 pub fn stationary_energy_at(params: &DiskParams, phi: f64) -> Result<f64, RenderError> {
-    let psi_dot = stationary_psi_dot(params, phi, 1.0)?;
-    Ok(stationary_rolling_energy(params, phi, psi_dot))
+    crate::energy::stationary_energy_at(params, phi).map_err(RenderError::invalid)
 }
 
 /// The nutation angle φ whose stationary-rolling energy (eq. 3.8) is `energy` [J]:
@@ -680,6 +678,7 @@ pub fn trajectory_motion(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::energy::stationary_rolling_energy;
     use crate::model::params::Preset;
 
     fn timing() -> Timing {
