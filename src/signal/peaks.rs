@@ -91,10 +91,10 @@ pub struct PeakSeries {
 ///
 /// Peaks are local maxima (a plateau counts once, at its middle) of z_rim − rest
 /// level whose prominence exceeds `prominence_sigmas` × the rest noise (and
-/// `min_prominence`), and the halt's last moving frame when it is such a maximum:
-/// the halt has already told it from noise (it rises above the motion threshold and
-/// the rim rests after it), so it is the last turn's peak whatever its prominence
-/// over the single noisy reading after it (o02 of the open footage: 0.78 px above the
+/// `min_prominence`), and the halt's last moving frame when it is such a maximum
+/// and lower than the peak before it: the halt has already told it from noise (it rises
+/// above the motion threshold and the rim rests after it), so it is the last turn's
+/// peak whatever its prominence over the single noisy reading after it (o02 of the open footage: 0.78 px above the
 /// rest level at the halt frame, a true peak of 0.71 px, with a rest noise of 0.15 px
 /// and a 6σ prominence test of 0.92 px). Each is refined by the local fit of `model` over one oscillation
 /// (module docs), falling back to the parabola through three samples.
@@ -195,14 +195,29 @@ pub(crate) fn extrema(
     let v: Vec<f64> = idx.iter().map(|&i| z_rim[i] - halt.rest_level).collect();
     let min_prominence = (config.prominence_sigmas * halt.noise).max(config.min_prominence);
     let frame = nominal_period(t);
-    let raw: Vec<(usize, f64)> = local_maxima(&v)
+    let maxima: Vec<(usize, f64)> = local_maxima(&v)
         .into_iter()
         .map(|k| (k, prominence(&v, k)))
-        .filter(|&(k, p)| {
-            let last_rise = idx[k] == halt.index && v[k] > halt.threshold;
-            (p > min_prominence || last_rise) && ts[idx[k]] >= from && idx[k] <= halt.index
-        })
+        .filter(|&(k, _)| ts[idx[k]] >= from && idx[k] <= halt.index)
         .collect();
+    let mut raw: Vec<(usize, f64)> = maxima
+        .iter()
+        .copied()
+        .filter(|&(_, p)| p > min_prominence)
+        .collect();
+    // The halt's last rise as the last turn's peak (see above): above the motion
+    // threshold, and lower than the peak before it by more than the noise, as the
+    // rim's amplitude decays (a picture the encoder holds after the halt repeats a
+    // height to 1e-5 px: o05 re-encoded at crf 16, five frames at 0.41 px, t_φ 7.5
+    // frames late).
+    if let (Some(&(k, p)), Some(&(previous, _))) = (maxima.last(), raw.last())
+        && idx[k] == halt.index
+        && k != previous
+        && v[k] > halt.threshold
+        && v[k] < v[previous] - halt.noise
+    {
+        raw.push((k, p));
+    }
     let sample_times: Vec<f64> = idx.iter().map(|&i| ts[i]).collect();
     // Motion samples only (through the halt) for the local fits.
     let fit_end = idx.partition_point(|&i| i <= halt.index);

@@ -237,6 +237,17 @@ fn the_last_rise_at_the_halt_is_the_last_peak() {
         Some(last),
         "the last rise is the last peak"
     );
+    // A last rise not lower than the peak before it by the noise is not the rim's
+    // decaying amplitude (an encoder's held picture after the halt repeats a height):
+    // not a peak.
+    let mut held = small.clone();
+    held[last - 4] = level - 2.0 * noise;
+    held[last - 3] = level + 6.0 * noise;
+    held[last - 2] = level - 2.0 * noise;
+    let halt = halt_time(&t, &held, &config).expect("halt");
+    assert_eq!(halt.index, last);
+    let series = find_peaks(&t, &held, &halt, &thesis_model(), &config).expect("peaks");
+    assert_eq!(series.peaks.last().map(|p| p.index), Some(last - 3));
     // The same rise below the motion threshold is rest: neither motion nor a peak.
     small[last] = level + 0.5 * halt.threshold;
     let halt = halt_time(&t, &small, &config).expect("halt");
