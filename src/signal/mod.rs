@@ -82,7 +82,8 @@
 //!   is checked to be at rest (nothing above the threshold, no
 //!   oscillation), the noise re-measured over the whole rest and t_φ found again.
 //! * **Peaks** ([`find_peaks`]): local maxima with prominence above
-//!   `prominence_sigmas` × noise, in the `window_s` before the halt. At 480 fps the last
+//!   `prominence_sigmas` × noise, in the `window_s` before the halt, and the halt's last
+//!   moving frame when it is a maximum lower than the peak before it. At 480 fps the last
 //!   oscillations have 5–7 frames, so the highest sample misses the true peak (the
 //!   thesis notes the truncation, §3.2.4). Each peak is refined by fitting the rim model
 //!   over 1.5 oscillations with φ = φ₀ + φ₁τ, χ = χ₀ + ωτ + ½ω̇τ² (ψ̇ ∝ τ^{−1/4}
@@ -108,7 +109,7 @@
 //! changes faster than that within a turn, and φ, ψ, ψ̇ and the peak times there carry a
 //! model error (peak times up to half a frame) that the residual scaling of the
 //! standard errors only partly shows. Peaks below `prominence_sigmas` ×
-//! noise (the final tiny oscillations) are not found. The phase-step test needs at least
+//! noise (the final tiny oscillations) are not found, unless at the halt's last frame. The phase-step test needs at least
 //! six frames per oscillation and an oscillation well above the noise.
 
 mod halt;
