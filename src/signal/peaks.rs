@@ -91,13 +91,14 @@ pub struct PeakSeries {
 ///
 /// Peaks are local maxima (a plateau counts once, at its middle) of z_rim − rest
 /// level whose prominence exceeds `prominence_sigmas` × the rest noise (and
-/// `min_prominence`), and the halt's last moving frame when it is such a maximum
-/// and lower than the peak before it: the halt has already told it from noise (it rises
-/// above the motion threshold and the rim rests after it), so it is the last turn's
-/// peak whatever its prominence over the single noisy reading after it (o02 of the open footage: 0.78 px above the
-/// rest level at the halt frame, a true peak of 0.71 px, with a rest noise of 0.15 px
-/// and a 6σ prominence test of 0.92 px). Each is refined by the local fit of `model` over one oscillation
-/// (module docs), falling back to the parabola through three samples.
+/// `min_prominence`), and the halt's last moving frame when it is such a maximum and
+/// lower than the peak before it by more than the noise: the halt has already told it
+/// from noise (it rises above the motion threshold and the rim rests after it), so it
+/// is the last turn's peak whatever its prominence over the single noisy reading after
+/// it (o02 of the open footage: 0.78 px above the rest level at the halt frame, a true
+/// peak of 0.71 px, with a rest noise of 0.15 px and a 6σ prominence test of 0.92 px).
+/// Each is refined by the local fit of `model` over one oscillation (module docs),
+/// falling back to the parabola through three samples.
 ///
 /// Errors with [`SignalError::TooFewPeaks`] when fewer than three peaks lie in the
 /// window.
