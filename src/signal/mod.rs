@@ -109,8 +109,9 @@
 //! changes faster than that within a turn, and φ, ψ, ψ̇ and the peak times there carry a
 //! model error (peak times up to half a frame) that the residual scaling of the
 //! standard errors only partly shows. Peaks below `prominence_sigmas` ×
-//! noise (the final tiny oscillations) are not found, unless at the halt's last frame. The phase-step test needs at least
-//! six frames per oscillation and an oscillation well above the noise.
+//! noise (the final tiny oscillations) are not found, unless at the halt's last frame.
+//! The phase-step test needs at least six frames per oscillation and an oscillation
+//! well above the noise.
 
 mod halt;
 mod local;
