@@ -209,6 +209,38 @@ fn the_final_descent_belongs_to_the_motion() {
     assert_eq!(halt.index, last + 1);
 }
 
+/// The first still picture after the last rise, read 2.5 σ over the later rest
+/// level, with the frames after it reading the same (an encoder's still picture that
+/// settles on the later level only at its next refresh: o05 and o08 of the open
+/// footage), is rest, not the final descent: the descent is measured against the
+/// picture right after it. The same frame followed by readings at the later level
+/// is still the descent.
+#[test]
+fn a_held_still_picture_is_not_the_final_descent() {
+    let (t, z, _) = clip(NOISE, 1);
+    let config = SignalConfig::default();
+    let before = halt_time(&t, &z, &config).expect("halt");
+    let (last, level, noise) = (before.index, before.rest_level, before.noise);
+    let mut held = z.clone();
+    for reading in &mut held[last + 1..last + 10] {
+        *reading = level + 2.5 * noise;
+    }
+    assert!(
+        held[last + 1] < held[last],
+        "the held picture lies below the last rise"
+    );
+    let halt = halt_time(&t, &held, &config).expect("halt");
+    assert_eq!(halt.index, last, "the held still picture is rest");
+    let mut descent = z.clone();
+    descent[last + 1] = level + 2.5 * noise;
+    let halt = halt_time(&t, &descent, &config).expect("halt");
+    assert_eq!(
+        halt.index,
+        last + 1,
+        "one frame over the rest after it descends"
+    );
+}
+
 /// The halt's last moving frame, higher than its neighbours, is the last turn's peak
 /// even when it stands less than the peaks' prominence test above them: the halt has
 /// told it from noise already (o02 of the open footage: 5.1 σ above the rest at the
