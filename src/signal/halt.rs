@@ -9,8 +9,9 @@
 //! t_φ is the last rise before the first such span, and a later lone excursion
 //! (an H.264 refresh frame, 50 frames on, read 0.15 px high on the open footage) is
 //! noise, not motion resumed. After its last rise the rim comes down to the plate:
-//! the frames that continue that descent above the still picture that follows them
-//! (by more than the noise σ, not necessarily the threshold) are motion too.
+//! the frames that continue that descent above both the rest level and the still
+//! picture that follows them (by more than the noise σ, not necessarily the
+//! threshold) are motion too.
 //!
 //! Motion is one-sided: the rim of a rolling disk is never below its rest on the plate
 //! (z_rim = R sin φ (1 + cos χ) ≥ 0, see the module docs of `signal`), so a reading
@@ -249,17 +250,17 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     }
     // The last rise is the last peak or a frame on its way up; the rim then comes
     // down to the plate, and frames that continue that descent by more than the
-    // noise above the rest that follows them are motion still, below the threshold
-    // or not (o03 of the open footage: 0.33 and 0.22 px above the rest level after a
-    // last peak of 1.23 px, with a rest noise σ of 0.18 px and a 5σ threshold; the
-    // truth 0.23 and 0.29 px, at rest one frame later). They must stand above the
-    // picture right after them as well (the median of the next [`MIN_REST_FRAMES`]
-    // readings), not only above the whole segment's level: an encoder settles on a
-    // still disk over many frames, so its first still pictures may read the edge
-    // above the later level by more than σ, and the frames after them read the same
-    // (o08: 0.056 px over the level, 2.8 σ; o05: the first still picture held at
-    // 0.44 px for the next frames). Against that median alone, white noise would
-    // extend the descent more often (its own noise adds to the test's).
+    // noise above the rest level are motion still, below the threshold or not (o03
+    // of the open footage: 0.33 and 0.22 px above the rest level after a last peak
+    // of 1.23 px, with a rest noise σ of 0.18 px and a 5σ threshold; the truth 0.23
+    // and 0.29 px, at rest one frame later). They must stand as far above the
+    // picture right after them too (the median of the next [`MIN_REST_FRAMES`]
+    // readings): an encoder settles on a still disk over many frames, so its first
+    // still pictures may read the edge above the later level by more than σ, and the
+    // frames after them read the same (o08: 0.056 px over the level, 2.8 σ; o05: the
+    // first still picture held at 0.44 px for the next frames). Against that median
+    // alone, white noise would extend the descent more often (its own noise adds to
+    // the test's).
     while let Some(n) = samples.iter().position(|&i| i > index) {
         let next = samples[n];
         let after: Vec<f64> = samples[n + 1..]
