@@ -91,6 +91,15 @@ fn clip(noise: f64, seed: u64) -> (Vec<f64>, Vec<f64>, Truth) {
     (t, z, truth)
 }
 
+/// The seed-1 clip with the default config and its halt: the setup of the tests that
+/// edit the frames around t_φ.
+fn clip_and_halt() -> (Vec<f64>, Vec<f64>, Truth, SignalConfig, Halt) {
+    let (t, z, truth) = clip(NOISE, 1);
+    let config = SignalConfig::default();
+    let halt = halt_time(&t, &z, &config).expect("halt");
+    (t, z, truth, config, halt)
+}
+
 /// Sub-pixel edge noise of 2 μm (3 % of the thesis's 66 μm pixel, eq. 3.10).
 const NOISE: f64 = 2e-6;
 
@@ -187,9 +196,7 @@ fn lone_excursions_after_the_halt_are_not_motion() {
 /// frame that rises again ends the descent.
 #[test]
 fn the_final_descent_belongs_to_the_motion() {
-    let (t, z, _) = clip(NOISE, 1);
-    let config = SignalConfig::default();
-    let before = halt_time(&t, &z, &config).expect("halt");
+    let (t, z, _, config, before) = clip_and_halt();
     let last = before.index;
     let mut descent = z.clone();
     let level = before.rest_level;
@@ -217,9 +224,7 @@ fn the_final_descent_belongs_to_the_motion() {
 /// is still the descent.
 #[test]
 fn a_held_still_picture_is_not_the_final_descent() {
-    let (t, z, _) = clip(NOISE, 1);
-    let config = SignalConfig::default();
-    let before = halt_time(&t, &z, &config).expect("halt");
+    let (t, z, _, config, before) = clip_and_halt();
     let (last, level, noise) = (before.index, before.rest_level, before.noise);
     let mut held = z.clone();
     for reading in &mut held[last + 1..last + 10] {
@@ -247,9 +252,7 @@ fn a_held_still_picture_is_not_the_final_descent() {
 /// halt frame, a true peak of 0.71 px, missed by the 6σ prominence test).
 #[test]
 fn the_last_rise_at_the_halt_is_the_last_peak() {
-    let (t, z, _) = clip(NOISE, 1);
-    let config = SignalConfig::default();
-    let before = halt_time(&t, &z, &config).expect("halt");
+    let (t, z, _, config, before) = clip_and_halt();
     let (last, level, noise) = (before.index, before.rest_level, before.noise);
     let mut small = z.clone();
     small[last] = level + 5.5 * noise;
@@ -293,9 +296,7 @@ fn the_last_rise_at_the_halt_is_the_last_peak() {
 /// frames after the last peak (0.13 px at frame 589, which set t_φ 2.8 frames late).
 #[test]
 fn a_late_lone_excursion_sizes_the_noise_near_the_halt() {
-    let (t, z, _) = clip(NOISE, 1);
-    let config = SignalConfig::default();
-    let before = halt_time(&t, &z, &config).expect("halt");
+    let (t, z, _, config, before) = clip_and_halt();
     let last = before.index;
     let level = before.rest_level;
     let rest_span = (config.rest_tail_s / (t[1] - t[0])).ceil() as usize;
@@ -319,9 +320,7 @@ fn a_late_lone_excursion_sizes_the_noise_near_the_halt() {
 /// not rise above it again.
 #[test]
 fn an_excursion_turns_after_the_halt_is_not_motion() {
-    let (t, z, truth) = clip(NOISE, 1);
-    let config = SignalConfig::default();
-    let before = halt_time(&t, &z, &config).expect("halt");
+    let (t, z, truth, config, before) = clip_and_halt();
     let last = before.index;
     let rest_span = (config.rest_tail_s / (t[1] - t[0])).ceil() as usize;
     let turn = 2.0 * std::f64::consts::PI / truth.psi_dot(t[last]);
