@@ -8,7 +8,10 @@
 //! sampling's phase), means the disk lies flat or moves below the threshold for good:
 //! t_φ is the last rise before the first such span, and a later lone excursion
 //! (an H.264 refresh frame, 50 frames on, read 0.15 px high on the open footage) is
-//! noise, not motion resumed. After its last rise the rim comes down to the plate:
+//! noise, not motion resumed. Nor is a picture held level for most of a final turn,
+//! whatever its height: the rim comes down to the plate every turn, and an encoder
+//! may show an earlier picture again for several frames after the halt. After its
+//! last rise the rim comes down to the plate:
 //! the frames that continue that descent above both the rest level and the still
 //! picture that follows them (by more than the noise σ, not necessarily the
 //! threshold) are motion too.
@@ -71,6 +74,9 @@ const PERIOD_TURNS: usize = 3;
 /// the sensor's, not the disk's. Two turns missed, with the sampling's phase: three
 /// periods from one rise to the next.
 const MISSED_TURNS: f64 = 3.0;
+/// Fraction of the final turn over which a level run of readings is a held picture,
+/// not the rim's motion ([`held`]).
+const HELD_TURN_FRACTION: f64 = 0.75;
 /// Re-measurements of the rest segment before t_φ is taken as settled.
 const MAX_HALT_ITERATIONS: usize = 8;
 /// Fewest rim heights a rest tail needs to measure its noise.
@@ -92,14 +98,17 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 /// 3. t_φ is the last frame of motion, the last rise before the first span with
 ///    none as long as `rest_tail_s` or [`MISSED_TURNS`] final turns (the median
 ///    interval of the last [`PERIOD_TURNS`] turns' peaks; module docs) and holding
-///    [`MIN_REST_FRAMES`] readings; the noise is then re-measured over every frame
+///    [`MIN_REST_FRAMES`] readings, where a rise inside a picture held level for
+///    [`HELD_TURN_FRACTION`] of the final turn ([`held`]) is no rise; the noise is
+///    then re-measured over every frame
 ///    after t_φ, the threshold raised to [`BAND_WIDENING`] × the deepest
 ///    reading below the rest level there (noise: the rim is never below its rest)
 ///    and × the highest reading more than that span after t_φ (noise: a flat disk
 ///    does not rise again), and t_φ found again, until it settles.
 /// 4. t_φ then follows the final descent: each next frame that lies lower than the
 ///    one before and more than σ above both the rest level and the rest right after
-///    it (the median of the next [`MIN_REST_FRAMES`] readings) is still motion.
+///    it (the median of the next [`MIN_REST_FRAMES`] readings) is still motion,
+///    unless it is a rise inside a held picture.
 ///
 /// Errors: [`SignalError::RestTailTooShort`], [`SignalError::TailNotAtRest`],
 /// [`SignalError::TailOscillates`], [`SignalError::NoMotion`], or invalid input.
@@ -186,7 +195,9 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             })
         };
         for (n, &i) in samples.iter().enumerate().skip(first + 1) {
-            if !moving(i, level, threshold) {
+            let still = !moving(i, level, threshold)
+                || final_turn(&turns).is_some_and(|p| held(&samples, t, z_rim, n, p, threshold));
+            if still {
                 low = low.min(z_rim[i]);
                 continue;
             }
@@ -206,13 +217,13 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             }
             (last_n, last) = (n, i);
         }
-        Some((last, span(&turns)))
+        Some((last, span(&turns), final_turn(&turns)))
     };
     let max_deviation = samples
         .iter()
         .map(|&i| z_rim[i] - level)
         .fold(0.0, f64::max);
-    let Some((first_guess, first_span)) = last_moving(level, threshold) else {
+    let Some((first_guess, first_span, first_period)) = last_moving(level, threshold) else {
         return Err(SignalError::NoMotion {
             threshold,
             max_deviation,
@@ -223,7 +234,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // segment is noise: the deepest one, widened as the tail's band is, bounds the
     // noise's own excursions (H.264 refresh frames, 4–6 σ of the copied frames, in
     // either direction) wherever they fall in the segment, not only in the tail.
-    let (mut index, mut span) = (first_guess, first_span);
+    let (mut index, mut span, mut period) = (first_guess, first_span, first_period);
     let (mut level, mut noise, mut threshold) = (level, noise, threshold);
     for _ in 0..MAX_HALT_ITERATIONS {
         let rest: Vec<usize> = samples.iter().copied().filter(|&i| i > index).collect();
@@ -242,11 +253,12 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             .max(band)
             .max(below)
             .max(lone);
-        let (next, next_span) = last_moving(level, threshold).unwrap_or((index, span));
+        let (next, next_span, next_period) =
+            last_moving(level, threshold).unwrap_or((index, span, period));
         if next == index {
             break;
         }
-        (index, span) = (next, next_span);
+        (index, span, period) = (next, next_span, next_period);
     }
     // The last rise is the last peak or a frame on its way up; the rim then comes
     // down to the plate, and frames that continue that descent by more than the
@@ -263,6 +275,12 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // the test's).
     while let Some(n) = samples.iter().position(|&i| i > index) {
         let next = samples[n];
+        // A rise that the search above took for a held picture is no descent either.
+        if moving(next, level, threshold)
+            && period.is_some_and(|p| held(&samples, t, z_rim, n, p, threshold))
+        {
+            break;
+        }
         let after: Vec<f64> = samples[n + 1..]
             .iter()
             .take(MIN_REST_FRAMES)
@@ -291,6 +309,49 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     })
 }
 
+/// Whether the reading at position `n` of `samples` belongs to a held picture: some
+/// window of consecutive readings that contains it and spans at least
+/// [`HELD_TURN_FRACTION`] of the final turn `period` [s] has all its readings
+/// within half the motion `threshold` of each other.
+///
+/// The rim of a rolling disk comes down to the plate once a turn, z_rim = R sin φ
+/// (1 + cos χ): three quarters of a turn sampled at least four times a turn, at any
+/// phase, hold a reading within 45° of the peak and one within 45° of the trough,
+/// which differ by at least 0.85 × (peak − trough), near the threshold for a turn
+/// whose peak rises above it and well over half of it. A span of readings that
+/// stays level for that long is not the rim moving but one picture shown again:
+/// after the halt an encoder may hold an earlier picture (o05 of the open footage
+/// re-encoded at crf 16 reads 0.41 px for five frames, three after the disk lay
+/// flat: a copy of a near-contact frame seven before; o08 at crf 26 0.45–0.55 px
+/// for six). The final turn is the shortest of the last ones ([`final_turn`]): the
+/// turn shortens towards the halt, and the median that sizes the span ending the
+/// motion lags it (o08 at crf 26: 7 frames, the last turn 5).
+fn held(samples: &[usize], t: &[f64], z: &[f64], n: usize, period: f64, threshold: f64) -> bool {
+    let span = HELD_TURN_FRACTION * period;
+    let time = |m: usize| t[samples[m]];
+    let level_over = |a: usize, b: usize| {
+        let (lo, hi) = samples[a..=b]
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &i| {
+                (lo.min(z[i]), hi.max(z[i]))
+            });
+        hi - lo < 0.5 * threshold
+    };
+    for a in (0..=n).rev() {
+        // The shortest window from `a` that spans the fraction of a turn and holds n.
+        let Some(b) = (n..samples.len()).find(|&b| time(b) - time(a) >= span) else {
+            continue;
+        };
+        if level_over(a, b) {
+            return true;
+        }
+        if time(n) - time(a) >= span {
+            break;
+        }
+    }
+    false
+}
+
 /// The precession turn near the end of the motion: the median interval between the
 /// last [`PERIOD_TURNS`] + 1 turns' peaks (each turn lifts the rim once), or `None`
 /// before there are that many.
@@ -298,6 +359,14 @@ fn turn_period(peaks: &[f64]) -> Option<f64> {
     let recent = peaks.get(peaks.len().checked_sub(PERIOD_TURNS + 1)?..)?;
     let intervals: Vec<f64> = recent.windows(2).map(|w| w[1] - w[0]).collect();
     Some(median(&intervals))
+}
+
+/// The final precession turn, bounded from above: the shortest interval between the
+/// last [`PERIOD_TURNS`] + 1 turns' peaks (the turn only shortens towards the halt),
+/// or `None` before there are that many.
+fn final_turn(peaks: &[f64]) -> Option<f64> {
+    let recent = peaks.get(peaks.len().checked_sub(PERIOD_TURNS + 1)?..)?;
+    recent.windows(2).map(|w| w[1] - w[0]).reduce(f64::min)
 }
 
 /// The runs of consecutive `indices` (consecutive within the slice) for which
