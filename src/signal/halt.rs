@@ -77,6 +77,14 @@ const MISSED_TURNS: f64 = 3.0;
 /// Fraction of the final turn over which a level run of readings is a held picture,
 /// not the rim's motion ([`held`]).
 const HELD_TURN_FRACTION: f64 = 0.75;
+/// Pictures an H.264 decoder keeps for reference (the standard's largest list): a
+/// held picture repeats one of them.
+const REFERENCE_PICTURES: usize = 16;
+/// Two readings this fraction of the noise σ apart or closer are one picture read
+/// twice ([`held`]): distinct pictures under sensor noise differ by about σ√2, and a
+/// copy read at another frame's light gain by 1e-5 px (o05 of the open footage, σ
+/// 0.05 px).
+const COPY_FRACTION: f64 = 1e-3;
 /// Re-measurements of the rest segment before t_φ is taken as settled.
 const MAX_HALT_ITERATIONS: usize = 8;
 /// Fewest rim heights a rest tail needs to measure its noise.
@@ -181,7 +189,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // that is as long as the rest tail or as [`MISSED_TURNS`] turns (module docs: a
     // disk lying flat does not rise again, and a decaying oscillation that stays below
     // the threshold for whole turns does not rise above it again either).
-    let last_moving = |level: f64, threshold: f64| {
+    let last_moving = |level: f64, noise: f64, threshold: f64| {
         let first = samples.iter().position(|&i| moving(i, level, threshold))?;
         // The last rise, as a position in `samples` and as a frame index.
         let (mut last_n, mut last) = (first, samples[first]);
@@ -196,7 +204,8 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         };
         for (n, &i) in samples.iter().enumerate().skip(first + 1) {
             let still = !moving(i, level, threshold)
-                || final_turn(&turns).is_some_and(|p| held(&samples, t, z_rim, n, p, threshold));
+                || final_turn(&turns)
+                    .is_some_and(|p| held(&samples, t, z_rim, n, p, threshold, noise));
             if still {
                 low = low.min(z_rim[i]);
                 continue;
@@ -223,7 +232,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         .iter()
         .map(|&i| z_rim[i] - level)
         .fold(0.0, f64::max);
-    let Some((first_guess, first_span, first_period)) = last_moving(level, threshold) else {
+    let Some((first_guess, first_span, first_period)) = last_moving(level, noise, threshold) else {
         return Err(SignalError::NoMotion {
             threshold,
             max_deviation,
@@ -254,7 +263,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             .max(below)
             .max(lone);
         let (next, next_span, next_period) =
-            last_moving(level, threshold).unwrap_or((index, span, period));
+            last_moving(level, noise, threshold).unwrap_or((index, span, period));
         if next == index {
             break;
         }
@@ -277,7 +286,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         let next = samples[n];
         // A rise that the search above took for a held picture is no descent either.
         if moving(next, level, threshold)
-            && period.is_some_and(|p| held(&samples, t, z_rim, n, p, threshold))
+            && period.is_some_and(|p| held(&samples, t, z_rim, n, p, threshold, noise))
         {
             break;
         }
@@ -312,21 +321,36 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
 /// Whether the reading at position `n` of `samples` belongs to a held picture: some
 /// window of consecutive readings that contains it and spans at least
 /// [`HELD_TURN_FRACTION`] of the final turn `period` [s] has all its readings
-/// within half the motion `threshold` of each other.
+/// within half the motion `threshold` of each other, and one of them repeats an
+/// earlier reading (in the window or among the [`REFERENCE_PICTURES`] before it) to
+/// [`COPY_FRACTION`] of the `noise` σ.
 ///
 /// The rim of a rolling disk comes down to the plate once a turn, z_rim = R sin φ
 /// (1 + cos χ): three quarters of a turn sampled at least four times a turn, at any
 /// phase, hold a reading within 45° of the peak and one within 45° of the trough,
 /// which differ by at least 0.85 × (peak − trough), near the threshold for a turn
 /// whose peak rises above it and well over half of it. A span of readings that
-/// stays level for that long is not the rim moving but one picture shown again:
-/// after the halt an encoder may hold an earlier picture (o05 of the open footage
+/// stays level for that long does not show the rim moving: either one picture is
+/// shown again, as an encoder may after the halt (o05 of the open footage
 /// re-encoded at crf 16 reads 0.41 px for five frames, three after the disk lay
-/// flat: a copy of a near-contact frame seven before; o08 at crf 26 0.45–0.55 px
-/// for six). The final turn is the shortest of the last ones ([`final_turn`]): the
+/// flat, repeating a near-contact frame seven before to 1e-5 px; o08 at crf 26
+/// 0.45–0.55 px for six, two of them exact repeats), or the motion is too small to
+/// resolve (a two-view render whose last turns rock by 0.15 px at a 0.1 px
+/// threshold reads 0.10–0.12 px, all distinct, for five frames before the halt).
+/// A repeated reading tells the first: a moving rim, or a still one under sensor
+/// noise, never reads the same twice.
+/// The final turn is the shortest of the last ones ([`final_turn`]): the
 /// turn shortens towards the halt, and the median that sizes the span ending the
 /// motion lags it (o08 at crf 26: 7 frames, the last turn 5).
-fn held(samples: &[usize], t: &[f64], z: &[f64], n: usize, period: f64, threshold: f64) -> bool {
+fn held(
+    samples: &[usize],
+    t: &[f64],
+    z: &[f64],
+    n: usize,
+    period: f64,
+    threshold: f64,
+    noise: f64,
+) -> bool {
     let span = HELD_TURN_FRACTION * period;
     let time = |m: usize| t[samples[m]];
     let level_over = |a: usize, b: usize| {
@@ -337,12 +361,20 @@ fn held(samples: &[usize], t: &[f64], z: &[f64], n: usize, period: f64, threshol
             });
         hi - lo < 0.5 * threshold
     };
+    // Some reading of the window repeats an earlier one, in it or among the
+    // encoder's references before it.
+    let copied = |a: usize, b: usize| {
+        (a..=b).any(|m| {
+            (a.saturating_sub(REFERENCE_PICTURES)..m)
+                .any(|j| (z[samples[m]] - z[samples[j]]).abs() <= COPY_FRACTION * noise)
+        })
+    };
     for a in (0..=n).rev() {
         // The shortest window from `a` that spans the fraction of a turn and holds n.
         let Some(b) = (n..samples.len()).find(|&b| time(b) - time(a) >= span) else {
             continue;
         };
-        if level_over(a, b) {
+        if level_over(a, b) && copied(a, b) {
             return true;
         }
         if time(n) - time(a) >= span {

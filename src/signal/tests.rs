@@ -339,8 +339,9 @@ fn an_excursion_turns_after_the_halt_is_not_motion() {
 /// A picture held after the halt, level for most of a final turn though above the
 /// threshold (o05 of the open footage re-encoded at crf 16: 0.41 px for five frames,
 /// three after the disk lay flat, a copy of a near-contact frame), is not motion: the
-/// rim of a rolling disk comes down to the plate every turn. The same rise for one
-/// frame, or rising and falling over the turn, is motion still.
+/// rim of a rolling disk comes down to the plate every turn. Level readings that
+/// never repeat (motion too small to resolve), the same rise for one frame, or rising
+/// and falling over the turn are motion still.
 #[test]
 fn a_picture_held_level_for_a_turn_is_not_motion() {
     let (t, z, truth, config, before) = clip_and_halt();
@@ -355,13 +356,27 @@ fn a_picture_held_level_for_a_turn_is_not_motion() {
     );
     let mut rested = z.clone();
     rested[last + 1..last + 4].fill(level);
-    // Within ±0.2 of the threshold of one height: a copy read at another frame's light.
+    // Two pictures, 0.2 of the threshold apart, shown in turn.
     let mut held = rested.clone();
     for (k, reading) in held[last + 4..last + 4 + frames].iter_mut().enumerate() {
-        *reading = level + threshold * (1.2 + 0.2 * (k as f64 * 2.1).sin());
+        *reading = level + threshold * (1.2 + 0.2 * (k % 2) as f64);
     }
     let halt = halt_time(&t, &held, &config).expect("halt");
     assert_eq!(halt.index, last, "the held picture is rest");
+    // As level but all distinct (motion too small to resolve): motion.
+    let mut level_run = rested.clone();
+    for (k, reading) in level_run[last + 4..last + 4 + frames]
+        .iter_mut()
+        .enumerate()
+    {
+        *reading = level + threshold * (1.2 + 0.2 * (k as f64 * 2.1).sin());
+    }
+    let halt = halt_time(&t, &level_run, &config).expect("halt");
+    assert!(
+        halt.index >= last + 4,
+        "no picture repeats: {}",
+        halt.index - last
+    );
     let mut lone = rested.clone();
     lone[last + 4] = level + 1.2 * threshold;
     let halt = halt_time(&t, &lone, &config).expect("halt");
