@@ -8,9 +8,10 @@
 //! sampling's phase), means the disk lies flat or moves below the threshold for good:
 //! t_φ is the last rise before the first such span, and a later lone excursion
 //! (an H.264 refresh frame, 50 frames on, read 0.15 px high on the open footage) is
-//! noise, not motion resumed. Nor is a picture held level for most of a final turn,
-//! whatever its height: the rim comes down to the plate every turn, and an encoder
-//! may show an earlier picture again for several frames after the halt. After its
+//! noise, not motion resumed. Nor is a picture held level for most of a final turn
+//! and repeating an earlier reading, whatever its height: the rim comes down to the
+//! plate every turn, and an encoder may show an earlier picture again for several
+//! frames after the halt. After its
 //! last rise the rim comes down to the plate:
 //! the frames that continue that descent above both the rest level and the still
 //! picture that follows them (by more than the noise σ, not necessarily the
@@ -393,9 +394,10 @@ fn turn_period(peaks: &[f64]) -> Option<f64> {
     Some(median(&intervals))
 }
 
-/// The final precession turn, bounded from above: the shortest interval between the
-/// last [`PERIOD_TURNS`] + 1 turns' peaks (the turn only shortens towards the halt),
-/// or `None` before there are that many.
+/// The final precession turn: the shortest interval between the last
+/// [`PERIOD_TURNS`] + 1 turns' peaks (the turn shortens towards the halt, so the
+/// latest intervals are the shortest, up to the peaks' timing), or `None` before
+/// there are that many.
 fn final_turn(peaks: &[f64]) -> Option<f64> {
     let recent = peaks.get(peaks.len().checked_sub(PERIOD_TURNS + 1)?..)?;
     recent.windows(2).map(|w| w[1] - w[0]).reduce(f64::min)
