@@ -1427,9 +1427,9 @@ mod tests {
     /// measurements combined by their variances (the fit's t0 errors have heavier
     /// tails, and the fits left alone keep theirs; 200 noisy series), and the
     /// intervals of t0 and of n, with n moved by its covariance with t0, still cover
-    /// the truth at least 90 % of the time (binomial(200, 0.95): ≥ 180 is 3.2 sd below the mean). A fit whose t0 lies
-    /// more than 3 sd of the difference away is left alone; with Gaussian errors that
-    /// is 0.3 % of them, and at most 5 % may be.
+    /// the truth at least 90 % of the time (binomial(200, 0.95): ≥ 180 is 3.2 sd
+    /// below the mean). A fit whose t0 lies more than 3 sd of the difference away is
+    /// left alone; with Gaussian errors that is 0.3 % of them, and at most 5 % may be.
     #[test]
     fn a_sighted_halt_sharpens_t0_and_keeps_the_intervals_honest() {
         let frame_s = 0.005;

@@ -11,11 +11,10 @@
 //! noise, not motion resumed. Nor is a picture held level for most of a final turn
 //! and repeating an earlier reading, whatever its height: the rim comes down to the
 //! plate every turn, and an encoder may show an earlier picture again for several
-//! frames after the halt. After its
-//! last rise the rim comes down to the plate:
-//! the frames that continue that descent above both the rest level and the still
-//! picture that follows them (by more than the noise σ, not necessarily the
-//! threshold) are motion too.
+//! frames after the halt. After its last rise the rim comes down to the plate: the
+//! frames that continue that descent above both the rest level and the still picture
+//! that follows them (by more than the noise σ, not necessarily the threshold) are
+//! motion too.
 //!
 //! Motion is one-sided: the rim of a rolling disk is never below its rest on the plate
 //! (z_rim = R sin φ (1 + cos χ) ≥ 0, see the module docs of `signal`), so a reading
@@ -109,11 +108,11 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    interval of the last [`PERIOD_TURNS`] turns' peaks; module docs) and holding
 ///    [`MIN_REST_FRAMES`] readings, where a rise inside a picture held level for
 ///    [`HELD_TURN_FRACTION`] of the final turn ([`held`]) is no rise; the noise is
-///    then re-measured over every frame
-///    after t_φ, the threshold raised to [`BAND_WIDENING`] × the deepest
-///    reading below the rest level there (noise: the rim is never below its rest)
-///    and × the highest reading more than that span after t_φ (noise: a flat disk
-///    does not rise again), and t_φ found again, until it settles.
+///    then re-measured over every frame after t_φ, the threshold raised to
+///    [`BAND_WIDENING`] × the deepest reading below the rest level there (noise: the
+///    rim is never below its rest) and × the highest reading more than that span
+///    after t_φ (noise: a flat disk does not rise again), and t_φ found again, until
+///    it settles.
 /// 4. t_φ then follows the final descent: each next frame that lies lower than the
 ///    one before and more than σ above both the rest level and the rest right after
 ///    it (the median of the next [`MIN_REST_FRAMES`] readings) is still motion,
@@ -339,10 +338,10 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
 /// resolve (a two-view render whose last turns rock by 0.15 px at a 0.1 px
 /// threshold reads 0.10–0.12 px, all distinct, for five frames before the halt).
 /// A repeated reading tells the first: a moving rim, or a still one under sensor
-/// noise, never reads the same twice.
-/// The final turn is the shortest of the last ones ([`final_turn`]): the
-/// turn shortens towards the halt, and the median that sizes the span ending the
-/// motion lags it (o08 at crf 26: 7 frames, the last turn 5).
+/// noise, never reads the same twice. The final turn is the shortest of the last
+/// ones ([`final_turn`]): the turn shortens towards the halt, and the median that
+/// sizes the span ending the motion lags it (o08 at crf 26: 7 frames, the last
+/// turn 5).
 fn held(
     samples: &[usize],
     t: &[f64],
