@@ -960,6 +960,22 @@ pub fn analyse_clip_keeping(
             )
         }
     };
+    // Unless the config names the band, it grows with the disk (config::band_for_disk)
+    // and the rest frames are calibrated again on it.
+    let calibration = match vision_config.band_half_width_px {
+        None => {
+            let cal = &calibration.calibration;
+            let band = crate::config::band_for_disk(cal.x_r - cal.x_l, side_config.half_width_px);
+            if band == side_config.half_width_px {
+                calibration
+            } else {
+                side_config.half_width_px = band;
+                vision::calibrate_at_rest(&rest_sides, rest[0].index, &side_config, given.as_ref())
+                    .map_err(vision_err)?
+            }
+        }
+        Some(_) => calibration,
+    };
     // The band must fit on the disk.
     let cal = calibration.calibration;
     if let Some(band) = vision_config.band_half_width_px {

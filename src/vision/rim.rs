@@ -200,7 +200,7 @@ impl RimGauge {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vision::synthetic::{Canvas, SideScene};
+    use crate::vision::synthetic::{Canvas, SideScene, grey};
     use crate::vision::{CalibrationReport, calibrate_at_rest};
 
     fn calibrate(c: &Canvas, config: &SideViewConfig) -> CalibrationReport {
@@ -324,6 +324,64 @@ mod tests {
             c
         };
         check_lifts(&s, draw, &[1.3, 3.1, 7.7], 0.2, 0.3);
+    }
+
+    /// A tilted rim: the bottom edge slopes across the columns by sin φ per column (the
+    /// steepest, at χ = 90°, `config::band_for_disk`), here 0.04 with the centre line
+    /// lifted 4.8 px (φ = 0.04 rad on this 239 px disk). Read on the band of 2 % of the
+    /// disk's width (±4 columns: edges within ±0.16 px) and on one of 5 % (±11: within
+    /// ±0.44 px, the widest the config accepts), the band's mean reads the centre line's
+    /// edge, as the area of a step is linear in the profile.
+    #[test]
+    fn a_tilted_rim_is_read_at_the_centre_line_on_a_wide_band() {
+        let s = SideScene::standard();
+        let x_c = 0.5 * (s.x_l + s.x_r);
+        let (slope, lift) = (0.04, 4.8);
+        let plate = 35.0;
+        let mirror = plate + 0.55 * (s.disk - plate);
+        let draw = |lift: f64, slope: f64| {
+            let mut c = Canvas::from_rects(
+                s.w,
+                s.h,
+                grey(s.background),
+                &[(0.0, s.z_base, s.w as f64, s.h as f64, grey(plate))],
+            );
+            let bottom = move |x: f64| s.z_base - lift - slope * (x - x_c);
+            let box_ = (s.x_l, s.z_t() - 20.0, s.x_r, s.z_base + s.thickness + 20.0);
+            let inside_disk = |x: f64, y: f64| {
+                (s.x_l..s.x_r).contains(&x) && y < bottom(x) && y >= bottom(x) - s.thickness
+            };
+            let inside_mirror = |x: f64, y: f64| {
+                let top = 2.0 * s.z_base - bottom(x);
+                (s.x_l..s.x_r).contains(&x) && y >= top && y < top + s.thickness
+            };
+            c.shape(box_, 8, inside_disk, grey(s.disk));
+            c.shape(box_, 8, inside_mirror, grey(mirror));
+            c
+        };
+        for half_width_px in [
+            crate::config::band_for_disk(s.x_r - s.x_l, 2),
+            (0.05 * (s.x_r - s.x_l)).floor() as usize,
+        ] {
+            let config = SideViewConfig {
+                half_width_px,
+                ..SideViewConfig::default()
+            };
+            let report = calibrate(&draw(0.0, 0.0), &config);
+            let gauge =
+                RimGauge::new(&report.calibration, &report.threshold, &config, s.w, s.h).unwrap();
+            assert_eq!(gauge.band_columns().len(), 2 * half_width_px + 1);
+            // The edge row against the drawn one (the rest frame's z_base is off by
+            // the blending of two shapes in one pixel row, which is not the point here).
+            let truth = s.z_base - lift;
+            match measure(&gauge, &draw(lift, slope)) {
+                RimHeight::Edge { edge_row, .. } => assert!(
+                    (edge_row - truth).abs() < EDGE_TOL,
+                    "band ±{half_width_px}: edge {edge_row}, centre line's {truth}"
+                ),
+                other => panic!("band ±{half_width_px}: {other:?}"),
+            }
+        }
     }
 
     #[test]
