@@ -382,9 +382,10 @@ impl MirrorEdgeModel {
     /// differ by 0.01 at the rim's foot, and such frames read 0.1 px apart
     /// (+0.13 px and +0.03 px from the truth). The mean over the likelihood,
     /// exp(−ΔSSR / 2s²) with s² = SSR_min / (rows − 2) (the edge and the light
-    /// fitted), weighs both minima by how well each fits. It moves by as much as
-    /// the model does, and equals the least-squares edge where there is one clear
-    /// minimum.
+    /// fitted), weighs both minima by how well each fits, so it changes little
+    /// when the model changes little; where there is one clear minimum it is the
+    /// least-squares edge. `tests/long_clip.rs` guards it: with the least-squares
+    /// edge alone that frame fails the test's 0.1 px bound.
     pub fn edge(&self, window: &BandWindow, edge0: f64) -> f64 {
         // Rows down to the mirror image's edge, 2 y_p − e, and its blur (as at rest).
         let mirror = 2.0 * self.plate_row - edge0;
