@@ -960,12 +960,21 @@ pub fn analyse_clip_keeping(
             )
         }
     };
-    // Unless the config names the band, it grows with the disk (config::band_for_disk)
-    // and the rest frames are calibrated again on it.
+    // A band named in the config must fit on the disk; otherwise the band grows with
+    // the disk (config::band_for_disk) and the rest frames are calibrated again on it.
+    let disk_width = calibration.calibration.x_r - calibration.calibration.x_l;
     let calibration = match vision_config.band_half_width_px {
+        Some(band) => {
+            crate::config::band_fits_disk(band, disk_width).map_err(|reason| {
+                AnalyseError::Clip {
+                    path: clip.to_path_buf(),
+                    reason,
+                }
+            })?;
+            calibration
+        }
         None => {
-            let cal = &calibration.calibration;
-            let band = crate::config::band_for_disk(cal.x_r - cal.x_l, side_config.half_width_px);
+            let band = crate::config::band_for_disk(disk_width, side_config.half_width_px);
             if band == side_config.half_width_px {
                 calibration
             } else {
@@ -974,18 +983,8 @@ pub fn analyse_clip_keeping(
                     .map_err(vision_err)?
             }
         }
-        Some(_) => calibration,
     };
-    // The band must fit on the disk.
     let cal = calibration.calibration;
-    if let Some(band) = vision_config.band_half_width_px {
-        crate::config::band_fits_disk(band, cal.x_r - cal.x_l).map_err(|reason| {
-            AnalyseError::Clip {
-                path: clip.to_path_buf(),
-                reason,
-            }
-        })?;
-    }
     let side0 = &rest_sides[0];
     let gauge = RimGauge::new(
         &calibration.calibration,
