@@ -38,7 +38,7 @@ use crate::report::diagnostics;
 use crate::signal::{self, SignalConfig, SignalError, StateSeries, ThesisRim};
 use crate::vision::{
     self, BandWindow, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge, RimGauge,
-    RimHeight, SideViewConfig, StripFinder, ThresholdSource, VisionError,
+    RimHeight, RimReading, SideViewConfig, StripFinder, ThresholdSource, VisionError,
 };
 
 /// Frames at the end of a clip that must show the disk at rest (calibration).
@@ -318,6 +318,8 @@ struct MeasuredSpan {
     highest: Option<(f64, f64, OwnedFrame)>,
     rim: String,
     rim_zero_row_px: f64,
+    /// How the rim's heights were read, which decides how well their zero is known.
+    reading: RimReading,
     scale: ScaleReport,
     metres_per_px: f64,
     /// Width of the local fits' window [turns of the rim].
@@ -426,9 +428,14 @@ pub struct ExperimentPlan {
     #[serde(default)]
     pub rim_zero_row_px: Option<f64>,
     /// 1σ uncertainty of that zero [px], carried into the intervals of n
-    /// (`PowerLawFit::se_n_zero`); 0 in results written before it was.
+    /// (`PowerLawFit::se_n_zero`): the config's `fit.rim_zero_uncertainty_px`, else
+    /// the one measured for [`Self::rim_reading`]; 0 in results written before it was.
     #[serde(default)]
     pub rim_zero_uncertainty_px: f64,
+    /// How the rim's heights were read (vision::RimReading); `None` in results
+    /// written before it was recorded.
+    #[serde(default)]
+    pub rim_reading: Option<RimReading>,
     pub colour_thresholds: Option<(ColourThresholds, ThresholdSource)>,
     pub window_s: f64,
     pub halt: HaltChoice,
@@ -1179,6 +1186,7 @@ pub fn analyse_clip_keeping(
         // z_b of eq. 3.10: the plate line where the mirror-edge model finds the rim
         // meets its mirror image (ScaleReport), else z_base.
         let mut bottom_rim_row = cal.z_base;
+        let mut reading = RimReading::FirstPass;
         let rim = match &rest_window {
             Some((rest_window, edge0)) => {
                 let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
@@ -1218,7 +1226,12 @@ pub fn analyse_clip_keeping(
                         model.plate_offset_test,
                         sharp = vision::SHARP_RIM_PX,
                     );
-                    (description, model.rest_edge, Some(model.plate_row))
+                    let reading = if model.is_sharp() {
+                        RimReading::SharpMirrorEdge
+                    } else {
+                        RimReading::RoundedMirrorEdge
+                    };
+                    (description, model.rest_edge, Some(model.plate_row), reading)
                 }),
                 Plate::Light => {
                     vision::remeasure_light_rim(&mut heights, &windows, cal.z_base, rest_window)
@@ -1233,18 +1246,19 @@ pub fn analyse_clip_keeping(
                                 model.rest_edge,
                                 model.kept_first_pass
                             );
-                            (description, model.rest_edge, None)
+                            (description, model.rest_edge, None, RimReading::ShadowEdge)
                         })
                         .map_err(String::from)
                 }
             };
                 match refit {
-                    Ok((description, rest_edge, plate_row)) => {
+                    Ok((description, rest_edge, plate_row, how)) => {
                         for (record, z) in frames.iter_mut().zip(heights) {
                             record.z_rim_px = z;
                         }
                         rim_zero_row_px = rest_edge;
                         bottom_rim_row = plate_row.unwrap_or(bottom_rim_row);
+                        reading = how;
                         description
                     }
                     Err(reason) => format!("{first_pass}: {reason}"),
@@ -1373,6 +1387,7 @@ pub fn analyse_clip_keeping(
             highest,
             rim,
             rim_zero_row_px,
+            reading,
             scale,
             metres_per_px,
             local_fit_periods: signal_config.state_window_periods,
@@ -1408,6 +1423,7 @@ pub fn analyse_clip_keeping(
         highest,
         rim,
         rim_zero_row_px,
+        reading,
         scale,
         metres_per_px,
         rest_tail_s,
@@ -1491,7 +1507,9 @@ pub fn analyse_clip_keeping(
     // it moves n without a trace in the residuals: each fit is made again with the
     // zero moved down and up by its uncertainty, and half the change of n enters
     // n's interval.
-    let zero_px = config.rim_zero_uncertainty_px();
+    let zero_px = config
+        .rim_zero_uncertainty_px()
+        .unwrap_or_else(|| reading.zero_uncertainty_px());
     let model = ThesisRim {
         radius: params.radius,
     };
@@ -1570,6 +1588,7 @@ pub fn analyse_clip_keeping(
         rim,
         rim_zero_row_px: Some(rim_zero_row_px),
         rim_zero_uncertainty_px: zero_px,
+        rim_reading: Some(reading),
         colour_thresholds,
         window_s,
         halt: config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default(),

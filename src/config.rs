@@ -37,7 +37,8 @@
 //! [fit]
 //! window_s = 0.5                 # fit the last 0.5 s before the halt
 //! halt = "combined"              # combined (t0 fitted, with the halt seen) | free (fitted only) | measured (fixed at the halt)
-//! rim_zero_uncertainty_px = 0.08 # 1σ of z_rim's zero, in n's interval (0: left out)
+//! rim_zero_uncertainty_px = 0.08 # 1σ of z_rim's zero, in n's interval (0: left out;
+//!                                # default: measured for how the rim is read)
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -131,7 +132,9 @@ pub struct FitConfig {
     pub window_s: Option<f64>,
     pub halt: Option<HaltChoice>,
     /// 1σ uncertainty of the zero of z_rim [px], carried into the interval of n
-    /// (default [`DEFAULT_RIM_ZERO_UNCERTAINTY_PX`]; 0 leaves it out).
+    /// (default: the one measured for how the rim was read,
+    /// [`RimReading::zero_uncertainty_px`](crate::vision::RimReading::zero_uncertainty_px);
+    /// 0 leaves it out).
     pub rim_zero_uncertainty_px: Option<f64>,
 }
 
@@ -157,18 +160,6 @@ pub struct ExperimentConfig {
 
 /// Default fit window before the halt [s] (the thesis's last 0.5 s).
 pub const DEFAULT_WINDOW_S: f64 = 0.5;
-
-/// How well the zero of z_rim is known [px], 1σ, by default. The zero is the edge
-/// at rest; a lifted rim's edge is read the same way, but not exactly: blur, the
-/// rim's rounding, the mirror image or shadow under it and the codec change between
-/// rest and lift, so every lifted height carries one shared offset. Measured against
-/// ground truth as the mean error of z_rim over the frames lifted past 0.5 px in the
-/// last 0.5 s: RMS 0.071 px over 60 seeded renders (`scripts/coverage`'s six
-/// conditions) and 0.079 px over the 8 open clips (−0.14 … +0.09 px), BENCHMARKS.md
-/// "Coverage"; rounded up to 0.08 px. Since sharp dark rims are read by the
-/// mirror-edge model the renders measure 0.044 px, but footage like the open set's
-/// keeps 0.079 px (a default by method was tried: BENCHMARKS.md).
-pub const DEFAULT_RIM_ZERO_UNCERTAINTY_PX: f64 = 0.08;
 
 impl ExperimentConfig {
     /// Parse one TOML text; `path` names it in errors.
@@ -369,12 +360,11 @@ impl ExperimentConfig {
             .unwrap_or(DEFAULT_WINDOW_S)
     }
 
-    /// The 1σ uncertainty of the zero of z_rim [px] carried into n's interval.
-    pub fn rim_zero_uncertainty_px(&self) -> f64 {
-        self.fit
-            .as_ref()
-            .and_then(|f| f.rim_zero_uncertainty_px)
-            .unwrap_or(DEFAULT_RIM_ZERO_UNCERTAINTY_PX)
+    /// The 1σ uncertainty of the zero of z_rim [px] carried into n's interval, when
+    /// the config sets it; `None`: the one measured for how the rim was read
+    /// ([`RimReading::zero_uncertainty_px`](crate::vision::RimReading::zero_uncertainty_px)).
+    pub fn rim_zero_uncertainty_px(&self) -> Option<f64> {
+        self.fit.as_ref().and_then(|f| f.rim_zero_uncertainty_px)
     }
 }
 

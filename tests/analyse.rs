@@ -8,7 +8,8 @@ mod util;
 use std::path::{Path, PathBuf};
 
 use eulerdisk::analyse::{AnalyseError, Experiment, analyse_clip};
-use eulerdisk::config::{DEFAULT_RIM_ZERO_UNCERTAINTY_PX, ExperimentConfig};
+use eulerdisk::config::ExperimentConfig;
+use eulerdisk::vision::RimReading;
 use serde_json::Value;
 
 fn fixture(name: &str) -> PathBuf {
@@ -461,8 +462,10 @@ fn a_blurred_sharp_rim_is_not_taken_for_a_rounded_one() {
         "1",
     ]);
     assert!(e.plan.rim.contains("a sharp rim"), "{}", e.plan.rim);
+    assert_eq!(e.plan.rim_reading, Some(RimReading::SharpMirrorEdge));
     // Frames lifted past 0.5 px in the last 0.5 s: their mean error is the zero's
-    // (one draw of the codec's error of the still frames), within its uncertainty.
+    // (one draw of the codec's error of the still frames), within the 1σ uncertainty
+    // measured for a sharp rim read by the model on other renders.
     let frames = truth["frames"].as_array().unwrap();
     let errors: Vec<f64> = e
         .frames
@@ -474,8 +477,9 @@ fn a_blurred_sharp_rim_is_not_taken_for_a_rounded_one() {
     assert!(errors.len() > 100, "{} lifted frames", errors.len());
     let mean = errors.iter().sum::<f64>() / errors.len() as f64;
     assert!(
-        mean.abs() < DEFAULT_RIM_ZERO_UNCERTAINTY_PX,
-        "lifted heights {mean:+.3} px off on average"
+        mean.abs() < e.plan.rim_zero_uncertainty_px,
+        "lifted heights {mean:+.3} px off on average (1σ {} px)",
+        e.plan.rim_zero_uncertainty_px
     );
 }
 

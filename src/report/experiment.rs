@@ -23,7 +23,7 @@ use serde::Serialize;
 use super::html::{page, png_figure, svg_figure, table, video_figure};
 use super::plot::{Panel, time_panels};
 use super::{ReportError, write_atomic, write_csv, write_json};
-use crate::analyse::{EnergyFit, Experiment};
+use crate::analyse::{EnergyFit, Experiment, ExperimentPlan};
 use crate::energy::{self, SightingUse};
 use crate::overlay::{OverlayIndex, OverlaySpec, write_measurement_overlays};
 
@@ -299,6 +299,21 @@ fn fit_row(f: &EnergyFit) -> Vec<String> {
 }
 
 /// How the halt seen in the footage entered the peaks fit's t0 (times from t_φ).
+/// Where the zero's uncertainty came from: the config, or the value measured for how
+/// the rim was read.
+fn zero_source(plan: &ExperimentPlan) -> String {
+    let set = plan
+        .config
+        .fit
+        .as_ref()
+        .is_some_and(|f| f.rim_zero_uncertainty_px.is_some());
+    match (set, plan.rim_reading) {
+        (true, _) => " (set in the config)".into(),
+        (false, Some(reading)) => format!(" (as measured for {})", reading.describe()),
+        (false, None) => String::new(),
+    }
+}
+
 fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
     let seen = format!(
         "The halt seen in the footage puts t0 at {:+.2} ± {:.2} ms after t_φ (one frame, and {:.2} ms \
@@ -500,10 +515,10 @@ fn experiment_page(
             "Energy exponent "
             strong { (format!("n = {:.3}", e.peaks_fit.fit.n)) }
             (format!(" (95 % CI {:.3} … {:.3}) from {} peaks in the last {} s before the halt; \
-                the interval includes ± {:.3} from the zero of z_rim, known to {} px (the fits \
+                the interval includes ± {:.3} from the zero of z_rim, known to {} px{} (the fits \
                 made again with it moved by that much).",
                 e.peaks_fit.fit.ci95_n.0, e.peaks_fit.fit.ci95_n.1, e.peaks_fit.fit.points, plan.window_s,
-                1.96 * e.peaks_fit.fit.se_n_zero, plan.rim_zero_uncertainty_px))
+                1.96 * e.peaks_fit.fit.se_n_zero, plan.rim_zero_uncertainty_px, zero_source(plan)))
         }
         @if let Some(s) = e.peaks_fit.fit.halt_sighting {
             p { (sighting_sentence(&s, e.peaks_fit.fit.t0)) }

@@ -44,6 +44,7 @@ mod light_plate;
 mod mirror_edge;
 mod profile;
 mod rim;
+mod rim_zero;
 mod shadow_edge;
 mod threshold;
 mod two_view;
@@ -63,6 +64,7 @@ pub use mirror_edge::{
     EdgeTemplate, MirrorEdgeModel, SHARP_RIM_PX, remeasure as remeasure_dark_rim,
 };
 pub use rim::{RimGauge, RimHeight};
+pub use rim_zero::RimReading;
 pub use shadow_edge::{ShadowEdgeModel, remeasure as remeasure_light_rim};
 pub use threshold::{GammaSource, INTENSITY_SCALE, Threshold};
 pub use two_view::{
