@@ -298,22 +298,20 @@ fn fit_row(f: &EnergyFit) -> Vec<String> {
     ]
 }
 
-/// How the halt seen in the footage entered the peaks fit's t0 (times from t_φ).
 /// Where the zero's uncertainty came from: the config, or the value measured for how
 /// the rim was read.
 fn zero_source(plan: &ExperimentPlan) -> String {
-    let set = plan
-        .config
-        .fit
-        .as_ref()
-        .is_some_and(|f| f.rim_zero_uncertainty_px.is_some());
-    match (set, plan.rim_reading) {
+    match (
+        plan.config.rim_zero_uncertainty_px().is_some(),
+        plan.rim_reading,
+    ) {
         (true, _) => " (set in the config)".into(),
         (false, Some(reading)) => format!(" (as measured for {})", reading.describe()),
         (false, None) => String::new(),
     }
 }
 
+/// How the halt seen in the footage entered the peaks fit's t0 (times from t_φ).
 fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
     let seen = format!(
         "The halt seen in the footage puts t0 at {:+.2} ± {:.2} ms after t_φ (one frame, and {:.2} ms \

@@ -3,8 +3,10 @@
 //! The zero is the edge at rest. A lifted rim's edge is read the same way, but not
 //! exactly: blur, the rim's rounding, the mirror image or the shadow under it and the
 //! codec differ between rest and lift, so every lifted height of a clip carries one
-//! shared offset (the heights of one clip are off by nearly the same amount at 0.5 px
-//! and at 5 px; BENCHMARKS.md "Coverage"). The residuals of the energy fits cannot
+//! shared offset (on our renders a clip's heights are off by the same amount to
+//! ±0.03 px from 0.25 to 6 px; on the open set's rounded rims the offset also changes
+//! with the height; BENCHMARKS.md "The zero's uncertainty by how the rim is read").
+//! The residuals of the energy fits cannot
 //! show it; `analyse` refits with the zero moved by ± its 1σ uncertainty and carries
 //! half the change of n into n's interval.
 //!
