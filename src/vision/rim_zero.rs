@@ -12,9 +12,10 @@
 //!
 //! That uncertainty is a property of the reading, measured against ground truth as
 //! the RMS over clips of the mean error of z_rim over the frames lifted past 0.5 px
-//! in the last 0.5 s before the halt. Each value below was measured on footage other
-//! than the renders `scripts/coverage` scores the intervals on (its seeds 1–120), so
-//! that coverage is an out-of-sample test of it.
+//! in the last 0.5 s before the halt (`scripts/zero-error` for the renders). Each
+//! value below was measured on footage other than the renders `scripts/coverage`
+//! scores the intervals on (its seeds 1–120), so that coverage is an out-of-sample
+//! test of it.
 
 use serde::{Deserialize, Serialize};
 
