@@ -101,8 +101,9 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 /// 2. The tail must be at rest: no rise in it above the threshold but one short run
 ///    (at most [`REFRESH_FRAMES`] new readings, a codec refresh), and no
 ///    oscillation (autocorrelation below −0.45 at some lag and above 0.6 at a
-///    later one, up to 24 frames, checked
-///    when the tail's spread exceeds twice `noise_floor`).
+///    later one, up to 24 frames, at which the readings do not repeat as the
+///    encoder's frame-type cadence does, checked when the tail's spread exceeds
+///    twice `noise_floor`).
 /// 3. t_φ is the last frame of motion, the last rise before the first span with
 ///    none as long as `rest_tail_s` or [`MISSED_TURNS`] final turns (the median
 ///    interval of the last [`PERIOD_TURNS`] turns' peaks; module docs) and holding
@@ -178,11 +179,20 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // A correlated tail whose spread stays within twice the noise floor is codec
     // or sensor texture on a still frame, not a disk still rocking.
     let oscillating = noise > 2.0 * config.noise_floor;
-    if let Some((lag, correlation)) = oscillation(z_rim, &tail, level).filter(|_| oscillating) {
+    if let Some((lag, correlation)) =
+        oscillation(z_rim, &tail, level, noise).filter(|_| oscillating)
+    {
+        let rms = (tail
+            .iter()
+            .map(|&i| (z_rim[i] - level).powi(2))
+            .sum::<f64>()
+            / tail.len() as f64)
+            .sqrt();
         return Err(SignalError::TailOscillates {
             tail_start,
             lag,
             correlation,
+            rms,
         });
     }
     // The last frame of motion: the last rise before the first span without one
@@ -452,7 +462,16 @@ fn rest_statistics(z: &[f64], indices: &[usize], floor: f64) -> (f64, f64) {
 /// 0.7 on the independent footage set), but that correlation decays without a
 /// trough. An oscillation therefore needs a correlation above the threshold at some
 /// lag *after* one below [`OSCILLATION_TROUGH`].
-fn oscillation(z: &[f64], tail: &[usize], level: f64) -> Option<(usize, f64)> {
+///
+/// Nor is the encoder's cadence: x264 codes a still picture as a repeating group of
+/// frame types (a P frame and three B frames), each type read a little differently,
+/// so a still tail can correlate at the group's length. Those readings repeat
+/// exactly, one group to the next (a dark-plate render at crf 23, seed 1003: 31 of 44
+/// readings equal the one 4 frames before, to 1e-9 m), while a moving rim, or a still
+/// one under sensor noise, never reads the same twice. A lag at which at least half
+/// the readings repeat the one a lag before (to [`COPY_FRACTION`] of the `noise` σ)
+/// is the codec's cadence, not the disk's period.
+fn oscillation(z: &[f64], tail: &[usize], level: f64, noise: f64) -> Option<(usize, f64)> {
     let dev: Vec<f64> = tail.iter().map(|&i| z[i] - level).collect();
     let mean = dev.iter().sum::<f64>() / dev.len() as f64;
     let var: f64 = dev.iter().map(|d| (d - mean).powi(2)).sum();
@@ -465,12 +484,19 @@ fn oscillation(z: &[f64], tail: &[usize], level: f64) -> Option<(usize, f64)> {
             .sum::<f64>()
             / var
     };
+    let cadence = |lag: usize| {
+        let repeats = (lag..dev.len())
+            .filter(|&i| (dev[i] - dev[i - lag]).abs() <= COPY_FRACTION * noise)
+            .count();
+        2 * repeats >= dev.len() - lag
+    };
     let mut trough = false;
     let mut best: Option<(usize, f64)> = None;
     for lag in 1..=MAX_LAG.min(dev.len() / 3) {
         let r = correlation(lag);
         trough |= r < OSCILLATION_TROUGH;
-        if trough && r > OSCILLATION_CORRELATION && best.is_none_or(|(_, b)| r > b) {
+        if trough && r > OSCILLATION_CORRELATION && best.is_none_or(|(_, b)| r > b) && !cadence(lag)
+        {
             best = Some((lag, r));
         }
     }

@@ -305,13 +305,16 @@ pub enum SignalError {
     },
     /// The rest tail oscillates.
     #[error(
-        "no rest tail: z_rim after t = {tail_start} s oscillates (autocorrelation {correlation} \
-         at a lag of {lag} frames); the clip seems to end before the disk stops"
+        "no rest tail: z_rim after t = {tail_start:.4} s oscillates by {rms:.2e} m RMS about \
+         its rest level (autocorrelation {correlation:.2} at a lag of {lag} frames); the clip \
+         seems to end before the disk stops"
     )]
     TailOscillates {
         tail_start: f64,
         lag: usize,
         correlation: f64,
+        /// RMS of the tail's readings about their median [m].
+        rms: f64,
     },
     /// Nothing moves beyond the noise.
     #[error(

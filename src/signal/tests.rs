@@ -163,6 +163,46 @@ fn codec_refreshes_in_the_rest_tail_are_not_motion() {
     }
 }
 
+/// A still disk coded by x264 as a repeating group of a P frame and three B frames:
+/// each frame type reads the rim a little differently and the group repeats exactly
+/// (a dark-plate render at crf 23, seed 1003, read 2.4, 0.1, −0.6 and 1.0 × 10⁻⁵ m in
+/// turn). Its autocorrelation has a trough at 2 frames and 0.8 at 4, as an
+/// oscillation's would, but the readings repeat one group to the next: the codec's
+/// cadence, not motion, and the halt stays within a frame of the truth. The same
+/// pattern with sensor noise on every reading (distinct readings, a disk still
+/// rocking by ±1.5 × 10⁻⁵ m at a period of 4 frames) is refused.
+#[test]
+fn the_encoders_frame_type_cadence_is_not_an_oscillation() {
+    let (t, z, truth) = clip(0.0, 1);
+    let group = [2.4e-5, 0.1e-5, -0.6e-5, 1.0e-5];
+    let after_halt = |z: &[f64], noise: f64, seed: u64| {
+        let mut rng = SplitMix64::new(seed);
+        let mut z = z.to_vec();
+        for (i, x) in z.iter_mut().enumerate() {
+            if t[i] > truth.t0 {
+                *x = group[i % 4] + noise * rng.gaussian();
+            }
+        }
+        z
+    };
+    let coded = after_halt(&z, 0.0, 2);
+    let halt = halt_time(&t, &coded, &SignalConfig::default()).expect("halt");
+    assert!(
+        (halt.t_phi - (truth.t0 - 0.5 * FRAME)).abs() <= FRAME + 1e-12,
+        "t_φ = {}, t0 = {}",
+        halt.t_phi,
+        truth.t0
+    );
+    let rocking = after_halt(&z, 0.2e-5, 3);
+    match halt_time(&t, &rocking, &SignalConfig::default()) {
+        Err(SignalError::TailOscillates { lag, rms, .. }) => {
+            assert_eq!(lag % 4, 0);
+            assert!((rms / 1.1e-5 - 1.0).abs() < 0.1, "rms {rms}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
 /// After the halt, before the rest tail: an excursion 7.5 σ high 50 frames after the
 /// last rise (an H.264 refresh on the open footage), and one 6 σ high with a 5 σ low
 /// one, 20 frames after it. A flat disk does not rise again, so the first is not
