@@ -468,6 +468,16 @@ struct RenderArgs {
     /// Strip angle on the top face β0 [rad] (eq. 3.13).
     #[arg(long, default_value_t = 0.3, allow_hyphen_values = true)]
     beta0: f64,
+    /// Precession angle ψ at the halt [rad] (prescribed motion): 0 puts the contact
+    /// point facing the camera as the disk falls flat (the thesis's ψ = 0 there), so
+    /// the last frames show the rim at its lowest; real footage stops at any phase.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true,
+        value_name = "RAD"
+    )]
+    psi_halt: f64,
     /// Seed of the sensor noise and the plate's texture.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -916,6 +926,7 @@ fn run_render(args: &RenderArgs) -> Result<()> {
             a_e: args.a_e,
             precession_sign: -1.0,
             beta0: args.beta0,
+            psi_halt: args.psi_halt,
         };
         let timing = Timing {
             fps: args.fps,

@@ -195,6 +195,11 @@ pub struct PowerLaw {
     pub precession_sign: f64,
     /// Strip angle β0 on the top face (eq. 3.13) [rad].
     pub beta0: f64,
+    /// Precession angle ψ at the halt [rad]: where the disk falls flat, as seen from
+    /// the camera. 0 (the thesis zeroes ψ there, §3.2.5) puts the contact point
+    /// facing the camera at the halt, so the rim is at its lowest in the last frames;
+    /// real footage stops at any phase.
+    pub psi_halt: f64,
 }
 
 impl PowerLaw {
@@ -205,6 +210,7 @@ impl PowerLaw {
             a_e: 0.0063,
             precession_sign: -1.0,
             beta0: 0.3,
+            psi_halt: 0.0,
         }
     }
 }
@@ -312,7 +318,9 @@ const GAUSS_8: [(f64, f64); 8] = [
 /// mass stays at rest (the contact slides at R β̇₀), φ and ψ are unchanged, and β̇ is
 /// continuous at the halt, as on real footage.
 ///
-/// ψ and θ are zero at the halt (as the thesis zeroes ψ, §3.2.5). They are integrals
+/// θ is zero at the halt and ψ is [`PowerLaw::psi_halt`] (0 by default, as the
+/// thesis zeroes ψ, §3.2.5); the strip then lies at β = ψ + β0 on the flat disk. They
+/// are integrals
 /// of ψ̇ ∝ (t_halt − t)^(−n/2) near the halt, computed in the variable
 /// u = (t_halt − t)^(1 − n/2), in which the integrand is smooth, by 8-point
 /// Gauss–Legendre quadrature between consecutive frames.
@@ -366,7 +374,7 @@ pub fn power_law_motion(
     let times = timing.times();
     let mut states = vec![None; times.len()];
     // Walk backwards from the halt, accumulating ψ(τ) = −∫₀^τ ψ̇ dτ'.
-    let (mut tau_prev, mut psi, mut theta) = (0.0, 0.0, 0.0);
+    let (mut tau_prev, mut psi, mut theta) = (0.0, law.psi_halt, 0.0);
     for (k, &t) in times.iter().enumerate().rev() {
         if t >= 0.0 {
             continue;
@@ -396,7 +404,7 @@ pub fn power_law_motion(
             centre: [0.0, 0.0],
         });
     }
-    let halt = DiskState::fallen_flat(0.0, 0.0, law.beta0);
+    let halt = DiskState::fallen_flat(law.psi_halt, 0.0, law.psi_halt + law.beta0);
     let states = times
         .iter()
         .zip(states)
@@ -822,6 +830,41 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// ψ at the halt turns the whole precession by a constant: φ and the rates are
+    /// unchanged, ψ moves by ψ_h at every frame, and the strip, continuous through
+    /// the halt, lies at ψ_h + β0 on the flat disk.
+    #[test]
+    fn psi_at_the_halt_turns_the_precession_and_keeps_the_strip_continuous() {
+        let params = Preset::EulerDisk.params();
+        let zero = power_law_motion(&params, &PowerLaw::thesis(0.5), &timing(), spin()).expect("m");
+        let psi_halt = 1.9;
+        let law = PowerLaw {
+            psi_halt,
+            ..PowerLaw::thesis(0.5)
+        };
+        let turned = power_law_motion(&params, &law, &timing(), spin()).expect("m");
+        for (a, b) in zero.states.iter().zip(&turned.states) {
+            assert_eq!(a.phi, b.phi);
+            assert_eq!(a.psi_dot, b.psi_dot);
+            assert!((b.psi - a.psi - psi_halt).abs() < 1e-9, "t = {}", a.t);
+        }
+        let last_moving = turned.states.iter().rfind(|s| s.t < 0.0).expect("motion");
+        let flat = turned.states.iter().find(|s| s.t >= 0.0).expect("rest");
+        assert!((flat.psi - psi_halt).abs() < 1e-12);
+        let rest_beta = psi_halt + law.beta0 + spin().beta_dot0 * flat.t;
+        assert!(
+            (flat.beta - rest_beta).abs() < 1e-3,
+            "{} vs {rest_beta}",
+            flat.beta
+        );
+        assert!(
+            (last_moving.beta - flat.beta).abs() < 0.05,
+            "β {} → {}",
+            last_moving.beta,
+            flat.beta
+        );
     }
 
     /// After the halt the strip decelerates linearly and stops at t_β (eq. 4.113).
