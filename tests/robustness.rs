@@ -3,11 +3,11 @@
 //! of any strength, light plates brighter than the disk's side, textured plates, a
 //! top face lit brighter than the side, pinhole cameras 0.2–1 m from the near rim or
 //! orthographic, 100 Hz and 50 Hz flicker, lateral drift, φ oscillating about
-//! stationary rolling, read and shot noise, blur, exposure smear, H.264 at crf 18–28,
-//! side views and two-view layouts — each rendered with its ground truth, encoded,
-//! and analysed **with no config beyond the frame rate**. Every scene must be
-//! measured, and at accuracies that follow from its resolution and the targets of
-//! issue 12 §5 (see [`Tolerances`]).
+//! stationary rolling, any phase of the precession at the halt, read and shot noise,
+//! blur, exposure smear, H.264 at crf 18–28, side views and two-view layouts — each
+//! rendered with its ground truth, encoded, and analysed **with no config beyond the
+//! frame rate**. Every scene must be measured, and at accuracies that follow from its
+//! resolution and the targets of issue 12 §5 (see [`Tolerances`]).
 //!
 //! The test prints one row per scene (`cargo test --release --test robustness --
 //! --nocapture`) and fails listing every scene that misses a target, with the metric
@@ -47,6 +47,8 @@ struct SceneSpec {
     n: f64,
     nutation: Option<Nutation>,
     crf: u8,
+    /// The precession angle at the halt [rad] ([`PowerLaw::psi_halt`]).
+    psi_halt: f64,
 }
 
 impl SceneSpec {
@@ -108,7 +110,8 @@ impl SceneSpec {
 /// brighter than the side, dark with a blurred reflection, textured dark or light;
 /// two-view on dark plates every fourth scene; orthographic every fifth; top face
 /// lit brighter every seventh; flicker on odd scenes; nutation, drift and smear each
-/// on a third), with their strengths drawn from the seeded generator.
+/// on a third), with their strengths drawn from the seeded generator, and the
+/// precession's phase at the halt spread over the turn.
 fn draw_scenes() -> Vec<SceneSpec> {
     let mut rng = SplitMix64::new(SEED);
     (0..SCENES)
@@ -181,6 +184,9 @@ fn draw_scenes() -> Vec<SceneSpec> {
                 n: rng.range(0.4, 0.7),
                 nutation,
                 crf: [18, 23, 28][(i / 3) % 3],
+                // Spread evenly over the turn by the golden ratio, apart from the
+                // generator so that the other draws stay as they were.
+                psi_halt: TAU * ((i + 1) as f64 * 0.618_033_988_7).fract(),
             }
         })
         .collect()
@@ -200,8 +206,11 @@ fn render(scene: &SceneSpec, dir: &Path) -> (std::path::PathBuf, GroundTruth) {
         beta_dot0: -2.8,
         mu: 0.134,
     };
-    let mut motion =
-        power_law_motion(&params, &PowerLaw::thesis(scene.n), &timing, spin).expect("motion");
+    let law = PowerLaw {
+        psi_halt: scene.psi_halt,
+        ..PowerLaw::thesis(scene.n)
+    };
+    let mut motion = power_law_motion(&params, &law, &timing, spin).expect("motion");
     if let Some(nu) = scene.nutation {
         add_nutation(&mut motion, nu).expect("nutation");
     }
@@ -469,11 +478,12 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
 const HEADER: &str = "| scene | conditions | worst cal. point, err px | scale err % / tol | z_rim RMS px | peaks found/true ≥0.5 px, spurious | φ med abs (signed) err % / tol | Δn peaks (95 % CI covers?) / per frame / tol | t_φ err frames | fitted t0 err ms | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|";
 
 #[test]
-#[ignore = "7 of 24 scenes miss a target (BENCHMARKS.md, \"Robustness scenes\" and \"A \
-            frame's edge: the mean over its likelihood\"): φ low at the peaks where the codec's \
-            still picture puts the edge at rest high (s05, s17, s23), a top face thinner than \
-            the blur (s08, s15), a textured light plate (s11), n past its tolerance on s05, s15, \
-            s17 and s21 (by 0.001); run with --ignored"]
+#[ignore = "8 of 24 scenes miss a target (BENCHMARKS.md, \"Robustness scenes\", \
+            \"The precession's phase at the halt\"): z_t read 0.6-2.4 px above the near \
+            top rim, 5-18 px below the far one, once the disk rests at another phase \
+            (s01, s09, s17, s18), a top face thinner than the blur (s08), φ +5.9 % on a \
+            textured dark plate (s07), n past its tolerance on s07, s14 (t_φ 13 frames \
+            late, a peak lost), s17 and s21 (t_φ 5 frames early); run with --ignored"]
 fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
     let scenes = draw_scenes();
     assert!(scenes.len() >= 24);
