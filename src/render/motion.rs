@@ -320,8 +320,7 @@ const GAUSS_8: [(f64, f64); 8] = [
 ///
 /// θ is zero at the halt and ψ is [`PowerLaw::psi_halt`] (0 by default, as the
 /// thesis zeroes ψ, §3.2.5); the strip then lies at β = ψ + β0 on the flat disk. They
-/// are integrals
-/// of ψ̇ ∝ (t_halt − t)^(−n/2) near the halt, computed in the variable
+/// are integrals of ψ̇ ∝ (t_halt − t)^(−n/2) near the halt, computed in the variable
 /// u = (t_halt − t)^(1 − n/2), in which the integrand is smooth, by 8-point
 /// Gauss–Legendre quadrature between consecutive frames.
 pub fn power_law_motion(
