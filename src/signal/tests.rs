@@ -100,6 +100,17 @@ fn clip_and_halt() -> (Vec<f64>, Vec<f64>, Truth, SignalConfig, Halt) {
     (t, z, truth, config, halt)
 }
 
+/// t_φ, the last frame of motion, is the frame before the true halt t0, within a
+/// frame either way (480 fps: ±2.1 ms).
+fn assert_halt_within_a_frame(halt: &Halt, truth: &Truth) {
+    assert!(
+        (halt.t_phi - (truth.t0 - 0.5 * FRAME)).abs() <= FRAME + 1e-12,
+        "t_φ = {}, t0 = {}",
+        halt.t_phi,
+        truth.t0
+    );
+}
+
 /// Sub-pixel edge noise of 2 μm (3 % of the thesis's 66 μm pixel, eq. 3.10).
 const NOISE: f64 = 2e-6;
 
@@ -112,12 +123,7 @@ fn halt_is_found_within_a_frame() {
     let (t, z, truth) = clip(NOISE, 1);
     let halt = halt_time(&t, &z, &SignalConfig::default()).expect("halt");
     // The last frame before t0 carries a peak far above the noise; 480 fps: ±1 frame.
-    assert!(
-        (halt.t_phi - (truth.t0 - 0.5 * FRAME)).abs() <= FRAME + 1e-12,
-        "t_φ = {}, t0 = {}",
-        halt.t_phi,
-        truth.t0
-    );
+    assert_halt_within_a_frame(&halt, &truth);
     // The MAD of 144 Gaussian samples estimates σ to about ±15 % (2 standard errors).
     assert!(
         (halt.noise / NOISE - 1.0).abs() < 0.3,
@@ -140,12 +146,7 @@ fn codec_refreshes_in_the_rest_tail_are_not_motion() {
         z[n - back] += sigmas * NOISE;
     }
     let halt = halt_time(&t, &z, &SignalConfig::default()).expect("halt");
-    assert!(
-        (halt.t_phi - (truth.t0 - 0.5 * FRAME)).abs() <= FRAME + 1e-12,
-        "t_φ = {}, t0 = {}",
-        halt.t_phi,
-        truth.t0
-    );
+    assert_halt_within_a_frame(&halt, &truth);
     // The same rise in the first half of the tail, where the band is not measured,
     // with nothing as high in the later half: one frame is a refresh, not a disk
     // moving at the clip's end; the halt stays where it was.
@@ -187,12 +188,7 @@ fn the_encoders_frame_type_cadence_is_not_an_oscillation() {
     };
     let coded = after_halt(&z, 0.0, 2);
     let halt = halt_time(&t, &coded, &SignalConfig::default()).expect("halt");
-    assert!(
-        (halt.t_phi - (truth.t0 - 0.5 * FRAME)).abs() <= FRAME + 1e-12,
-        "t_φ = {}, t0 = {}",
-        halt.t_phi,
-        truth.t0
-    );
+    assert_halt_within_a_frame(&halt, &truth);
     let rocking = after_halt(&z, 0.2e-5, 3);
     match halt_time(&t, &rocking, &SignalConfig::default()) {
         Err(SignalError::TailOscillates { lag, rms, .. }) => {
@@ -220,12 +216,7 @@ fn lone_excursions_after_the_halt_are_not_motion() {
     paired[last + 30] -= 5.0 * NOISE;
     for z in [&lone, &paired] {
         let halt = halt_of(z);
-        assert!(
-            (halt.t_phi - (truth.t0 - 0.5 * FRAME)).abs() <= FRAME + 1e-12,
-            "t_φ = {}, t0 = {}",
-            halt.t_phi,
-            truth.t0
-        );
+        assert_halt_within_a_frame(&halt, &truth);
     }
     // The single-frame rule these replace took the lone excursion for the halt.
     assert!(lone[last + 50] - halt_of(&lone).rest_level > 5.0 * NOISE);
@@ -1091,7 +1082,7 @@ fn sweep_seeds() {
             ("halt", |s| {
                 let (t, z, truth) = clip(NOISE, s);
                 let halt = halt_time(&t, &z, &SignalConfig::default()).expect("halt");
-                assert!((halt.t_phi - (truth.t0 - 0.5 * FRAME)).abs() <= FRAME + 1e-12);
+                assert_halt_within_a_frame(&halt, &truth);
             }),
         ] {
             if std::panic::catch_unwind(|| f(seed)).is_err() {
