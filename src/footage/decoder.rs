@@ -16,7 +16,9 @@
 //!
 //! Seeking lands on the key frame before the target and decodes forward from
 //! there, discarding frames, as a decoder must; unlike OpenCV's seek it does not
-//! back off a further 16 frames first.
+//! back off a further 16 frames first, but it goes back further when the first
+//! frame out lies past the target (an open GOP: MP4 seeks by decoding time, and
+//! the B-frames shown before a key frame but decoded after it need the GOP before).
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -408,33 +410,47 @@ impl VideoDecoder {
         let fps = self.fps.unwrap_or(1.0);
         let target = self.start + (time_s / self.time_base).round() as i64;
         let tolerance = (early_s / self.time_base).floor().min(i64::MAX as f64) as i64;
-        // SAFETY: the format context is open and owned by `self.input`.
-        let ret = unsafe {
-            ffi::av_seek_frame(
-                self.input.as_mut_ptr(),
-                self.stream as i32,
-                target,
-                ffi::AVSEEK_FLAG_BACKWARD,
-            )
-        };
-        if ret < 0 {
-            return Err(self.error(format!("cannot seek to {what}: {}", ff::Error::from(ret))));
-        }
-        self.decoder.flush();
-        self.eof_sent = false;
-        self.pending = false;
         // Frames more than REORDER_MARGIN before the target cannot be lent out
         // (in decoding order they may stand that far from their display place).
-        self.skip_before =
-            Some(target - (REORDER_MARGIN as f64 / fps / self.time_base).ceil() as i64);
-        let mut landed = false;
-        while self.receive()? {
-            let ts = self.yuv.timestamp().unwrap_or(target);
-            if ts >= target - tolerance {
-                landed = true;
-                break;
+        let margin = (REORDER_MARGIN as f64 / fps / self.time_base).ceil() as i64;
+        let mut seek_to = target;
+        let landed = loop {
+            // SAFETY: the format context is open and owned by `self.input`.
+            let ret = unsafe {
+                ffi::av_seek_frame(
+                    self.input.as_mut_ptr(),
+                    self.stream as i32,
+                    seek_to,
+                    ffi::AVSEEK_FLAG_BACKWARD,
+                )
+            };
+            if ret < 0 {
+                return Err(self.error(format!("cannot seek to {what}: {}", ff::Error::from(ret))));
             }
-        }
+            self.decoder.flush();
+            self.eof_sent = false;
+            self.pending = false;
+            self.skip_before = Some(target - margin);
+            let mut first = None;
+            let mut landed = false;
+            while self.receive()? {
+                let ts = self.yuv.timestamp().unwrap_or(target);
+                first.get_or_insert(ts);
+                if ts >= target - tolerance {
+                    landed = true;
+                    break;
+                }
+            }
+            // An MP4's index holds decoding times: a key frame decoded before the
+            // target may be shown after it, with the frames shown before it (an
+            // open GOP's B-frames) decoded after it but not decodable from it. The
+            // seek then lands past the target: go back further.
+            let overshot = first.is_some_and(|ts| ts > target + tolerance);
+            if !overshot || seek_to <= self.start {
+                break landed;
+            }
+            seek_to = (seek_to - margin).max(self.start);
+        };
         self.skip_before = None;
         self.decoder.skip_frame(ff::Discard::Default);
         self.pending = landed;
@@ -710,6 +726,58 @@ mod tests {
                 decoder.bgr_whole().unwrap() == reference[index].as_slice(),
                 "frame {index}"
             );
+        }
+    }
+
+    /// The presentation times of the stream's packets in decoding order, each
+    /// with its key-frame flag.
+    fn packets_in_decoding_order(path: &Path) -> Vec<(i64, bool)> {
+        let mut input = ff::format::input(path).unwrap();
+        let stream = input
+            .streams()
+            .best(ff::media::Type::Video)
+            .unwrap()
+            .index();
+        input
+            .packets()
+            .filter(|(s, _)| s.index() == stream)
+            .map(|(_, p)| (p.pts().unwrap(), p.is_key()))
+            .collect()
+    }
+
+    /// An open GOP (`scripts/make-fixtures`' fixture `side-dark-open-gop.mp4`): the
+    /// key frame 250 is decoded before frames 247–249, which are shown before it
+    /// and reference the frames before it. The MP4's index holds decoding times,
+    /// so a seek to any of those three finds that key frame first, and from it
+    /// their own pictures cannot be decoded; the seek must go back further.
+    #[test]
+    fn a_seek_lands_before_an_open_gops_key_frame() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/side-dark-open-gop.mp4");
+        let packets = packets_in_decoding_order(&path);
+        let open: Vec<i64> = packets
+            .iter()
+            .enumerate()
+            .filter(|&(i, &(pts, key))| key && packets[i + 1..].iter().any(|p| p.0 < pts))
+            .map(|(_, p)| p.0)
+            .collect();
+        assert!(!open.is_empty(), "the fixture has no open GOP");
+        let reference = opencv_frames(&path);
+        let mut decoder = VideoDecoder::open(&path).unwrap();
+        let fps = decoder.fps().unwrap();
+        for &key_pts in &open {
+            let key = ((key_pts - decoder.start) as f64 * decoder.time_base * fps).round() as usize;
+            for (index, expected) in reference.iter().enumerate().take(key + 1).skip(key - 3) {
+                decoder.seek(index).unwrap();
+                let t = decoder.next().unwrap().expect("frame").unwrap();
+                assert!(
+                    (t - index as f64 / fps).abs() < 1e-9,
+                    "frame {index} (key frame {key}): t = {t}"
+                );
+                assert!(
+                    decoder.bgr_whole().unwrap() == expected.as_slice(),
+                    "frame {index}"
+                );
+            }
         }
     }
 }
