@@ -26,9 +26,10 @@
 //!    holds whatever the frame's overall histogram.
 
 use super::VisionError;
-use super::calibration::{Calibration, band, near_top_rim};
+use super::calibration::{Calibration, band};
 use super::components::Component;
 use super::profile::{area_edge, column_band_mean, row_band_mean};
+use super::top_rim::{CentreBand, near_top_rim, near_top_rim_across};
 use crate::footage::FrameView;
 
 /// Least departure from the side's level that ends it, 0–255 intensity, and as a
@@ -104,7 +105,18 @@ pub(super) fn calibrate(
         .max_by(|&a, &b| step(a).total_cmp(&step(b)))
         .ok_or_else(|| missing("z_t"))?;
     let silhouette = area_edge(&p, j, REACH, 0.0).ok_or_else(|| missing("z_t"))?;
-    let z_t = near_top_rim(&p, j + 1, i, windowed(k), 0.0).unwrap_or(silhouette);
+    let centre = CentreBand {
+        x_centre: 0.5 * (x_l + x_r),
+        half_span: 0.5 * (x_r - x_l),
+        half_width,
+        top: j + 1,
+        far: silhouette,
+        side_end: i,
+        contrast: windowed(k),
+    };
+    let z_t = near_top_rim_across(frame, &centre)
+        .or_else(|| near_top_rim(&p, j + 1, i, windowed(k), 0.0))
+        .unwrap_or(silhouette);
     Ok(Calibration {
         x_l,
         x_r,

@@ -47,6 +47,7 @@ mod rim;
 mod rim_zero;
 mod shadow_edge;
 mod threshold;
+mod top_rim;
 mod two_view;
 
 #[cfg(test)]

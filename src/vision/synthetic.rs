@@ -63,10 +63,22 @@ impl Canvas {
     /// [x0, x1) × [y0, y1), by n × n supersampling of each pixel.
     pub fn shape(
         &mut self,
-        (x0, y0, x1, y1): (f64, f64, f64, f64),
+        box_: (f64, f64, f64, f64),
         n: usize,
         inside: impl Fn(f64, f64) -> bool,
         colour: [f64; 3],
+    ) {
+        self.paint(box_, n, |x, y| inside(x, y).then_some(colour));
+    }
+
+    /// Paints `colour_at(x, y)` where it is `Some`, within the box [x0, x1) ×
+    /// [y0, y1), by n × n supersampling of each pixel: regions of different colours
+    /// that share an edge, painted at once, mix in each pixel by their areas.
+    pub fn paint(
+        &mut self,
+        (x0, y0, x1, y1): (f64, f64, f64, f64),
+        n: usize,
+        colour_at: impl Fn(f64, f64) -> Option<[f64; 3]>,
     ) {
         let (c0, c1) = (
             x0.floor().max(0.0) as usize,
@@ -76,25 +88,29 @@ impl Canvas {
             y0.floor().max(0.0) as usize,
             (y1.ceil() as usize).min(self.h),
         );
+        let samples = (n * n) as f64;
         for r in r0..r1 {
             for c in c0..c1 {
+                let mut painted = [0.0; 3];
                 let mut hits = 0;
                 for i in 0..n {
                     for j in 0..n {
                         let x = c as f64 + (i as f64 + 0.5) / n as f64;
                         let y = r as f64 + (j as f64 + 0.5) / n as f64;
-                        hits += usize::from(inside(x, y));
+                        if let Some(colour) = colour_at(x, y) {
+                            hits += 1;
+                            for k in 0..3 {
+                                painted[k] += colour[k] / samples;
+                            }
+                        }
                     }
                 }
-                self.blend(c, r, hits as f64 / (n * n) as f64, colour);
+                let keep = 1.0 - hits as f64 / samples;
+                let p = &mut self.px[r * self.w + c];
+                for k in 0..3 {
+                    p[k] = keep * p[k] + painted[k];
+                }
             }
-        }
-    }
-
-    fn blend(&mut self, c: usize, r: usize, a: f64, colour: [f64; 3]) {
-        let p = &mut self.px[r * self.w + c];
-        for k in 0..3 {
-            p[k] = (1.0 - a) * p[k] + a * colour[k];
         }
     }
 
