@@ -436,6 +436,52 @@ fn a_thin_top_face_gives_the_near_top_rim() {
     assert!(error.abs() < 0.02, "scale error {:+.2} %", 100.0 * error);
 }
 
+/// The strip on the top face resting 82° from across the view (ψ_h + β0 = 1.43 rad),
+/// nearly pointing at the camera, on a light plate seen from 1.6° above: on the
+/// centre band it runs from the far top rim to 2 px above the near one, and its
+/// edge was read as the rim (z_t 1.9 px high, scale −3.4 %). The bands across the
+/// face read the near rim beside the strip (`vision::top_rim`).
+#[test]
+fn a_strip_pointing_at_the_camera_leaves_the_near_top_rim() {
+    let (e, truth) = render_and_analyse(&[
+        "--n",
+        "0.5",
+        "--halt",
+        "0.6",
+        "--after-halt",
+        "0.15",
+        "--size",
+        "320x180",
+        "--plate",
+        "light",
+        "--plate-grey",
+        "207",
+        "--paper-grey",
+        "180",
+        "--elevation",
+        "1.6",
+        "--blur",
+        "0.6",
+        "--noise",
+        "1.7",
+        "--psi-halt",
+        "1.13",
+        "--seed",
+        "9",
+    ]);
+    // Rows: the truth's on pixel centres at integers, ours at half-integers.
+    let near = f(&truth["calibration"]["z_t"]) + 0.5;
+    let far = f(&truth["camera"]["z_t_far"]) + 0.5;
+    let z_t = e.plan.calibration.calibration.z_t;
+    assert!(
+        (z_t - near).abs() < 0.3,
+        "z_t {z_t} px, near rim {near}, far {far}"
+    );
+    let scale = f(&truth["camera"]["near_rim_metres_per_px"]);
+    let error = e.plan.metres_per_px / scale - 1.0;
+    assert!(error.abs() < 0.02, "scale error {:+.2} %", 100.0 * error);
+}
+
 /// A sharp rim under a 0.8 px blur: the rest frames alone put the plate line
 /// 0.56 px below the edge, which took this rim for a rounded one, and the
 /// mirror-edge model then read the lifted heights of the last 0.5 s 0.12 px high
