@@ -716,17 +716,20 @@ mod tests {
         let fps = decoder.fps().unwrap();
         // Just after a key frame, before one, the last frames, and back to the start.
         for index in [260, 7, last - 4, last, 0] {
-            decoder.seek(index).unwrap();
-            let t = decoder.next().unwrap().expect("frame").unwrap();
-            assert!(
-                (t - index as f64 / fps).abs() < 1e-9,
-                "frame {index}: t = {t}"
-            );
-            assert!(
-                decoder.bgr_whole().unwrap() == reference[index].as_slice(),
-                "frame {index}"
-            );
+            assert_seek_lands(&mut decoder, index, fps, &reference[index]);
         }
+    }
+
+    /// A seek to frame `index` gives that frame next: its time at `fps` and the
+    /// bytes OpenCV decodes for it.
+    fn assert_seek_lands(decoder: &mut VideoDecoder, index: usize, fps: f64, expected: &[u8]) {
+        decoder.seek(index).unwrap();
+        let t = decoder.next().unwrap().expect("frame").unwrap();
+        assert!(
+            (t - index as f64 / fps).abs() < 1e-9,
+            "frame {index}: t = {t}"
+        );
+        assert!(decoder.bgr_whole().unwrap() == expected, "frame {index}");
     }
 
     /// The presentation times of the stream's packets in decoding order, each
@@ -767,16 +770,7 @@ mod tests {
         for &key_pts in &open {
             let key = ((key_pts - decoder.start) as f64 * decoder.time_base * fps).round() as usize;
             for (index, expected) in reference.iter().enumerate().take(key + 1).skip(key - 3) {
-                decoder.seek(index).unwrap();
-                let t = decoder.next().unwrap().expect("frame").unwrap();
-                assert!(
-                    (t - index as f64 / fps).abs() < 1e-9,
-                    "frame {index} (key frame {key}): t = {t}"
-                );
-                assert!(
-                    decoder.bgr_whole().unwrap() == expected.as_slice(),
-                    "frame {index}"
-                );
+                assert_seek_lands(&mut decoder, index, fps, expected);
             }
         }
     }
