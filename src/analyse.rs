@@ -1004,8 +1004,9 @@ pub fn analyse_clip_keeping(
     // Dark plate: rim heights below 2 px from the darkness of the gap (vision::gap),
     // then, on either plate, every height re-measured with a model of the rim's
     // edge learned from the clip (vision::mirror_edge on a dark plate,
-    // vision::shadow_edge on a light one), whose zero is the rest frames' band
-    // rows about their edge.
+    // vision::shadow_edge on a light one), whose zero is the rest tail's band rows
+    // about their edge (pass 1's rest frames here, the whole tail's after pass 2:
+    // `tail_rest_window`).
     let gap_gauge = match side_config.plate {
         Plate::Dark => GapGauge::new(&calibration.calibration, &side_config, &rest_sides)
             .map_err(vision_err)?,
@@ -1187,6 +1188,9 @@ pub fn analyse_clip_keeping(
         // meets its mirror image (ScaleReport), else z_base.
         let mut bottom_rim_row = cal.z_base;
         let mut reading = RimReading::FirstPass;
+        let rest_window = rest_window
+            .as_ref()
+            .map(|(pass1, edge0)| (tail_rest_window(&windows, pass1, fps.fps), *edge0));
         let rim = match &rest_window {
             Some((rest_window, edge0)) => {
                 let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
@@ -1714,6 +1718,23 @@ fn frame_energies(
             })
         })
         .collect()
+}
+
+/// The rest window whose edge is the zero of z_rim: the mean of the band windows of
+/// the rest tail's frames (the last [`SignalConfig::rest_tail_s`] at `fps`) that
+/// hold the same rows as pass 1's mean of the last [`REST_FRAMES`], else pass 1's.
+///
+/// Each picture of a still disk carries its own coding error, and an encoder may
+/// code a clip's last frames apart from the ones before, so five frames can put the
+/// zero off by tenths of a pixel, an offset in every z_rim: on o05 of the open
+/// footage re-encoded at CRF 20 they put the edge at rest at 429.35 px, the tail's
+/// 48 frames at 429.74 px, where the original clip's five and 48 put it (429.71,
+/// 429.74), and every lifted height had read 0.33 px low. Copies of one picture
+/// average to that picture, as before. The halt's analysis checks that the same
+/// tail is at rest.
+fn tail_rest_window(windows: &[Option<BandWindow>], pass1: &BandWindow, fps: f64) -> BandWindow {
+    let tail = ((SignalConfig::default().rest_tail_s * fps).round() as usize).max(REST_FRAMES);
+    BandWindow::tail_mean(windows, pass1, tail, REST_FRAMES).unwrap_or_else(|| pass1.clone())
 }
 
 /// The signal stage's settings for a clip measured at `metres_per_px`.

@@ -49,13 +49,12 @@ impl BandWindow {
         })
     }
 
-    /// The mean of several windows of the same rows (the rest frames).
-    pub fn mean(windows: &[Self]) -> Option<Self> {
+    /// The mean of several windows of the same rows (the rest frames); `None` when
+    /// there are none or their rows differ.
+    pub fn mean<'a>(windows: impl IntoIterator<Item = &'a Self>) -> Option<Self> {
+        let windows: Vec<&Self> = windows.into_iter().collect();
         let first = windows.first()?;
-        if windows
-            .iter()
-            .any(|w| w.first_row != first.first_row || w.values.len() != first.values.len())
-        {
+        if windows.iter().any(|w| !w.same_rows(first)) {
             return None;
         }
         let n = windows.len() as f32;
@@ -66,6 +65,31 @@ impl BandWindow {
             first_row: first.first_row,
             values,
         })
+    }
+
+    /// Whether `other` holds the same rows.
+    pub fn same_rows(&self, other: &Self) -> bool {
+        self.first_row == other.first_row && self.values.len() == other.values.len()
+    }
+
+    /// The mean of the windows among the last `tail` of a clip's `windows` (one per
+    /// frame, `None` without an edge) that hold the same rows as `like`, or `None`
+    /// when fewer than `min` do.
+    pub fn tail_mean(
+        windows: &[Option<Self>],
+        like: &Self,
+        tail: usize,
+        min: usize,
+    ) -> Option<Self> {
+        let same: Vec<&Self> = windows[windows.len().saturating_sub(tail)..]
+            .iter()
+            .flatten()
+            .filter(|w| w.same_rows(like))
+            .collect();
+        if same.len() < min {
+            return None;
+        }
+        Self::mean(same)
     }
 
     /// The disk's level: the median of the top [`LEVEL_ROWS`] rows.
@@ -83,5 +107,54 @@ impl BandWindow {
             .iter()
             .enumerate()
             .map(|(k, &v)| ((self.first_row + k) as f64 + 0.5, f64::from(v)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A window of rows 20.. with a step from the disk's 200 to the gap's 40 at row
+    /// `edge`, sampled by area.
+    fn step(first_row: usize, edge: f64) -> BandWindow {
+        let values = (0..26)
+            .map(|k| {
+                let cover = (edge - (first_row + k) as f64).clamp(0.0, 1.0) as f32;
+                40.0 + 160.0 * cover
+            })
+            .collect();
+        BandWindow { first_row, values }
+    }
+
+    /// The edge of a window by the area of its step.
+    fn area(w: &BandWindow) -> f64 {
+        w.first_row as f64
+            + w.values
+                .iter()
+                .map(|&v| f64::from((v - 40.0) / 160.0))
+                .sum::<f64>()
+    }
+
+    #[test]
+    fn the_rest_tail_mean_follows_the_tail_not_its_last_frames() {
+        // A still disk whose last five frames were coded apart, 0.3 px lower, after
+        // 43 others at 30.2 px; before them the rim moved (other rows, and no edge).
+        let mut windows: Vec<Option<BandWindow>> = vec![None, Some(step(12, 24.0))];
+        windows.extend((0..43).map(|_| Some(step(16, 30.2))));
+        windows.extend((0..5).map(|_| Some(step(16, 30.5))));
+        let last_five = BandWindow::mean(windows[windows.len() - 5..].iter().flatten()).unwrap();
+        assert!((area(&last_five) - 30.5).abs() < 1e-4);
+        let tail = BandWindow::tail_mean(&windows, &last_five, 60, 5).expect("a tail");
+        let expected = (43.0 * 30.2 + 5.0 * 30.5) / 48.0;
+        assert!(
+            (area(&tail) - expected).abs() < 1e-4,
+            "tail edge {} (expected {expected})",
+            area(&tail)
+        );
+        // Too few frames of the same rows: none.
+        assert_eq!(
+            BandWindow::tail_mean(&windows, &step(12, 24.0), 60, 5),
+            None
+        );
     }
 }
