@@ -85,6 +85,11 @@ const REFERENCE_PICTURES: usize = 16;
 /// copy read at another frame's light gain by 1e-5 px (o05 of the open footage, σ
 /// 0.05 px).
 const COPY_FRACTION: f64 = 1e-3;
+/// Noise σ by which every reading of a level window must clear the motion threshold
+/// for the level to be a held picture without a repeated reading ([`held`]): well
+/// beyond the noise, so that motion too small to resolve, read near the threshold,
+/// stays motion.
+const RESOLVED_SIGMAS: f64 = 4.0;
 /// Re-measurements of the rest segment before t_φ is taken as settled.
 const MAX_HALT_ITERATIONS: usize = 8;
 /// Fewest rim heights a rest tail needs to measure its noise.
@@ -215,7 +220,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         for (n, &i) in samples.iter().enumerate().skip(first + 1) {
             let still = !moving(i, level, threshold)
                 || final_turn(&turns)
-                    .is_some_and(|p| held(&samples, t, z_rim, n, p, threshold, noise));
+                    .is_some_and(|p| held(&samples, t, z_rim, n, p, level, threshold, noise));
             if still {
                 low = low.min(z_rim[i]);
                 continue;
@@ -296,7 +301,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         let next = samples[n];
         // A rise that the search above took for a held picture is no descent either.
         if moving(next, level, threshold)
-            && period.is_some_and(|p| held(&samples, t, z_rim, n, p, threshold, noise))
+            && period.is_some_and(|p| held(&samples, t, z_rim, n, p, level, threshold, noise))
         {
             break;
         }
@@ -331,9 +336,10 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
 /// Whether the reading at position `n` of `samples` belongs to a held picture: some
 /// window of consecutive readings that contains it and spans at least
 /// [`HELD_TURN_FRACTION`] of the final turn `period` [s] has all its readings
-/// within half the motion `threshold` of each other, and one of them repeats an
-/// earlier reading (in the window or among the [`REFERENCE_PICTURES`] before it) to
-/// [`COPY_FRACTION`] of the `noise` σ.
+/// within half the motion `threshold` of each other, and either one of them repeats
+/// an earlier reading (in the window or among the [`REFERENCE_PICTURES`] before it)
+/// to [`COPY_FRACTION`] of the `noise` σ, or all of them stand more than
+/// [`RESOLVED_SIGMAS`] σ above the threshold over the rest `level`.
 ///
 /// The rim of a rolling disk comes down to the plate once a turn, z_rim = R sin φ
 /// (1 + cos χ): three quarters of a turn sampled at least four times a turn, at any
@@ -348,16 +354,24 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
 /// resolve (a two-view render whose last turns rock by 0.15 px at a 0.1 px
 /// threshold reads 0.10–0.12 px, all distinct, for five frames before the halt).
 /// A repeated reading tells the first: a moving rim, or a still one under sensor
-/// noise, never reads the same twice. The final turn is the shortest of the last
+/// noise, never reads the same twice. So does a level that every reading holds
+/// clearly above the threshold: motion that high is resolved, and would swing by
+/// 0.85 of its peak, four times the level's spread at most, within the window. An
+/// encoder that shows an earlier picture again with the light's flicker coded over
+/// it repeats no reading exactly (o05 of the open footage, once the zero of z_rim
+/// is the whole rest tail's: 0.33–0.40 px in frames 618–622, the disk flat from
+/// 615.5, at a 0.16 px threshold and σ 0.02 px). The final turn is the shortest of the last
 /// ones ([`final_turn`]): the turn shortens towards the halt, and the median that
 /// sizes the span ending the motion lags it (o08 at crf 26: 7 frames, the last
 /// turn 5).
+#[allow(clippy::too_many_arguments)]
 fn held(
     samples: &[usize],
     t: &[f64],
     z: &[f64],
     n: usize,
     period: f64,
+    level: f64,
     threshold: f64,
     noise: f64,
 ) -> bool {
@@ -379,12 +393,18 @@ fn held(
                 .any(|j| (z[samples[m]] - z[samples[j]]).abs() <= COPY_FRACTION * noise)
         })
     };
+    // Every reading of the window clearly above the threshold.
+    let resolved = |a: usize, b: usize| {
+        samples[a..=b]
+            .iter()
+            .all(|&i| z[i] - level > threshold + RESOLVED_SIGMAS * noise)
+    };
     for a in (0..=n).rev() {
         // The shortest window from `a` that spans the fraction of a turn and holds n.
         let Some(b) = (n..samples.len()).find(|&b| time(b) - time(a) >= span) else {
             continue;
         };
-        if level_over(a, b) && copied(a, b) {
+        if level_over(a, b) && (copied(a, b) || resolved(a, b)) {
             return true;
         }
         if time(n) - time(a) >= span {

@@ -370,9 +370,10 @@ fn an_excursion_turns_after_the_halt_is_not_motion() {
 /// A picture held after the halt, level for most of a final turn though above the
 /// threshold (o05 of the open footage re-encoded at crf 16: 0.41 px for five frames,
 /// three after the disk lay flat, a copy of a near-contact frame), is not motion: the
-/// rim of a rolling disk comes down to the plate every turn. Level readings that
-/// never repeat (motion too small to resolve), the same rise for one frame, or rising
-/// and falling over the turn are motion still.
+/// rim of a rolling disk comes down to the plate every turn. Nor is a level that
+/// repeats no reading but stands twice the threshold high. Level readings near the
+/// threshold that never repeat (motion too small to resolve), the same rise for one
+/// frame, or rising and falling over the turn are motion still.
 #[test]
 fn a_picture_held_level_for_a_turn_is_not_motion() {
     let (t, z, truth, config, before) = clip_and_halt();
@@ -408,6 +409,17 @@ fn a_picture_held_level_for_a_turn_is_not_motion() {
         "no picture repeats: {}",
         halt.index - last
     );
+    // Level and all distinct, but clearly above the threshold (an earlier picture
+    // shown again with the flicker coded over it): motion that high would swing by
+    // 0.85 of its peak within the window, so it is a held picture.
+    let noise = before.noise;
+    assert!(threshold >= 4.0 * noise, "threshold {threshold}, σ {noise}");
+    let mut high = rested.clone();
+    for (k, reading) in high[last + 4..last + 4 + frames].iter_mut().enumerate() {
+        *reading = level + threshold * (2.2 + 0.2 * (k as f64 * 2.1).sin());
+    }
+    let halt = halt_time(&t, &high, &config).expect("halt");
+    assert_eq!(halt.index, last, "a level far above the threshold is rest");
     let mut lone = rested.clone();
     lone[last + 4] = level + 1.2 * threshold;
     let halt = halt_time(&t, &lone, &config).expect("halt");
