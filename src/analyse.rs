@@ -1188,9 +1188,13 @@ pub fn analyse_clip_keeping(
         // meets its mirror image (ScaleReport), else z_base.
         let mut bottom_rim_row = cal.z_base;
         let mut reading = RimReading::FirstPass;
+        let tail = rest_tail_frames(fps.fps);
         let rest_window = rest_window
             .as_ref()
-            .map(|(pass1, edge0)| (tail_rest_window(&windows, pass1, fps.fps), *edge0));
+            .map(|(pass1, edge0)| match side_config.plate {
+                Plate::Dark => (tail_rest_window(&windows, pass1, tail), *edge0),
+                Plate::Light => (pass1.clone(), *edge0),
+            });
         let rim = match &rest_window {
             Some((rest_window, edge0)) => {
                 let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
@@ -1256,7 +1260,15 @@ pub fn analyse_clip_keeping(
                 }
             };
                 match refit {
-                    Ok((description, rest_edge, plate_row, how)) => {
+                    Ok((mut description, mut rest_edge, plate_row, how)) => {
+                        if side_config.plate == Plate::Light {
+                            let shift = tail_median_shift(&mut heights, tail);
+                            rest_edge -= shift;
+                            description += &format!(
+                                "; the rest tail's median reading ({shift:+.3} px) moves the \
+                                 zero to {rest_edge:.2} px"
+                            );
+                        }
                         for (record, z) in frames.iter_mut().zip(heights) {
                             record.z_rim_px = z;
                         }
@@ -1720,21 +1732,50 @@ fn frame_energies(
         .collect()
 }
 
-/// The rest window whose edge is the zero of z_rim: the mean of the band windows of
-/// the rest tail's frames (the last [`SignalConfig::rest_tail_s`] at `fps`) that
-/// hold the same rows as pass 1's mean of the last [`REST_FRAMES`], else pass 1's.
+/// Frames in the rest tail ([`SignalConfig::rest_tail_s`]) at `fps`, at least
+/// [`REST_FRAMES`].
+fn rest_tail_frames(fps: f64) -> usize {
+    ((SignalConfig::default().rest_tail_s * fps).round() as usize).max(REST_FRAMES)
+}
+
+/// The rest window whose fitted edge is the zero of z_rim on a dark plate
+/// (vision::mirror_edge): the mean of the band windows of the last `tail` frames
+/// that hold the same rows as pass 1's mean of the last [`REST_FRAMES`], else pass
+/// 1's.
 ///
 /// Each picture of a still disk carries its own coding error, and an encoder may
-/// code a clip's last frames apart from the ones before, so five frames can put the
-/// zero off by tenths of a pixel, an offset in every z_rim: on o05 of the open
-/// footage re-encoded at CRF 20 they put the edge at rest at 429.35 px, the tail's
-/// 48 frames at 429.74 px, where the original clip's five and 48 put it (429.71,
-/// 429.74), and every lifted height had read 0.33 px low. Copies of one picture
-/// average to that picture, as before. The halt's analysis checks that the same
-/// tail is at rest.
-fn tail_rest_window(windows: &[Option<BandWindow>], pass1: &BandWindow, fps: f64) -> BandWindow {
-    let tail = ((SignalConfig::default().rest_tail_s * fps).round() as usize).max(REST_FRAMES);
+/// code a clip's last frames apart from the ones before. The rest fit (edge,
+/// plate line and reflectivity at once) then moves with the frames it is given: on
+/// o05 of the open footage re-encoded at CRF 20 pass 1's five frames put the edge
+/// at rest at 429.35 px, the tail's 48 frames at 429.74 px, where the original
+/// clip's five and 48 put it (429.71, 429.74), and every lifted height had read
+/// 0.33 px low. The halt's analysis checks that the same tail is at rest.
+fn tail_rest_window(windows: &[Option<BandWindow>], pass1: &BandWindow, tail: usize) -> BandWindow {
     BandWindow::tail_mean(windows, pass1, tail, REST_FRAMES).unwrap_or_else(|| pass1.clone())
+}
+
+/// Moves the zero of `heights` [px] to the median of the last `tail` frames'
+/// readings (light plate, vision::shadow_edge), when [`REST_FRAMES`] of them have
+/// one; returns the shift (0 otherwise).
+///
+/// On a light plate the zero is the shadow-edge contour's crossing at rest alone,
+/// so the rest tail's frames can each be read with it and the median taken: it
+/// passes over a codec refresh that a mean profile would take in, and over the
+/// last frames' own coding error.
+fn tail_median_shift(heights: &mut [Option<f64>], tail: usize) -> f64 {
+    let rest: Vec<f64> = heights[heights.len().saturating_sub(tail)..]
+        .iter()
+        .flatten()
+        .copied()
+        .collect();
+    if rest.len() < REST_FRAMES {
+        return 0.0;
+    }
+    let shift = signal::median(&rest);
+    for z in heights.iter_mut().flatten() {
+        *z -= shift;
+    }
+    shift
 }
 
 /// The signal stage's settings for a clip measured at `metres_per_px`.
