@@ -1004,9 +1004,9 @@ pub fn analyse_clip_keeping(
     // Dark plate: rim heights below 2 px from the darkness of the gap (vision::gap),
     // then, on either plate, every height re-measured with a model of the rim's
     // edge learned from the clip (vision::mirror_edge on a dark plate,
-    // vision::shadow_edge on a light one), whose zero is the rest tail's band rows
-    // about their edge (pass 1's rest frames here, the whole tail's after pass 2:
-    // `tail_rest_window`).
+    // vision::shadow_edge on a light one), whose zero is the rest frames' band rows
+    // about their edge: pass 1's five here, the whole rest tail's after pass 2
+    // (`tail_rest_window` on a dark plate, `tail_median_shift` on a light one).
     let gap_gauge = match side_config.plate {
         Plate::Dark => GapGauge::new(&calibration.calibration, &side_config, &rest_sides)
             .map_err(vision_err)?,

@@ -356,14 +356,14 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
 /// A repeated reading tells the first: a moving rim, or a still one under sensor
 /// noise, never reads the same twice. So does a level that every reading holds
 /// clearly above the threshold: motion that high is resolved, and would swing by
-/// 0.85 of its peak, four times the level's spread at most, within the window. An
-/// encoder that shows an earlier picture again with the light's flicker coded over
-/// it repeats no reading exactly (o05 of the open footage, once the zero of z_rim
-/// is the whole rest tail's: 0.33–0.40 px in frames 618–622, the disk flat from
-/// 615.5, at a 0.16 px threshold and σ 0.02 px). The final turn is the shortest of the last
-/// ones ([`final_turn`]): the turn shortens towards the halt, and the median that
-/// sizes the span ending the motion lags it (o08 at crf 26: 7 frames, the last
-/// turn 5).
+/// 0.85 of its peak, more than 0.85 of the threshold, within a window whose
+/// readings spread by less than half of it. An encoder that shows an earlier
+/// picture again with the light's flicker coded over it repeats no reading exactly
+/// (o05 of the open footage, once the zero of z_rim is the whole rest tail's:
+/// 0.33–0.40 px in frames 618–622, the disk flat from 615.5, at a 0.16 px threshold
+/// and σ 0.02 px). The final turn is the shortest of the last ones
+/// ([`final_turn`]): the turn shortens towards the halt, and the median that sizes
+/// the span ending the motion lags it (o08 at crf 26: 7 frames, the last turn 5).
 #[allow(clippy::too_many_arguments)]
 fn held(
     samples: &[usize],
