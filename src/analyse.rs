@@ -1972,3 +1972,47 @@ pub fn summary(
         warnings: experiment.warnings.clone(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_light_plates_zero_is_the_rest_tails_median_reading() {
+        // A clip whose rest tail (48 frames) reads 0.03 px above the zero pass 1
+        // gave, but for a codec refresh 0.3 px high over 12 of them, and whose
+        // lifted frames read the rim 0.03 px high too: the median moves the zero by
+        // the tail's 0.03 px, whatever the refresh.
+        let tail = rest_tail_frames(480.0);
+        assert_eq!(tail, 48);
+        let truth: Vec<f64> = (0..100)
+            .map(|k| 3.0 * (1.0 - k as f64 / 60.0).max(0.0))
+            .collect();
+        let mut heights: Vec<Option<f64>> = truth.iter().map(|z| Some(z + 0.03)).collect();
+        for z in heights[70..82].iter_mut().flatten() {
+            *z += 0.3;
+        }
+        heights[10] = None;
+        let shift = tail_median_shift(&mut heights, tail);
+        assert!((shift - 0.03).abs() < 1e-12, "shift {shift}");
+        assert_eq!(heights[10], None);
+        for (k, z) in heights
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| !(70..82).contains(k))
+        {
+            if let Some(z) = z {
+                assert!(
+                    (z - truth[k]).abs() < 1e-12,
+                    "frame {k}: {z} against {}",
+                    truth[k]
+                );
+            }
+        }
+        // Fewer readings in the tail than the rest frames: the zero stays.
+        let mut few: Vec<Option<f64>> = vec![None; 60];
+        few[59] = Some(0.2);
+        assert_eq!(tail_median_shift(&mut few, tail), 0.0);
+        assert_eq!(few[59], Some(0.2));
+    }
+}

@@ -114,8 +114,8 @@ impl BandWindow {
 mod tests {
     use super::*;
 
-    /// A window of rows 20.. with a step from the disk's 200 to the gap's 40 at row
-    /// `edge`, sampled by area.
+    /// A window of 26 rows from `first_row` with a step from the disk's 200 to the
+    /// gap's 40 at row `edge`, sampled by area.
     fn step(first_row: usize, edge: f64) -> BandWindow {
         let values = (0..26)
             .map(|k| {
