@@ -1247,10 +1247,12 @@ pub fn analyse_clip_keeping(
                             let description = format!(
                                 "shadow-edge contour (vision::shadow_edge): the edge where the \
                                  band falls to {:.3} of the disk's side, halfway to the shadow \
-                                 under the lifted rim ({:.3}); edge at rest {:.2} px, the zero \
+                                 under the lifted rim ({:.3}), placed by the pixel means of a \
+                                 step blurred by σ = {:.2} px; edge at rest {:.2} px, the zero \
                                  of z_rim; {} frame(s) kept the first pass",
                                 model.edge_level(),
                                 model.shadow_ratio,
+                                model.blur_px,
                                 model.rest_edge,
                                 model.kept_first_pass
                             );

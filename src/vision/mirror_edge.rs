@@ -76,6 +76,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use super::band_window::{BandWindow, ROWS_ABOVE, ROWS_BELOW};
+use super::profile::{golden_section, steps};
 
 /// Width of the template's bins [px].
 pub const BIN_PX: f64 = 0.1;
@@ -556,36 +557,6 @@ fn best_gain_ssr(samples: &[(f64, f64)], model: impl Fn(f64) -> f64) -> f64 {
         vv += v * v;
     }
     if mm <= 0.0 { vv } else { vv - mv * mv / mm }
-}
-
-/// start, start + step, … up to end (inclusive within half a step).
-fn steps((start, end, step): (f64, f64, f64)) -> impl Iterator<Item = f64> {
-    let n = ((end - start) / step + 0.5).floor().max(0.0) as usize;
-    (0..=n).map(move |k| start + k as f64 * step)
-}
-
-/// The minimiser of a unimodal `f` on [a, b], to `tol`.
-fn golden_section(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> f64 {
-    let r = 0.5 * (5f64.sqrt() - 1.0);
-    let mut c = b - r * (b - a);
-    let mut d = a + r * (b - a);
-    let (mut fc, mut fd) = (f(c), f(d));
-    while b - a > tol {
-        if fc < fd {
-            b = d;
-            d = c;
-            fd = fc;
-            c = b - r * (b - a);
-            fc = f(c);
-        } else {
-            a = c;
-            c = d;
-            fc = fd;
-            d = a + r * (b - a);
-            fd = f(d);
-        }
-    }
-    0.5 * (a + b)
 }
 
 #[cfg(test)]

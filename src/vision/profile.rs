@@ -86,6 +86,36 @@ pub(crate) fn area_edge(p: &[f32], i: usize, reach: usize, origin: f64) -> Optio
     Some(origin + a as f64 + sum)
 }
 
+/// start, start + step, … up to end (inclusive within half a step).
+pub(super) fn steps((start, end, step): (f64, f64, f64)) -> impl Iterator<Item = f64> {
+    let n = ((end - start) / step + 0.5).floor().max(0.0) as usize;
+    (0..=n).map(move |k| start + k as f64 * step)
+}
+
+/// The minimiser of a unimodal `f` on [a, b], to `tol`.
+pub(super) fn golden_section(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> f64 {
+    let r = 0.5 * (5f64.sqrt() - 1.0);
+    let mut c = b - r * (b - a);
+    let mut d = a + r * (b - a);
+    let (mut fc, mut fd) = (f(c), f(d));
+    while b - a > tol {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - r * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + r * (b - a);
+            fd = f(d);
+        }
+    }
+    0.5 * (a + b)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
