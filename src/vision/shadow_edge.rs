@@ -336,15 +336,15 @@ mod tests {
         }
     }
 
-    /// A sharp edge (blurred by 0.05 px) from the side's 150 to the shadow's 50 at
-    /// row `rim`, under the light's `gain`, sampled by area, 8-bit.
+    /// A sharp edge from the side's 150 to the shadow's 50 at row `rim`, under the
+    /// light's `gain`, sampled by area, 8-bit.
     fn sharp_window(rim: f64, gain: f64) -> BandWindow {
         let first = rim.round() as usize - ROWS_ABOVE;
         BandWindow {
             first_row: first,
             values: (first..first + ROWS_ABOVE + ROWS_BELOW)
                 .map(|y| {
-                    let side = covered(rim - y as f64, 0.05);
+                    let side = (rim - y as f64).clamp(0.0, 1.0);
                     (gain * (50.0 + 100.0 * side)).round() as f32
                 })
                 .collect(),
