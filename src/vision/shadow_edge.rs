@@ -292,11 +292,17 @@ mod tests {
             }
             acc / wsum
         };
+        rows_about(rim, |y| 120.0 * gain * blurred(y))
+    }
+
+    /// The band window about row `rim` whose row y (its top) reads `value(y)`,
+    /// rounded to 8 bits.
+    fn rows_about(rim: f64, value: impl Fn(f64) -> f64) -> BandWindow {
         let first = rim.round() as usize - ROWS_ABOVE;
         BandWindow {
             first_row: first,
             values: (first..first + ROWS_ABOVE + ROWS_BELOW)
-                .map(|y| (120.0 * gain * blurred(y as f64)).round() as f32)
+                .map(|y| value(y as f64).round() as f32)
                 .collect(),
         }
     }
@@ -339,16 +345,7 @@ mod tests {
     /// A sharp edge from the side's 150 to the shadow's 50 at row `rim`, under the
     /// light's `gain`, sampled by area, 8-bit.
     fn sharp_window(rim: f64, gain: f64) -> BandWindow {
-        let first = rim.round() as usize - ROWS_ABOVE;
-        BandWindow {
-            first_row: first,
-            values: (first..first + ROWS_ABOVE + ROWS_BELOW)
-                .map(|y| {
-                    let side = (rim - y as f64).clamp(0.0, 1.0);
-                    (gain * (50.0 + 100.0 * side)).round() as f32
-                })
-                .collect(),
-        }
+        rows_about(rim, |y| gain * (50.0 + 100.0 * (rim - y).clamp(0.0, 1.0)))
     }
 
     #[test]
