@@ -1224,12 +1224,13 @@ pub fn analyse_clip_keeping(
                         "mirror-edge model (vision::mirror_edge): the rim's profile learned from \
                          the frames with an open gap; edge at rest {:.2} px, the zero of z_rim; \
                          plate line {:.2} px, where the rim meets its mirror image (z_b of eq. \
-                         3.10's scale), reflectivity {:.2}; rest fit RMS {:.1} % of the disk's \
-                         level; {kind}: {test} {:+.2} px below the edge (sharp under {sharp} \
-                         px)",
+                         3.10's scale), reflectivity {:.2}, the reflection blurred by σ {:.2} \
+                         px; rest fit RMS {:.1} % of the disk's level; {kind}: {test} {:+.2} px \
+                         below the edge (sharp under {sharp} px)",
                         model.rest_edge,
                         model.plate_row,
                         model.reflectivity,
+                        model.mirror_blur_px(),
                         100.0 * model.rest_rms,
                         model.plate_offset_test,
                         sharp = vision::SHARP_RIM_PX,
