@@ -212,6 +212,23 @@ impl EdgeTemplate {
     pub fn floor(&self) -> f64 {
         self.levels[self.levels.len() - 1]
     }
+
+    /// The width of D's fall from the side to the gap, as a Gaussian's σ [px]: half
+    /// the distance between its 84 % and 16 % levels. For a sharp rim it is the
+    /// camera's blur; a rounded rim widens it.
+    fn edge_width(&self) -> f64 {
+        let (top, f) = (self.levels[0], self.floor());
+        let crossing = |share: f64| {
+            let level = f + share * (top - f);
+            let k = self.levels.iter().position(|&v| v < level)?;
+            let (a, b) = (self.levels[k.checked_sub(1)?], self.levels[k]);
+            Some(self.first + BIN_PX * ((k - 1) as f64 + (a - level) / (a - b)))
+        };
+        match (crossing(0.84), crossing(0.16)) {
+            (Some(hi), Some(lo)) => 0.5 * (lo - hi),
+            _ => 0.0,
+        }
+    }
 }
 
 /// A rough plate's reflection: the mirror image blurred by a Gaussian of width σ
@@ -395,7 +412,8 @@ impl MirrorEdgeModel {
     /// reads them: as the gap under the rim opens, a blurred reflection fills it
     /// with light, where a sharp one leaves it dark to its mirror edge. Searched
     /// over 0 … [`MAX_PLATE_BLUR_PX`]; `None` for a sharp reflection (σ_m = 0 fits
-    /// best), or with fewer than [`MIN_NEAR_CONTACT_FRAMES`] frames.
+    /// best, or the plate's share of σ is not resolved beyond D's own width), or
+    /// with fewer than [`MIN_NEAR_CONTACT_FRAMES`] frames.
     fn plate_blur_near_contact(
         &self,
         rest: &BandWindow,
@@ -422,7 +440,14 @@ impl MirrorEdgeModel {
             return None;
         }
         let sigma = golden_section(total, grid[k - 1], grid[(k + 1).min(grid.len() - 1)], 0.05);
-        (sigma.is_finite() && total(sigma) < ssr[0]).then_some(sigma)
+        // The plate's own share of σ, √(σ² − w²) with w D's own width (the camera's
+        // blur of a sharp rim), must be resolved, at least w: below it the sharp
+        // model, whose mirror image is D reflected with the camera's blur exact, is
+        // the better description (on 2-view renders with no plate blur σ came out
+        // as the camera's 1.0 px, and read with it φ at the peaks went +1.7 → +6.9 %).
+        let width = self.template.edge_width();
+        (sigma.is_finite() && total(sigma) < ssr[0] && sigma * sigma > 2.0 * width * width)
+            .then_some(sigma)
     }
 
     /// The rest frames' and the frames near contact's SSR with the plate line c
