@@ -301,6 +301,10 @@ pub struct MirrorEdgeModel {
 /// rows (centre, value over its own level) and its first-pass edge.
 type NearContact = (Vec<(f64, f64)>, f64);
 
+/// The rest frames' rows (centre, value over their level) and the frames near
+/// contact, the inputs of the fits of c and of the plate's blur.
+type NearContactInputs = (Vec<(f64, f64)>, Vec<NearContact>);
+
 impl MirrorEdgeModel {
     /// Fits ρ, y_p and e_rest to the rest frames' mean window, `rest_edge0` their
     /// first-pass edge (or the calibrated plate line when they read contact), for a
@@ -381,11 +385,7 @@ impl MirrorEdgeModel {
         rest: &BandWindow,
         near: &[(&BandWindow, f64, f64)],
     ) -> Option<f64> {
-        if near.len() < MIN_NEAR_CONTACT_FRAMES {
-            return None;
-        }
-        let rest_samples = rest_samples(rest, self.rest_edge);
-        let near_samples = near_contact_samples(near);
+        let (rest_samples, near_samples) = self.near_contact_inputs(rest, near)?;
         let total = |c: f64| self.near_contact_ssr(self.profile(), &rest_samples, &near_samples, c);
         let mut best = (f64::INFINITY, f64::NAN);
         for c in steps((MIN_PLATE_OFFSET_PX, PLATE_OFFSET_PX.end, 0.25)) {
@@ -419,11 +419,7 @@ impl MirrorEdgeModel {
         rest: &BandWindow,
         near: &[(&BandWindow, f64, f64)],
     ) -> Option<f64> {
-        if near.len() < MIN_NEAR_CONTACT_FRAMES {
-            return None;
-        }
-        let rest_samples = rest_samples(rest, self.rest_edge);
-        let near_samples = near_contact_samples(near);
+        let (rest_samples, near_samples) = self.near_contact_inputs(rest, near)?;
         let c = self.plate_offset_test;
         let total = |sigma: f64| {
             let blur = (sigma > 0.0).then_some(PlateBlur { sigma });
@@ -448,6 +444,22 @@ impl MirrorEdgeModel {
         let width = self.template.edge_width();
         (sigma.is_finite() && total(sigma) < ssr[0] && sigma * sigma > 2.0 * width * width)
             .then_some(sigma)
+    }
+
+    /// The rest frames' rows about the model's edge at rest and the frames near
+    /// contact as [`near_contact_samples`] reads them; `None` with fewer than
+    /// [`MIN_NEAR_CONTACT_FRAMES`] frames.
+    fn near_contact_inputs(
+        &self,
+        rest: &BandWindow,
+        near: &[(&BandWindow, f64, f64)],
+    ) -> Option<NearContactInputs> {
+        (near.len() >= MIN_NEAR_CONTACT_FRAMES).then(|| {
+            (
+                rest_samples(rest, self.rest_edge),
+                near_contact_samples(near),
+            )
+        })
     }
 
     /// The rest frames' and the frames near contact's SSR with the plate line c
@@ -675,7 +687,8 @@ pub fn remeasure(
     // A rough plate: D learned again from the rows its blurred mirror image cannot
     // reach, and the model fitted again with the blur.
     if let Some(sigma) = model.plate_blur_near_contact(rest, &near) {
-        let template = learn(MIRROR_REACH_PX + 3.0 * sigma).unwrap_or(model.template.clone());
+        let template =
+            learn(MIRROR_REACH_PX + 3.0 * sigma).unwrap_or_else(|| model.template.clone());
         let blur = PlateBlur { sigma };
         let test = (model.plate_offset_test, model.near_contact_frames);
         model = MirrorEdgeModel::fit_with_blur(template, Some(blur), rest, rest_edge0);
