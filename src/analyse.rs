@@ -328,6 +328,10 @@ struct MeasuredSpan {
     rest_tail_s: f64,
     /// The overlay's pictures of the frames near the last motion.
     kept: Option<KeptFrames>,
+    /// The duplicated and interpolated frames, flagged by the signal stage.
+    repeated: Vec<footage::RepeatedFrame>,
+    /// Whether the strip's angle β was read (a two-view clip).
+    two_view: bool,
 }
 
 /// Why a clip could not be analysed. Every message names the clip; vision errors
@@ -1355,48 +1359,16 @@ pub fn analyse_clip_keeping(
         warnings.splice(0..0, fps.warnings.iter().cloned());
 
         // Signal.
-        let z: Vec<f64> = frames
-            .iter()
-            .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
-            .collect();
-        let beta: Option<Vec<f64>> = strip_finder.as_ref().map(|_| {
-            frames
-                .iter()
-                .map(|f| f.beta_raw.unwrap_or(f64::NAN))
-                .collect()
-        });
         let signal_config = signal_config(window_s, metres_per_px);
-        let model = ThesisRim {
-            radius: params.radius,
-        };
-        let signal_err = |error| signal_error(clip, &fps, error);
-        let mut series =
-            signal::analyse(&t, &z, beta.as_deref(), &model, &signal_config).map_err(signal_err)?;
-        for r in &repeated {
-            let (statistic, neighbours) = (r.statistic, r.neighbours);
-            series.flags.push(signal::FrameFlag {
-                index: r.index,
-                t: series.halt.shifted_t[r.index],
-                reason: match r.kind {
-                    footage::RepeatKind::Duplicated => signal::SkipReason::DuplicatedFrame {
-                        step: statistic,
-                        neighbours,
-                    },
-                    footage::RepeatKind::Interpolated => signal::SkipReason::InterpolatedFrame {
-                        residual: statistic,
-                        neighbours,
-                    },
-                },
-            });
-        }
-        series.flags.sort_by_key(|f| f.index);
-        // Flags carry the clip's frame numbers (a span's positions are not).
-        for flag in &mut series.flags {
-            flag.index = frames[flag.index].index;
-        }
-        for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
-            record.t = *shifted;
-        }
+        let two_view = strip_finder.is_some();
+        let series = signal_series(
+            &mut frames,
+            &repeated,
+            two_view,
+            &signal_config,
+            params.radius,
+        )
+        .map_err(|error| signal_error(clip, &fps, error))?;
         Ok(MeasuredSpan {
             frames,
             series,
@@ -1412,6 +1384,8 @@ pub fn analyse_clip_keeping(
             local_fit_periods: signal_config.state_window_periods,
             rest_tail_s: signal_config.rest_tail_s,
             kept: keeper.and_then(FrameKeeper::finish),
+            repeated,
+            two_view,
         })
     };
     let mut first = plan_span.first_span();
@@ -1447,28 +1421,114 @@ pub fn analyse_clip_keeping(
         metres_per_px,
         rest_tail_s,
         kept,
+        repeated,
+        two_view,
         ..
     } = measured;
     let decoded = plan_span.decoded(first, attempts, frames.len());
+    let halt_choice = config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default();
+    // `bounded`: t_φ was bounded by the energy law ([`law_bound`]), which leaves the
+    // halt seen no measurement of t0.
+    let halt_for = |series: &StateSeries, bounded: bool| match halt_choice {
+        HaltChoice::Measured => HaltTime::Fixed(0.0),
+        HaltChoice::Free => HaltTime::Free,
+        HaltChoice::Combined if bounded => HaltTime::Free,
+        HaltChoice::Combined => {
+            HaltTime::Sighted(halt_sighting(&params, series.halt.threshold, 1.0 / fps.fps))
+        }
+    };
     // The fit window and the rest tail must each lie in one section of constant
     // frame interval (footage::timing): a slowed section's boundary inside them
-    // is known only to within a few frames.
-    let t_phi = series.halt.t_phi;
-    let clip_end = frames.last().map_or(t_phi, |f| f.t_capture);
-    for (span, start_s, end_s) in [
-        ("fit window", t_phi - window_s, t_phi),
-        ("rest tail", clip_end - rest_tail_s, clip_end),
-    ] {
-        if !frame_times.within_one_section(start_s, end_s) {
-            return Err(AnalyseError::AcrossSections {
-                path: clip.to_path_buf(),
-                span,
-                start_s,
-                end_s,
-                sections: frame_times.sections_text(),
-            });
+    // is known only to within a few frames. Then the energy's fits.
+    let clip_end = frames.last().map_or(0.0, |f| f.t_capture);
+    let fit_span = |series: &StateSeries, bounded: bool| -> Result<Fits, AnalyseError> {
+        let t_phi = series.halt.t_phi;
+        for (span, start_s, end_s) in [
+            ("fit window", t_phi - window_s, t_phi),
+            ("rest tail", clip_end - rest_tail_s, clip_end),
+        ] {
+            if !frame_times.within_one_section(start_s, end_s) {
+                return Err(AnalyseError::AcrossSections {
+                    path: clip.to_path_buf(),
+                    span,
+                    start_s,
+                    end_s,
+                    sections: frame_times.sections_text(),
+                });
+            }
+        }
+        let halt = halt_for(series, bounded);
+        let peak_samples = peak_energies(&params, series);
+        let peaks =
+            fit_series("eq. 3.8 at peaks", peak_samples, window_s, halt).map_err(|error| {
+                AnalyseError::Fit {
+                    path: clip.to_path_buf(),
+                    error,
+                }
+            })?;
+        // Each state is a local fit over frames shared with its neighbours: the fit's
+        // interval allows for the autocorrelation this leaves in its residuals.
+        let frame_samples = frame_energies(&params, series, None);
+        let frames = fit_series("eq. 3.8 per frame", frame_samples, window_s, halt).ok();
+        let full_state = series.strip.as_ref().and_then(|strip| {
+            let samples = frame_energies(&params, series, Some(strip));
+            fit_series(
+                "eq. 3.6 per frame, θ̇ = β̇ − ψ̇ (eq. 3.22)",
+                samples,
+                window_s,
+                halt,
+            )
+            .ok()
+        });
+        Ok(Fits {
+            peaks,
+            frames,
+            full_state,
+        })
+    };
+    let (mut frames, mut series) = (frames, series);
+    let mut fits = fit_span(&series, false)?;
+    // A halt seen well after the energy law's is a coded picture, not motion: the
+    // rim is looked for again up to the law's halt ([`law_bound`]), and t0 is then
+    // the fits' own.
+    let mut bounded = false;
+    if let Some(bound) = law_bound(&fits, 1.0 / fps.fps) {
+        let mut config = signal_config(window_s, metres_per_px);
+        config.motion_until = Some(series.halt.t_phi + bound);
+        let mut frames_again = frames.clone();
+        let again = signal_series(
+            &mut frames_again,
+            &repeated,
+            two_view,
+            &config,
+            params.radius,
+        )
+        .ok()
+        .filter(|a| a.halt.index < series.halt.index);
+        if let Some(again) = again
+            && let Ok(fits_again) = fit_span(&again, true)
+        {
+            warnings.push(format!(
+                "the rim seemed to move until t = {:.4} s, {:.1} ms after the halt of the \
+                 energy law fitted to its peaks (t0 {:.1} ± {:.1} ms before it): a rise after \
+                 t0 + 3σ + one frame is taken for a coded picture, not motion, so t_φ moves \
+                 {} frame(s) earlier, to t = {:.4} s, and t0 is fitted free of it",
+                series.halt.t_phi,
+                -1e3 * fits.peaks.fit.t0,
+                -1e3 * fits.peaks.fit.t0,
+                1e3 * fits.peaks.fit.se_t0.unwrap_or(f64::NAN),
+                series.halt.index - again.halt.index,
+                again.halt.t_phi,
+            ));
+            (frames, series, fits, bounded) = (frames_again, again, fits_again, true);
         }
     }
+    let Fits {
+        peaks: peaks_fit,
+        frames: frames_fit,
+        full_state: full_state_fit,
+    } = fits;
+    let halt = halt_for(&series, bounded);
     let window = (-window_s, 0.0);
     let in_window = signal::flags_within(&series.flags, window.0, window.1);
     let skips_in_window = in_window.len();
@@ -1493,35 +1553,6 @@ pub fn analyse_clip_keeping(
         ));
     }
 
-    // Energy.
-    let halt = match config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default() {
-        HaltChoice::Measured => HaltTime::Fixed(0.0),
-        HaltChoice::Free => HaltTime::Free,
-        HaltChoice::Combined => {
-            HaltTime::Sighted(halt_sighting(&params, series.halt.threshold, 1.0 / fps.fps))
-        }
-    };
-    let fit_err = |error| AnalyseError::Fit {
-        path: clip.to_path_buf(),
-        error,
-    };
-    let peak_samples = peak_energies(&params, &series);
-    let peaks_fit =
-        fit_series("eq. 3.8 at peaks", peak_samples, window_s, halt).map_err(fit_err)?;
-    // Each state is a local fit over frames shared with its neighbours: the fit's
-    // interval allows for the autocorrelation this leaves in its residuals.
-    let frame_samples = frame_energies(&params, &series, None);
-    let frames_fit = fit_series("eq. 3.8 per frame", frame_samples, window_s, halt).ok();
-    let full_state_fit = series.strip.as_ref().and_then(|strip| {
-        let samples = frame_energies(&params, &series, Some(strip));
-        fit_series(
-            "eq. 3.6 per frame, θ̇ = β̇ − ψ̇ (eq. 3.22)",
-            samples,
-            window_s,
-            halt,
-        )
-        .ok()
-    });
     // The zero of z_rim (the edge at rest) is shared by every height, so an error in
     // it moves n without a trace in the residuals: each fit is made again with the
     // zero moved down and up by its uncertainty, and half the change of n enters
@@ -1627,6 +1658,93 @@ pub fn analyse_clip_keeping(
         },
         kept,
     })
+}
+
+/// The signal stage (thesis §3.2.4–§3.3.3) on the measured frames: t_φ, the peaks,
+/// the states, β and the skip flags, with the `repeated` frames flagged too (by
+/// the clip's frame numbers); sets each frame's time from the halt
+/// ([`FrameRecord::t`]).
+fn signal_series(
+    frames: &mut [FrameRecord],
+    repeated: &[footage::RepeatedFrame],
+    two_view: bool,
+    config: &SignalConfig,
+    radius: f64,
+) -> Result<StateSeries, SignalError> {
+    let t: Vec<f64> = frames.iter().map(|f| f.t_capture).collect();
+    let z: Vec<f64> = frames
+        .iter()
+        .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
+        .collect();
+    let beta: Option<Vec<f64>> = two_view.then(|| {
+        frames
+            .iter()
+            .map(|f| f.beta_raw.unwrap_or(f64::NAN))
+            .collect()
+    });
+    let mut series = signal::analyse(&t, &z, beta.as_deref(), &ThesisRim { radius }, config)?;
+    for r in repeated {
+        let (statistic, neighbours) = (r.statistic, r.neighbours);
+        series.flags.push(signal::FrameFlag {
+            index: r.index,
+            t: series.halt.shifted_t[r.index],
+            reason: match r.kind {
+                footage::RepeatKind::Duplicated => signal::SkipReason::DuplicatedFrame {
+                    step: statistic,
+                    neighbours,
+                },
+                footage::RepeatKind::Interpolated => signal::SkipReason::InterpolatedFrame {
+                    residual: statistic,
+                    neighbours,
+                },
+            },
+        });
+    }
+    series.flags.sort_by_key(|f| f.index);
+    // Flags carry the clip's frame numbers (a span's positions are not).
+    for flag in &mut series.flags {
+        flag.index = frames[flag.index].index;
+    }
+    for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
+        record.t = *shifted;
+    }
+    Ok(series)
+}
+
+/// The energy's fits of one span: at the peaks, per frame, and per frame with the
+/// strip's θ̇ (two-view).
+struct Fits {
+    peaks: EnergyFit,
+    frames: Option<EnergyFit>,
+    full_state: Option<EnergyFit>,
+}
+
+/// The latest time at which the energy laws leave the rim any motion, on the fits'
+/// clock (t_φ = 0), when the halt seen lies after the law's: the peaks fit's
+/// sighting of the halt disagrees with its t0, late, by more than
+/// [`energy::SIGHTING_DISAGREEMENT`] standard deviations of their difference
+/// ([`HaltSighting`]). A disk whose energy E = A_e (t0 − t)^n has gone to zero lies
+/// flat and does not rise again, so a rise seen after t0 is a coded picture: an
+/// encoder that shows earlier pictures again for a few frames after the halt, or
+/// a refresh, read as motion (o05 of the open footage re-encoded at CRF 20: t_φ
+/// 9.5 frames late, a spurious peak). The bound is the earliest over the fits that
+/// disagree alike (at the peaks, per frame) of t0 + 3 σ_t0 + one frame `frame_s`
+/// (the last frame of motion falls up to a frame after t0, [`HaltSighting`]);
+/// `None` when the halt seen agrees, or the bound does not lie before t_φ. A halt
+/// seen *before* the law's is the motion's last part too small to see, which the
+/// sighting's Δ describes: left alone.
+fn law_bound(fits: &Fits, frame_s: f64) -> Option<f64> {
+    let late = |s: &energy::SightingUse| {
+        s.t0_seen - s.t0_fitted > energy::SIGHTING_DISAGREEMENT * s.se_t0_seen.hypot(s.se_t0_fitted)
+    };
+    fits.peaks.fit.halt_sighting.filter(late)?;
+    [Some(&fits.peaks), fits.frames.as_ref()]
+        .into_iter()
+        .flatten()
+        .filter_map(|f| f.fit.halt_sighting.filter(late))
+        .map(|s| s.t0_fitted + energy::SIGHTING_DISAGREEMENT * s.se_t0_fitted + frame_s)
+        .min_by(f64::total_cmp)
+        .filter(|&bound| bound < 0.0)
 }
 
 /// PNG bytes of a diagnostic image; empty if encoding fails (the images are for
@@ -1979,6 +2097,60 @@ pub fn summary(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Peak energies of E = A_e (t0 − t)^n with 2 % noise, one every 6 ms up to
+    /// `last` (t_φ = 0 on this clock), fitted as `analyse` fits them with the halt seen.
+    fn sighted_peaks_fit(t0: f64, last: f64) -> EnergyFit {
+        let (a_e, n, frame_s) = (0.5, 0.55, 1.0 / 480.0);
+        let samples: Vec<EnergySample> = (0..80)
+            .map(|k| last - 0.006 * k as f64)
+            .rev()
+            .enumerate()
+            .map(|(k, t)| EnergySample {
+                t,
+                phi: 0.0,
+                psi_dot: 0.0,
+                theta_dot: None,
+                energy: a_e * (t0 - t).powf(n) * (1.0 + 0.02 * (k as f64 * 2.39).sin()),
+            })
+            .collect();
+        let halt = HaltTime::Sighted(HaltSighting {
+            t_phi: 0.0,
+            frame_s,
+            visible_energy: a_e * (0.3 * frame_s).powf(n),
+        });
+        fit_series("eq. 3.8 at peaks", samples, 0.5, halt).expect("fit")
+    }
+
+    /// The halt seen 20 ms (nearly 10 frames) after the law's, as an encoder showing
+    /// earlier pictures again after the halt makes it: the bound lies between the
+    /// law's t0 and t_φ, within three standard errors and a frame of t0. Seen where
+    /// the law has it, or before it (the last motion too small to see), no bound.
+    #[test]
+    fn a_halt_seen_after_the_laws_is_bounded_by_it() {
+        let frame_s = 1.0 / 480.0;
+        let late = sighted_peaks_fit(-0.020, -0.023);
+        assert!(late.fit.halt_sighting.is_some_and(|s| !s.combined));
+        let fits = Fits {
+            peaks: late,
+            frames: None,
+            full_state: None,
+        };
+        let bound = law_bound(&fits, frame_s).expect("a bound");
+        let t0 = fits.peaks.fit.t0;
+        let se = fits.peaks.fit.se_t0.expect("t0 free");
+        assert!((t0 + 0.020).abs() < 3.0 * se, "t0 {t0}");
+        assert!(bound > t0 && bound < 0.0, "bound {bound}, t0 {t0}");
+        assert!((bound - (t0 + 3.0 * se + frame_s)).abs() < 1e-12);
+        for t0 in [0.001, 0.006] {
+            let fits = Fits {
+                peaks: sighted_peaks_fit(t0, -0.002),
+                frames: None,
+                full_state: None,
+            };
+            assert_eq!(law_bound(&fits, frame_s), None, "t0 {t0}");
+        }
+    }
 
     #[test]
     fn the_light_plates_zero_is_the_rest_tails_median_reading() {

@@ -170,7 +170,7 @@ pub struct HaltSighting {
 /// deviations of their difference is not combined: one of them is wrong (an encoder
 /// holding a picture past the halt, or a last motion too small to see), and which is
 /// not known.
-const SIGHTING_DISAGREEMENT: f64 = 3.0;
+pub const SIGHTING_DISAGREEMENT: f64 = 3.0;
 
 /// How a [`HaltSighting`] entered the fit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

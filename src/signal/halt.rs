@@ -124,6 +124,9 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    it (the median of the next [`MIN_REST_FRAMES`] readings) is still motion,
 ///    unless it is a rise inside a held picture.
 ///
+/// With [`SignalConfig::motion_until`] set, no frame after it is motion in steps 3
+/// and 4 (the energy law fitted to the clip has the disk flat by then).
+///
 /// Errors: [`SignalError::RestTailTooShort`], [`SignalError::TailNotAtRest`],
 /// [`SignalError::TailOscillates`], [`SignalError::NoMotion`], or invalid input.
 pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt, SignalError> {
@@ -154,6 +157,10 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             .fold(0.0, f64::max);
     let threshold = (config.motion_sigmas * noise).max(band);
     let moving = |i: usize, level: f64, threshold: f64| z_rim[i] - level > threshold;
+    // After `motion_until` the energy law has the disk flat: no rise there is motion.
+    let until = config.motion_until.unwrap_or(f64::INFINITY);
+    let motion =
+        |i: usize, level: f64, threshold: f64| t[i] <= until && moving(i, level, threshold);
     // A disk still moving at the clip's end lifts its rim once a turn, turn after turn,
     // or holds it up: the tail is refused for rises in two runs or more, or in one
     // run of more than [`REFRESH_FRAMES`] readings. A frame that repeats the previous
@@ -205,7 +212,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // disk lying flat does not rise again, and a decaying oscillation that stays below
     // the threshold for whole turns does not rise above it again either).
     let last_moving = |level: f64, noise: f64, threshold: f64| {
-        let first = samples.iter().position(|&i| moving(i, level, threshold))?;
+        let first = samples.iter().position(|&i| motion(i, level, threshold))?;
         // The last rise, as a position in `samples` and as a frame index.
         let (mut last_n, mut last) = (first, samples[first]);
         // The times of the turns' peaks so far: a rise higher than its neighbours that
@@ -218,7 +225,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             })
         };
         for (n, &i) in samples.iter().enumerate().skip(first + 1) {
-            let still = !moving(i, level, threshold)
+            let still = !motion(i, level, threshold)
                 || final_turn(&turns)
                     .is_some_and(|p| held(&samples, t, z_rim, n, p, level, threshold, noise));
             if still {
@@ -297,7 +304,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // first still picture held at 0.44 px for the next frames). Against that median
     // alone, white noise would extend the descent more often (its own noise adds to
     // the test's).
-    while let Some(n) = samples.iter().position(|&i| i > index) {
+    while let Some(n) = samples.iter().position(|&i| i > index && t[i] <= until) {
         let next = samples[n];
         // A rise that the search above took for a held picture is no descent either.
         if moving(next, level, threshold)

@@ -175,6 +175,10 @@ pub struct SignalConfig {
     pub strip_step_floor: f64,
     /// The phase-step test runs where the peak height exceeds this many noise σ.
     pub skip_min_snr: f64,
+    /// Time [s, caller's axis] after which no rise of the rim is motion: the energy
+    /// law fitted to the clip has the disk flat by then (`analyse` sets it when the
+    /// halt seen lies after the law's, [`halt::halt_time`]); `None`: no bound.
+    pub motion_until: Option<f64>,
     /// F statistic above which a rim phase step is flagged. Frames more than three
     /// from a skip give F ≤ 0 (the stepped model fits them worse) on the dark, light
     /// and two-view
@@ -200,6 +204,7 @@ impl Default for SignalConfig {
             strip_step_sigmas: 6.0,
             strip_step_floor: 1e-6,
             skip_min_snr: 20.0,
+            motion_until: None,
             phase_step_statistic: 10.0,
         }
     }

@@ -367,6 +367,28 @@ fn an_excursion_turns_after_the_halt_is_not_motion() {
     assert_eq!(halt.index, last);
 }
 
+/// The encoder's frame-type cadence after the halt (robustness scene s14: 0.07,
+/// 0.12, 0.07, 0 px, a turn of 4 frames like the last true turns, for 12 frames) is
+/// read as motion on its own; with `motion_until` at the energy law's halt it is not,
+/// and t_φ is found within a frame.
+#[test]
+fn rises_after_the_laws_halt_are_not_motion() {
+    let (t, z, truth, config, before) = clip_and_halt();
+    let (last, level, threshold) = (before.index, before.rest_level, before.threshold);
+    let mut coded = z.clone();
+    for (k, reading) in coded[last + 2..last + 14].iter_mut().enumerate() {
+        *reading = level + threshold * [0.6, 1.2, 0.6, 0.0][k % 4];
+    }
+    let fooled = halt_time(&t, &coded, &config).expect("halt");
+    assert!(fooled.index > last + 8, "t_φ at {}", fooled.index);
+    let bounded = SignalConfig {
+        motion_until: Some(truth.t0 + FRAME),
+        ..config
+    };
+    let halt = halt_time(&t, &coded, &bounded).expect("halt");
+    assert_halt_within_a_frame(&halt, &truth);
+}
+
 /// A picture held after the halt, level for most of a final turn though above the
 /// threshold (o05 of the open footage re-encoded at crf 16: 0.41 px for five frames,
 /// three after the disk lay flat, a copy of a near-contact frame), is not motion: the
