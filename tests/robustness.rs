@@ -485,12 +485,12 @@ const HEADER: &str = "| scene | conditions | worst cal. point, err px | scale er
 
 #[test]
 #[ignore = "6 of 24 scenes miss a target (BENCHMARKS.md, \"Robustness scenes\", \
-            \"A rough plate's blurred reflection\"): φ 4-11 % low on two light plates whose \
+            \"The halt bounded by the energy law\"): φ 4-11 % low on two light plates whose \
             still rest picture carries the codec's error at the rim (s03, s17), a top face \
-            thinner than the blur (s08), n past its tolerance on s06 (peaks -0.047, a 2-view \
-            scene read with a 1.07 px plate blur where 0.6 was drawn), s14 (t_φ 13 frames \
-            late, a peak lost) and s21 (per frame -0.035, t_φ 5 frames early); run with \
-            --ignored"]
+            thinner than the blur (s08), n past its tolerance on the 2-view s06 (peaks \
+            -0.047) and s14 (peaks -0.072, t_φ 6 frames late after the law's bound, one \
+            spurious peak), whose edge at rest reads 0.07 and 0.10 px low, and s21 (per \
+            frame -0.035, t_φ 5 frames early); run with --ignored"]
 fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
     let scenes = draw_scenes();
     assert!(scenes.len() >= 24);
