@@ -1509,14 +1509,14 @@ pub fn analyse_clip_keeping(
             && let Ok(fits_again) = fit_span(&again, true)
         {
             warnings.push(format!(
-                "the rim seemed to move until t = {:.4} s, {:.1} ms after the halt of the \
-                 energy law fitted to its peaks (t0 {:.1} ± {:.1} ms before it): a rise after \
-                 t0 + 3σ + one frame is taken for a coded picture, not motion, so t_φ moves \
-                 {} frame(s) earlier, to t = {:.4} s, and t0 is fitted free of it",
+                "the rim seemed to move until t = {:.4} s, {:.1} ± {:.1} ms after the halt of \
+                 the energy law fitted to its peaks: a rise after t = {:.4} s (the law's t0 + \
+                 3σ + one frame) is taken for a coded picture, not motion, so t_φ moves {} \
+                 frame(s) earlier, to t = {:.4} s, and t0 is fitted free of the halt seen",
                 series.halt.t_phi,
                 -1e3 * fits.peaks.fit.t0,
-                -1e3 * fits.peaks.fit.t0,
                 1e3 * fits.peaks.fit.se_t0.unwrap_or(f64::NAN),
+                series.halt.t_phi + bound,
                 series.halt.index - again.halt.index,
                 again.halt.t_phi,
             ));
@@ -1723,7 +1723,7 @@ struct Fits {
 /// clock (t_φ = 0), when the halt seen lies after the law's: the peaks fit's
 /// sighting of the halt disagrees with its t0, late, by more than
 /// [`energy::SIGHTING_DISAGREEMENT`] standard deviations of their difference
-/// ([`HaltSighting`]). A disk whose energy E = A_e (t0 − t)^n has gone to zero lies
+/// ([`HaltSighting`]). A disk whose energy E = A_e (t0 − t)^n (eq. 3.2) has gone to zero lies
 /// flat and does not rise again, so a rise seen after t0 is a coded picture: an
 /// encoder that shows earlier pictures again for a few frames after the halt, or
 /// a refresh, read as motion (o05 of the open footage re-encoded at CRF 20: t_φ
