@@ -330,8 +330,6 @@ struct MeasuredSpan {
     kept: Option<KeptFrames>,
     /// The duplicated and interpolated frames, flagged by the signal stage.
     repeated: Vec<footage::RepeatedFrame>,
-    /// Whether the strip's angle β was read (a two-view clip).
-    two_view: bool,
 }
 
 /// Why a clip could not be analysed. Every message names the clip; vision errors
@@ -1360,7 +1358,6 @@ pub fn analyse_clip_keeping(
 
         // Signal.
         let signal_config = signal_config(window_s, metres_per_px);
-        let two_view = strip_finder.is_some();
         let series = signal_series(
             &mut frames,
             &repeated,
@@ -1385,7 +1382,6 @@ pub fn analyse_clip_keeping(
             rest_tail_s: signal_config.rest_tail_s,
             kept: keeper.and_then(FrameKeeper::finish),
             repeated,
-            two_view,
         })
     };
     let mut first = plan_span.first_span();
@@ -1422,7 +1418,6 @@ pub fn analyse_clip_keeping(
         rest_tail_s,
         kept,
         repeated,
-        two_view,
         ..
     } = measured;
     let decoded = plan_span.decoded(first, attempts, frames.len());
@@ -1563,11 +1558,7 @@ pub fn analyse_clip_keeping(
     let model = ThesisRim {
         radius: params.radius,
     };
-    let t: Vec<f64> = frames.iter().map(|f| f.t_capture).collect();
-    let z: Vec<f64> = frames
-        .iter()
-        .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
-        .collect();
+    let (t, z) = rim_series(&frames);
     let moved = [-1.0, 1.0].map(|sign| {
         signal::with_zero_moved(
             &t,
@@ -1671,11 +1662,7 @@ fn signal_series(
     config: &SignalConfig,
     radius: f64,
 ) -> Result<StateSeries, SignalError> {
-    let t: Vec<f64> = frames.iter().map(|f| f.t_capture).collect();
-    let z: Vec<f64> = frames
-        .iter()
-        .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
-        .collect();
+    let (t, z) = rim_series(frames);
     let beta: Option<Vec<f64>> = two_view.then(|| {
         frames
             .iter()
@@ -1709,6 +1696,17 @@ fn signal_series(
         record.t = *shifted;
     }
     Ok(series)
+}
+
+/// The frames' capture times [s] and rim heights z_rim [m] (NaN: no edge), as the
+/// signal stage reads them.
+fn rim_series(frames: &[FrameRecord]) -> (Vec<f64>, Vec<f64>) {
+    let t = frames.iter().map(|f| f.t_capture).collect();
+    let z = frames
+        .iter()
+        .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
+        .collect();
+    (t, z)
 }
 
 /// The energy's fits of one span: at the peaks, per frame, and per frame with the
