@@ -32,6 +32,7 @@ use serde::{Deserialize, Serialize};
 use crate::config::{ExperimentConfig, HaltChoice, Plate};
 use crate::energy::{self, FitError, HaltSighting, HaltTime, PowerLawFit};
 use crate::footage::{self, CaptureFps, FootageError, FrameSource, FrameTiming, FrameView};
+use crate::model::closed_form;
 use crate::model::params::DiskParams;
 use crate::overlay::{FrameKeeper, KeptFrames, LayoutGeometry, OverlaySpec};
 use crate::report::diagnostics;
@@ -1429,7 +1430,7 @@ pub fn analyse_clip_keeping(
         HaltChoice::Free => HaltTime::Free,
         HaltChoice::Combined if bounded => HaltTime::Free,
         HaltChoice::Combined => {
-            HaltTime::Sighted(halt_sighting(&params, series.halt.threshold, 1.0 / fps.fps))
+            HaltTime::Sighted(halt_sighting(&params, &series.halt, 1.0 / fps.fps))
         }
     };
     // The fit window and the rest tail must each lie in one section of constant
@@ -1752,15 +1753,22 @@ fn png(image: &image::RgbImage) -> Vec<u8> {
 }
 
 /// The halt as the footage shows it: motion last seen at t_φ (t = 0 on the fit's
-/// clock), one frame `frame_s` apart, down to a rim rise of `threshold_m` (the halt
-/// detector's), which a peak of stationary rolling reaches at sin φ = z/(2R).
-fn halt_sighting(params: &DiskParams, threshold_m: f64, frame_s: f64) -> HaltSighting {
-    let phi = (threshold_m / (2.0 * params.radius)).clamp(0.0, 1.0).asin();
+/// clock), one frame `frame_s` apart, down to the halt detector's threshold, a rim
+/// rise a peak of stationary rolling reaches at sin φ = z/(2R), over its rest noise.
+fn halt_sighting(params: &DiskParams, halt: &signal::Halt, frame_s: f64) -> HaltSighting {
+    let phi = (halt.threshold / (2.0 * params.radius))
+        .clamp(0.0, 1.0)
+        .asin();
     let visible_energy = energy::stationary_energy_at(params, phi).unwrap_or(0.0);
+    let visible_precession =
+        closed_form::stationary_rolling(params, phi).map_or(0.0, |(psi_dot, _)| psi_dot.abs());
     HaltSighting {
         t_phi: 0.0,
         frame_s,
         visible_energy,
+        threshold_m: halt.threshold,
+        noise_m: halt.noise,
+        visible_precession,
     }
 }
 
@@ -2116,6 +2124,9 @@ mod tests {
             t_phi: 0.0,
             frame_s,
             visible_energy: a_e * (0.3 * frame_s).powf(n),
+            threshold_m: 2e-5,
+            noise_m: 2e-6,
+            visible_precession: 1400.0,
         });
         fit_series("eq. 3.8 at peaks", samples, 0.5, halt).expect("fit")
     }
