@@ -697,12 +697,12 @@ impl HaltSighting {
         let power = 1.0 - 0.5 * n;
         let turning = self.visible_precession * unseen.powf(0.5 * n) / power;
         let mut rng = crate::rng::SplitMix64::new(0x5157_4854);
-        let mut rises = Vec::with_capacity(SIGHTING_FRAMES);
+        let mut readings = Vec::with_capacity(SIGHTING_FRAMES);
         let (mut sum, mut sum_sq, mut draws) = (0.0, 0.0, 0usize);
         for _ in 0..SIGHTING_DRAWS {
             let offset = dt * rng.uniform();
             let phase = std::f64::consts::TAU * rng.uniform();
-            rises.clear();
+            readings.clear();
             // Frames back from t0 (k = 0 the last before it) up to the last rise.
             let last_rise = (0..SIGHTING_FRAMES).find(|&k| {
                 let tau = offset + k as f64 * dt;
@@ -713,18 +713,21 @@ impl HaltSighting {
                 };
                 let peak = self.threshold_m * (tau / unseen).powf(n);
                 let z = 0.5 * peak * (1.0 + chi.cos()) + self.noise_m * rng.gaussian();
-                rises.push(z);
+                readings.push(z);
                 z > self.threshold_m
             });
             let Some(mut last) = last_rise else { continue };
             // The descent after it, towards t0, and on into the readings after t0
             // (rest, with its noise) while they keep falling more than σ above rest.
-            while last > 0 && rises[last - 1] < rises[last] && rises[last - 1] > self.noise_m {
+            while last > 0
+                && readings[last - 1] < readings[last]
+                && readings[last - 1] > self.noise_m
+            {
                 last -= 1;
             }
             let mut after = 0.0;
             if last == 0 {
-                let mut previous = rises[0];
+                let mut previous = readings[0];
                 loop {
                     let z = self.noise_m * rng.gaussian();
                     if !(z < previous && z > self.noise_m) {
