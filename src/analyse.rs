@@ -1730,8 +1730,8 @@ struct Fits {
 /// disagree alike (at the peaks, per frame) of t0 + 3 σ_t0 + one frame `frame_s`
 /// (the last frame of motion falls up to a frame after t0, [`HaltSighting`]);
 /// `None` when the halt seen agrees, or the bound does not lie before t_φ. A halt
-/// seen *before* the law's is the motion's last part too small to see, which the
-/// sighting's Δ describes: left alone.
+/// seen *before* the law's is the motion's last part too small to see or hidden by
+/// its phase, which the sighting models: left alone.
 fn law_bound(fits: &Fits, frame_s: f64) -> Option<f64> {
     let late = |s: &energy::SightingUse| {
         s.t0_seen - s.t0_fitted > energy::SIGHTING_DISAGREEMENT * s.se_t0_seen.hypot(s.se_t0_fitted)
