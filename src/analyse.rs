@@ -36,7 +36,7 @@ use crate::model::closed_form;
 use crate::model::params::DiskParams;
 use crate::overlay::{FrameKeeper, KeptFrames, LayoutGeometry, OverlaySpec};
 use crate::report::diagnostics;
-use crate::signal::{self, SignalConfig, SignalError, StateSeries, ThesisRim};
+use crate::signal::{self, SideViewRim, SignalConfig, SignalError, StateSeries, ThesisRim};
 use crate::vision::{
     self, BandWindow, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge, RimGauge,
     RimHeight, RimReading, SideViewConfig, StripFinder, ThresholdSource, VisionError,
@@ -319,8 +319,11 @@ struct MeasuredSpan {
     highest: Option<(f64, f64, OwnedFrame)>,
     rim: String,
     rim_zero_row_px: f64,
-    /// How the rim's heights were read, which decides how well their zero is known.
+    /// How the rim's heights were read, which decides how well their zero is known
+    /// when the motion does not place it.
     reading: RimReading,
+    /// The zero the motion placed.
+    zero: Option<ZeroFromMotion>,
     scale: ScaleReport,
     metres_per_px: f64,
     /// Width of the local fits' window [turns of the rim].
@@ -331,6 +334,18 @@ struct MeasuredSpan {
     kept: Option<KeptFrames>,
     /// The duplicated and interpolated frames, flagged by the signal stage.
     repeated: Vec<footage::RepeatedFrame>,
+}
+
+/// The zero of z_rim as the motion places it ([`signal::motion_zero`]), and how far it
+/// moved every height.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ZeroFromMotion {
+    /// The windows' offset c above the rest tail's level, and its standard error [m].
+    pub zero: signal::MotionZero,
+    /// How far every height moved down: the rest tail's level plus c [m].
+    pub shift_m: f64,
+    /// ε of the profile fitted ([`SideViewRim::camera_elevation`]) [rad].
+    pub camera_elevation: f64,
 }
 
 /// Why a clip could not be analysed. Every message names the clip; vision errors
@@ -423,16 +438,22 @@ pub struct ExperimentPlan {
     /// contour, or the edge alone and why.
     #[serde(default)]
     pub rim: String,
-    /// The side view's row where z_rim = 0 [px]: the rim edge at rest (the
-    /// mirror-edge model's fitted e_rest on a dark plate, the shadow-edge
-    /// contour's on a light one, else the plate line z_base). A frame's
-    /// measured rim edge lies at this row − z_rim_px; `None` in results written
-    /// before it was recorded (then z_base).
+    /// The side view's row where z_rim = 0 [px]: where the motion places it
+    /// ([`Self::rim_zero_from_motion`]), else the rim edge at rest (the mirror-edge
+    /// model's fitted e_rest on a dark plate, the shadow-edge contour's on a light
+    /// one, else the plate line z_base). A frame's measured rim edge lies at this
+    /// row − z_rim_px; `None` in results written before it was recorded (then
+    /// z_base).
     #[serde(default)]
     pub rim_zero_row_px: Option<f64>,
+    /// The zero the motion placed, and how far it moved the heights from the rest
+    /// edge's; `None` when too few turns fitted, and in results written before it.
+    #[serde(default)]
+    pub rim_zero_from_motion: Option<ZeroFromMotion>,
     /// 1σ uncertainty of that zero [px], carried into the intervals of n
     /// (`PowerLawFit::se_n_zero`): the config's `fit.rim_zero_uncertainty_px`, else
-    /// the one measured for [`Self::rim_reading`]; 0 in results written before it was.
+    /// the motion's ([`vision::RimReading::motion_zero_uncertainty_px`]), else the
+    /// one measured for [`Self::rim_reading`]; 0 in results written before it was.
     #[serde(default)]
     pub rim_zero_uncertainty_px: f64,
     /// How the rim's heights were read (vision::RimReading); `None` in results
@@ -498,6 +519,16 @@ pub struct ScaleReport {
     /// Which scale is used: "thickness (eq. 3.10, at the near rim)" or
     /// "diameter (…reason)".
     pub used: String,
+    /// The silhouette's top on the centre line at rest, the top face's far rim [px]
+    /// ([`vision::silhouette_top`]); `None` when not seen, and in results written
+    /// before it was recorded.
+    #[serde(default)]
+    pub silhouette_top_px: Option<f64>,
+    /// ε: the elevation of the camera's ray to the near bottom rim [rad], where
+    /// z_rim is read ([`Self::with_near_rim_elevation`]); `None` without the
+    /// silhouette's top.
+    #[serde(default)]
+    pub near_rim_elevation_rad: Option<f64>,
 }
 
 /// The perspective factors eq. 3.10's thickness scale is trusted within: a camera
@@ -532,7 +563,45 @@ impl ScaleReport {
             perspective_factor: factor,
             camera_distance_m: (factor > 1.0 && factor <= hi).then(|| disk.radius / (factor - 1.0)),
             used,
+            silhouette_top_px: None,
+            near_rim_elevation_rad: None,
         }
+    }
+
+    /// The scale with the elevation ε of the camera's ray to the near bottom rim,
+    /// from the top face's height F = z_t − `silhouette_top` on the centre line (the
+    /// near top rim to the far one) at the centre's scale δ_c = 2R/(x_r − x_l):
+    ///
+    /// * a distant camera sees the face's diameter 2R foreshortened to 2R sin ε, so
+    ///   sin ε = F δ_c / 2R;
+    /// * a pinhole at the distance d from the near rim ([`Self::camera_distance_m`])
+    ///   and Δh above the top face sees its near and far rims, at d_c ∓ R from below
+    ///   the camera (d_c = d + R), F = f Δh (1/(d_c − R) − 1/(d_c + R)) apart with
+    ///   f = d_c/δ_c, so Δh = F δ_c (d_c² − R²)/(2R d_c); the camera is Δh + 2H above
+    ///   the plate and tan ε = (Δh + 2H)/d at the near bottom rim. Close to the disk
+    ///   that is 0.5–1.5° more than the top face's own elevation (the open footage's
+    ///   o01, 0.45 m: 2.53° at the bottom rim, 0.91° at the top face).
+    pub fn with_near_rim_elevation(
+        mut self,
+        cal: &vision::Calibration,
+        silhouette_top: Option<f64>,
+        disk: &DiskParams,
+    ) -> Self {
+        let (r, thickness) = (disk.radius, 2.0 * disk.half_thickness);
+        let delta_c = self.diameter_metres_per_px;
+        self.silhouette_top_px = silhouette_top;
+        self.near_rim_elevation_rad = silhouette_top.map(|top| {
+            let face = (cal.z_t - top).max(0.0) * delta_c;
+            match self.camera_distance_m {
+                Some(d) => {
+                    let d_c = d + r;
+                    let above_face = face * (d_c * d_c - r * r) / (2.0 * r * d_c);
+                    ((above_face + thickness) / d).atan()
+                }
+                None => (face / (2.0 * r)).min(1.0).asin(),
+            }
+        });
+        self
     }
 
     /// Whether eq. 3.10's scale at the near rim is used (its perspective factor is
@@ -540,6 +609,16 @@ impl ScaleReport {
     pub fn at_near_rim(&self) -> bool {
         let (lo, hi) = PERSPECTIVE_FACTOR_RANGE;
         (lo..=hi).contains(&self.perspective_factor)
+    }
+
+    /// The rim's profile as this camera sees it: [`SideViewRim`] at the near rim's
+    /// elevation (0 when it is not known).
+    pub fn side_view_rim(&self, disk: &DiskParams) -> SideViewRim {
+        SideViewRim {
+            radius: disk.radius,
+            half_thickness: disk.half_thickness,
+            camera_elevation: self.near_rim_elevation_rad.unwrap_or(0.0),
+        }
     }
 
     /// The scale used [m/px].
@@ -995,6 +1074,10 @@ pub fn analyse_clip_keeping(
         }
     };
     let cal = calibration.calibration;
+    // The top face's far rim at rest, for the camera's elevation (ScaleReport).
+    let silhouette_top = rest_sides
+        .last()
+        .and_then(|side| vision::silhouette_top(side, &cal));
     let side0 = &rest_sides[0];
     let gauge = RimGauge::new(
         &calibration.calibration,
@@ -1312,7 +1395,8 @@ pub fn analyse_clip_keeping(
         }
         // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
         // z_rim in metres once, after every correction of z_rim in px.
-        let scale = ScaleReport::new(&calibration.calibration, bottom_rim_row, &params);
+        let scale = ScaleReport::new(&calibration.calibration, bottom_rim_row, &params)
+            .with_near_rim_elevation(&calibration.calibration, silhouette_top, &params);
         let metres_per_px = scale.metres_per_px();
         if !scale.at_near_rim() {
             warnings.push(format!("scale from the {}", scale.used));
@@ -1359,14 +1443,18 @@ pub fn analyse_clip_keeping(
 
         // Signal.
         let signal_config = signal_config(window_s, metres_per_px);
-        let series = signal_series(
+        let (series, zero) = signal_series(
             &mut frames,
             &repeated,
             two_view,
             &signal_config,
-            params.radius,
+            &scale.side_view_rim(&params),
+            metres_per_px,
         )
         .map_err(|error| signal_error(clip, &fps, error))?;
+        if let Some(zero) = &zero {
+            rim_zero_row_px -= zero.shift_m / metres_per_px;
+        }
         Ok(MeasuredSpan {
             frames,
             series,
@@ -1377,6 +1465,7 @@ pub fn analyse_clip_keeping(
             rim,
             rim_zero_row_px,
             reading,
+            zero,
             scale,
             metres_per_px,
             local_fit_periods: signal_config.state_window_periods,
@@ -1412,8 +1501,9 @@ pub fn analyse_clip_keeping(
         mut warnings,
         highest,
         rim,
-        rim_zero_row_px,
+        mut rim_zero_row_px,
         reading,
+        mut zero,
         scale,
         metres_per_px,
         rest_tail_s,
@@ -1497,11 +1587,12 @@ pub fn analyse_clip_keeping(
             &repeated,
             two_view,
             &config,
-            params.radius,
+            &scale.side_view_rim(&params),
+            metres_per_px,
         )
         .ok()
-        .filter(|a| a.halt.index < series.halt.index);
-        if let Some(again) = again
+        .filter(|a| a.0.halt.index < series.halt.index);
+        if let Some((again, zero_again)) = again
             && let Ok(fits_again) = fit_span(&again, true)
         {
             warnings.push(format!(
@@ -1517,6 +1608,15 @@ pub fn analyse_clip_keeping(
                 again.halt.t_phi,
             ));
             (frames, series, fits, bounded) = (frames_again, again, fits_again, true);
+            // The heights were re-zeroed already: what moves now is within the
+            // windows' scatter, but the zero row follows it.
+            if let Some(again) = zero_again {
+                rim_zero_row_px -= again.shift_m / metres_per_px;
+                zero = zero.map(|z| ZeroFromMotion {
+                    shift_m: z.shift_m + again.shift_m,
+                    ..again
+                });
+            }
         }
     }
     let Fits {
@@ -1555,7 +1655,10 @@ pub fn analyse_clip_keeping(
     // n's interval.
     let zero_px = config
         .rim_zero_uncertainty_px()
-        .unwrap_or_else(|| reading.zero_uncertainty_px());
+        .unwrap_or_else(|| match &zero {
+            Some(z) => RimReading::motion_zero_uncertainty_px(z.zero.se / metres_per_px),
+            None => reading.zero_uncertainty_px(),
+        });
     let model = ThesisRim {
         radius: params.radius,
     };
@@ -1629,6 +1732,7 @@ pub fn analyse_clip_keeping(
         band_half_width_px: side_config.half_width_px,
         rim,
         rim_zero_row_px: Some(rim_zero_row_px),
+        rim_zero_from_motion: zero,
         rim_zero_uncertainty_px: zero_px,
         rim_reading: Some(reading),
         colour_thresholds,
@@ -1661,8 +1765,9 @@ fn signal_series(
     repeated: &[footage::RepeatedFrame],
     two_view: bool,
     config: &SignalConfig,
-    radius: f64,
-) -> Result<StateSeries, SignalError> {
+    camera: &SideViewRim,
+    metres_per_px: f64,
+) -> Result<(StateSeries, Option<ZeroFromMotion>), SignalError> {
     let (t, z) = rim_series(frames);
     let beta: Option<Vec<f64>> = two_view.then(|| {
         frames
@@ -1670,7 +1775,30 @@ fn signal_series(
             .map(|f| f.beta_raw.unwrap_or(f64::NAN))
             .collect()
     });
-    let mut series = signal::analyse(&t, &z, beta.as_deref(), &ThesisRim { radius }, config)?;
+    let thesis = ThesisRim {
+        radius: camera.radius,
+    };
+    let mut series = signal::analyse(&t, &z, beta.as_deref(), &thesis, config)?;
+    // The heights from the zero the motion places (signal::motion_zero), with the
+    // camera's own profile: every height moves by the rest level and the motion's
+    // offset from it, and the peaks and states are found again on them.
+    let zero = signal::motion_zero(&t, &z, &series, camera, config).map(|zero| {
+        let shift_m = series.halt.rest_level + zero.offset;
+        for record in frames.iter_mut() {
+            record.z_rim_m = record.z_rim_m.map(|z| z - shift_m);
+            record.z_rim_px = record.z_rim_px.map(|z| z - shift_m / metres_per_px);
+        }
+        ZeroFromMotion {
+            zero,
+            shift_m,
+            camera_elevation: camera.camera_elevation,
+        }
+    });
+    if zero.is_some() {
+        let (t, z) = rim_series(frames);
+        series.halt.rest_level = 0.0;
+        series = signal::with_zero_moved(&t, &z, &series, 0.0, &thesis, config)?;
+    }
     for r in repeated {
         let (statistic, neighbours) = (r.statistic, r.neighbours);
         series.flags.push(signal::FrameFlag {
@@ -1696,7 +1824,7 @@ fn signal_series(
     for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
         record.t = *shifted;
     }
-    Ok(series)
+    Ok((series, zero))
 }
 
 /// The frames' capture times [s] and rim heights z_rim [m] (NaN: no edge), as the

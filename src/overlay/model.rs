@@ -34,7 +34,7 @@ use super::measured::{
 use super::pose::CameraPose;
 use crate::analyse::Experiment;
 use crate::compare::Comparison;
-use crate::footage::{FrameSource, FrameView};
+use crate::footage::FrameSource;
 use crate::render::H264Writer;
 use crate::render::motion::{DiskState, trajectory_motion};
 use crate::render::rim_edge_row;
@@ -168,7 +168,7 @@ pub fn write_model_overlay(
         .filter_map(|&k| e.frames[k].z_rim_px)
         .fold(0.0, f64::max);
     let layout = Layout::new(plan, z_max);
-    let pose = CameraPose::from_calibration(plan, silhouette_top(e, &layout)?);
+    let pose = CameraPose::from_calibration(plan, silhouette_top(e)?);
     let camera = pose.camera(plan);
     let (ox, oy) = plan.side_view_origin();
     let (ox, oy) = (ox as f64, oy as f64);
@@ -350,12 +350,15 @@ fn project(camera: &Camera, p: [f64; 3]) -> (f64, f64) {
     (x + 0.5, row + 0.5)
 }
 
-/// The silhouette's top on the centre band of the last (rest) frame: going down
-/// the band from the top of the side window, where the mean intensity crosses
-/// halfway from the background's level to the top face's (just above z_t).
-fn silhouette_top(e: &Experiment, layout: &Layout) -> Result<f64, OverlayError> {
+/// The silhouette's top on the centre line at rest: the plan's, measured on the
+/// rest frames ([`crate::vision::silhouette_top`]), else (results written before it
+/// was recorded) read the same way on the clip's last frame.
+fn silhouette_top(e: &Experiment) -> Result<f64, OverlayError> {
     let plan = &e.plan;
     let c = &plan.calibration.calibration;
+    if let Some(top) = plan.scale.silhouette_top_px {
+        return Ok(top);
+    }
     let (ox, oy) = plan.side_view_origin();
     let mut source = FrameSource::open(&plan.clip)?;
     // The clip's last frame (a decoded span's frames are numbered in the clip),
@@ -365,30 +368,12 @@ fn silhouette_top(e: &Experiment, layout: &Layout) -> Result<f64, OverlayError> 
         Some(index) if last < index.container_times_s.len() => source.seek_frame(last, &index)?,
         _ => source.seek(last)?,
     }
-    let mut top = c.z_t;
-    if let Some(frame) = source.next_frame()? {
-        let band = |y: usize, view: &FrameView| -> f64 {
-            let x = ox + c.x_centre().floor() as usize;
-            (x - 2..=x + 2)
-                .map(|x| f64::from(view.intensity(x, oy + y)))
-                .sum::<f64>()
-                / 5.0
-        };
-        let start = layout.side.src_y - oy;
-        let face_row = (c.z_t - 1.5).floor().max(start as f64) as usize;
-        let (background, face) = (band(start, &frame.view), band(face_row, &frame.view));
-        let half = 0.5 * (background + face);
-        let above = |v: f64| (v - half) * (face - half) < 0.0;
-        for y in start..face_row {
-            let (a, b) = (band(y, &frame.view), band(y + 1, &frame.view));
-            if above(a) && !above(b) {
-                // Rows' centres at y + ½: the crossing between them.
-                top = y as f64 + 0.5 + (half - a) / (b - a);
-                break;
-            }
-        }
-    }
-    Ok(top)
+    let top = source.next_frame()?.and_then(|frame| {
+        let rows = (c.z_t.ceil().max(0.0) as usize + 1).min(frame.view.height.saturating_sub(oy));
+        let side = frame.view.crop(ox, oy, plan.side_view_width(), rows)?;
+        crate::vision::silhouette_top(&side, c)
+    });
+    Ok(top.unwrap_or(c.z_t))
 }
 
 /// The convex hull (Andrew's monotone chain), counter-clockwise in image axes.
@@ -611,8 +596,7 @@ mod tests {
 
     /// The camera pose the model overlay draws `e` with.
     fn calibrated_pose(e: &Experiment) -> CameraPose {
-        let layout = Layout::new(&e.plan, 0.0);
-        CameraPose::from_calibration(&e.plan, silhouette_top(e, &layout).unwrap())
+        CameraPose::from_calibration(&e.plan, silhouette_top(e).unwrap())
     }
 
     /// For each frame of `truth` (the rendered clip's) whose rim is more than half

@@ -298,16 +298,26 @@ fn fit_row(f: &EnergyFit) -> Vec<String> {
     ]
 }
 
-/// Where the zero's uncertainty came from: the config, or the value measured for how
-/// the rim was read.
+/// Where the zero and its uncertainty came from: the config, the motion, or the
+/// value measured for how the rim was read.
 fn zero_source(plan: &ExperimentPlan) -> String {
+    let px = |m: f64| m / plan.metres_per_px;
     match (
         plan.config.rim_zero_uncertainty_px().is_some(),
+        plan.rim_zero_from_motion,
         plan.rim_reading,
     ) {
-        (true, _) => " (set in the config)".into(),
-        (false, Some(reading)) => format!(" (as measured for {})", reading.describe()),
-        (false, None) => String::new(),
+        (true, _, _) => " (set in the config)".into(),
+        (false, Some(z), _) => format!(
+            " (placed by the motion: the rim's profile at ε = {:.2}° fitted with an offset over              {} windows of the turns, {:+.3} ± {:.3} px from the still disk's edge; that and              the profile's own {} px in quadrature)",
+            z.camera_elevation.to_degrees(),
+            z.zero.windows,
+            px(z.zero.offset),
+            px(z.zero.se),
+            crate::vision::MOTION_ZERO_PROFILE_PX
+        ),
+        (false, None, Some(reading)) => format!(" (as measured for {})", reading.describe()),
+        (false, None, None) => String::new(),
     }
 }
 

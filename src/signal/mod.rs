@@ -122,6 +122,7 @@ mod skips;
 mod strip;
 #[cfg(test)]
 mod tests;
+mod zero;
 
 pub use halt::{Halt, halt_time};
 pub use peaks::{
@@ -133,8 +134,9 @@ pub use strip::{
     StripSeries, StripStop, derivative, moving_average, strip_series, strip_stop_time,
     unwrap_half_turns,
 };
+pub use zero::{MotionZero, motion_zero};
 
-use local::{LocalInit, fit_local};
+use local::{LocalInit, Terms, fit_local};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -447,7 +449,15 @@ pub fn frame_states(
                 chi: psi0,
                 omega,
             };
-            let fit = fit_local(model, &st[lo..hi], &v[lo..hi], t_c, init, true, None)?;
+            let fit = fit_local(
+                model,
+                &st[lo..hi],
+                &v[lo..hi],
+                t_c,
+                init,
+                Terms::CHIRP,
+                None,
+            )?;
             let psi = fit.chi + 2.0 * PI * ((psi0 - fit.chi) / (2.0 * PI)).round();
             Some(FrameState {
                 index: i,

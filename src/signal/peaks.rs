@@ -1,7 +1,7 @@
 //! Peaks and troughs of z_rim with sub-frame interpolation, φ at peaks (eq. 3.9), ψ by
 //! counting turns and ψ̇ (eq. 3.11) (thesis §3.2.5).
 
-use super::local::{LocalInit, PhaseTrack, fit_local};
+use super::local::{LocalInit, PhaseTrack, Terms, fit_local};
 use super::{Halt, RimModel, SignalConfig, SignalError, finite_samples};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -464,7 +464,18 @@ fn refine(
         chi: target + omega * (t_c - parabolic.0),
         omega,
     };
-    let fit = fit_local(model, &t[lo..hi], &v[lo..hi], t_c, init, chirp, None)?;
+    let fit = fit_local(
+        model,
+        &t[lo..hi],
+        &v[lo..hi],
+        t_c,
+        init,
+        Terms {
+            chirp,
+            offset: false,
+        },
+        None,
+    )?;
     let (t_x, phi_x) = fit.time_of_phase(t_c, target);
     let plausible = (t_x - parabolic.0).abs() <= frame
         && phi_x > 0.0

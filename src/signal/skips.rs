@@ -4,7 +4,7 @@
 //! interpolated frames, found on the pixels by `footage::RepeatGauge`, are flagged
 //! with the same type.
 
-use super::local::{LocalInit, PhaseTrack, fit_local};
+use super::local::{LocalInit, PhaseTrack, Terms, fit_local};
 use super::peaks::nominal_period;
 use super::{Halt, RimModel, SignalConfig, finite_samples, mad_sigma};
 use rayon::prelude::*;
@@ -393,8 +393,8 @@ pub(crate) fn rim_phase_steps(
                 omega: psi_dot,
             };
             let (tw, zw) = (&st[lo..hi], &v[lo..hi]);
-            let plain = fit_local(model, tw, zw, t_c, init, true, None);
-            let stepped = fit_local(model, tw, zw, t_c, init, true, Some((t_c, frame)));
+            let plain = fit_local(model, tw, zw, t_c, init, Terms::CHIRP, None);
+            let stepped = fit_local(model, tw, zw, t_c, init, Terms::CHIRP, Some((t_c, frame)));
             let (Some(a), Some(b)) = (plain, stepped) else {
                 return None;
             };

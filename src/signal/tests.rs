@@ -1359,3 +1359,44 @@ fn the_halt_seen_models_the_detector_on_the_final_turns() {
         model_spread / FRAME
     );
 }
+
+/// The zero the motion places ([`motion_zero`]): heights drawn with the camera's
+/// profile (ε = 3°) and lifted by a shared offset of 6.6 μm (0.1 of the thesis's
+/// 66 μm pixel) until the halt, as a still picture read differently from a moving
+/// one leaves them, give the offset back within three of its standard errors and
+/// 0.5 μm. The first-order profile R sin φ (1 + cos χ) on the same heights takes the
+/// camera's tilt of the swing against the mean, (H/R) tan ε · R sin φ, for an offset:
+/// it reads the zero high by about H tan ε times the windows' φ (4–7 μm here).
+#[test]
+fn the_motion_places_the_zero_of_the_heights() {
+    let camera = SideViewRim {
+        radius: R,
+        half_thickness: H,
+        camera_elevation: 3f64.to_radians(),
+    };
+    let lift = 6.6e-6;
+    let (t, _, truth) = clip(0.0, 7);
+    let mut rng = SplitMix64::new(8);
+    let z: Vec<f64> = t
+        .iter()
+        .map(|&x| {
+            let offset = if x < truth.t0 { lift } else { 0.0 };
+            camera.z_rim(truth.phi(x), truth.psi(x)) + offset + NOISE * rng.gaussian()
+        })
+        .collect();
+    let config = SignalConfig::default();
+    let series = analyse(&t, &z, None, &thesis_model(), &config).expect("series");
+    let zero = motion_zero(&t, &z, &series, &camera, &config).expect("zero");
+    assert!(zero.windows >= 10, "{zero:?}");
+    let error = series.halt.rest_level + zero.offset - lift;
+    assert!(
+        error.abs() < (3.0 * zero.se).max(0.5e-6) && error.abs() < 0.5e-6,
+        "{zero:?}: error {error:e} m"
+    );
+    let first_order = motion_zero(&t, &z, &series, &thesis_model(), &config).expect("zero");
+    let bias = first_order.offset - zero.offset;
+    assert!(
+        (4e-6..7e-6).contains(&bias) && bias > 5.0 * first_order.se,
+        "{first_order:?}: reads {bias:e} m above the camera's profile"
+    );
+}

@@ -65,9 +65,10 @@ pub use mirror_edge::{
     EdgeTemplate, MirrorEdgeModel, SHARP_RIM_PX, remeasure as remeasure_dark_rim,
 };
 pub use rim::{RimGauge, RimHeight};
-pub use rim_zero::RimReading;
+pub use rim_zero::{MOTION_ZERO_PROFILE_PX, RimReading};
 pub use shadow_edge::{ShadowEdgeModel, remeasure as remeasure_light_rim};
 pub use threshold::{GammaSource, INTENSITY_SCALE, Threshold};
+pub use top_rim::silhouette_top;
 pub use two_view::{
     ColourThresholds, LayoutDetection, Strip, StripFinder, ThresholdSource, auto_colour_thresholds,
     detect_two_view, find_split_row, split_views,

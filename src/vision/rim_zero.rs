@@ -19,6 +19,16 @@
 
 use serde::{Deserialize, Serialize};
 
+/// How far the zero the motion places lies from the truth beyond its windows'
+/// scatter [px]: the profile fitted is the first-order one with the camera's
+/// elevation, which the clip's calibration knows to ±0.5°, and φ may oscillate
+/// about stationary rolling. Measured as the RMS over clips of the difference
+/// from the truth's offset of the lifted heights (BENCHMARKS.md "The zero from the
+/// motion"): 0.025 px over the open footage's eight clips (the largest 0.044 px,
+/// o04 with φ oscillating) and 0.013 px over the 24 robustness scenes (the largest
+/// 0.040 px, s05's light plate brighter than the disk); 0.03 px.
+pub const MOTION_ZERO_PROFILE_PX: f64 = 0.03;
+
 /// The method that read the rim's heights, as far as it decides how well their zero
 /// is known.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -58,6 +68,13 @@ impl RimReading {
             RimReading::ShadowEdge => 0.06,
             RimReading::RoundedMirrorEdge | RimReading::FirstPass => 0.08,
         }
+    }
+
+    /// 1σ of the zero of z_rim [px] where the motion places it (`signal::motion_zero`),
+    /// from the windows' standard error `se_px`: that and the profile's own error,
+    /// [`MOTION_ZERO_PROFILE_PX`], in quadrature.
+    pub fn motion_zero_uncertainty_px(se_px: f64) -> f64 {
+        se_px.hypot(MOTION_ZERO_PROFILE_PX)
     }
 
     /// The reading in words, for the report.

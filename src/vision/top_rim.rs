@@ -108,6 +108,36 @@ pub(super) fn near_top_rim_across(frame: &FrameView, centre: &CentreBand) -> Opt
     Some(z_t)
 }
 
+/// The silhouette's top on the centre line (the far top rim; thesis fig. 3.3) of a
+/// frame at rest: going down a band of five columns about `cal`'s centre line from
+/// the frame's first row, where the mean level crosses halfway from the first row's
+/// (what lies behind the disk) to the top face's, 1.5 px above z_t (rows' centres at
+/// y + ½). z_t − top is the top face's height on the centre line, from which the
+/// camera's elevation follows (`analyse::ScaleReport`). `None` when the disk's top
+/// is at the frame's first row or the face is as bright as what lies behind it.
+pub fn silhouette_top(frame: &FrameView, cal: &super::Calibration) -> Option<f64> {
+    let x = cal.x_centre().floor() as usize;
+    if x < 2 || x + 3 > frame.width {
+        return None;
+    }
+    let face_row = (cal.z_t - 1.5).floor();
+    if !(1.0..frame.height as f64).contains(&face_row) {
+        return None;
+    }
+    let face_row = face_row as usize;
+    let band = |y: usize| f64::from(row_band_mean(frame, y, x - 2, x + 3));
+    let (behind, face) = (band(0), band(face_row));
+    let half = 0.5 * (behind + face);
+    if (face - behind).abs() < 1.0 {
+        return None;
+    }
+    let beyond = |v: f64| (v - half) * (face - half) < 0.0;
+    (0..face_row).find_map(|y| {
+        let (a, b) = (band(y), band(y + 1));
+        (beyond(a) && !beyond(b)).then(|| y as f64 + 0.5 + (half - a) / (b - a))
+    })
+}
+
 /// Least difference between the top face's and the side's mean levels, as a
 /// fraction of the disk's contrast with what lies below it, for the near top rim
 /// to count as seen (a sub-pixel edge between levels closer than this is noise).
