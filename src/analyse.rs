@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::config::{ExperimentConfig, HaltChoice, Plate};
+use crate::config::{ExperimentConfig, HaltChoice, Plate, RimZeroChoice};
 use crate::energy::{self, FitError, HaltSighting, HaltTime, PowerLawFit};
 use crate::footage::{self, CaptureFps, FootageError, FrameSource, FrameTiming, FrameView};
 use crate::model::closed_form;
@@ -1449,6 +1449,7 @@ pub fn analyse_clip_keeping(
             two_view,
             &signal_config,
             &scale.side_view_rim(&params),
+            config.rim_zero(),
             metres_per_px,
         )
         .map_err(|error| signal_error(clip, &fps, error))?;
@@ -1513,6 +1514,7 @@ pub fn analyse_clip_keeping(
     } = measured;
     let decoded = plan_span.decoded(first, attempts, frames.len());
     let halt_choice = config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default();
+    let zero_choice = config.rim_zero();
     // `bounded`: t_φ was bounded by the energy law ([`law_bound`]), which leaves the
     // halt seen no measurement of t0.
     let halt_for = |series: &StateSeries, bounded: bool| match halt_choice {
@@ -1588,6 +1590,7 @@ pub fn analyse_clip_keeping(
             two_view,
             &config,
             &scale.side_view_rim(&params),
+            zero_choice,
             metres_per_px,
         )
         .ok()
@@ -1766,6 +1769,7 @@ fn signal_series(
     two_view: bool,
     config: &SignalConfig,
     camera: &SideViewRim,
+    zero_choice: RimZeroChoice,
     metres_per_px: f64,
 ) -> Result<(StateSeries, Option<ZeroFromMotion>), SignalError> {
     let (t, z) = rim_series(frames);
@@ -1782,7 +1786,11 @@ fn signal_series(
     // The heights from the zero the motion places (signal::motion_zero), with the
     // camera's own profile: every height moves by the rest level and the motion's
     // offset from it, and the peaks and states are found again on them.
-    let zero = signal::motion_zero(&t, &z, &series, camera, config).map(|zero| {
+    let motion = match zero_choice {
+        RimZeroChoice::Motion => signal::motion_zero(&t, &z, &series, camera, config),
+        RimZeroChoice::Rest => None,
+    };
+    let zero = motion.map(|zero| {
         let shift_m = series.halt.rest_level + zero.offset;
         for record in frames.iter_mut() {
             record.z_rim_m = record.z_rim_m.map(|z| z - shift_m);

@@ -37,8 +37,9 @@
 //! [fit]
 //! window_s = 0.5                 # fit the last 0.5 s before the halt
 //! halt = "combined"              # combined (t0 fitted, with the halt seen) | free (fitted only) | measured (fixed at the halt)
+//! rim_zero = "motion"            # z_rim's zero: motion (placed by the turns) | rest (the still disk's edge)
 //! rim_zero_uncertainty_px = 0.08 # 1σ of z_rim's zero, in n's interval (0: left out;
-//!                                # default: measured for how the rim is read)
+//!                                # default: the motion's, else measured for how the rim is read)
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -86,6 +87,18 @@ pub enum HaltChoice {
     Combined,
 }
 
+/// Where the zero of z_rim comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RimZeroChoice {
+    /// Placed by the motion: the rim's profile fitted with an offset over the turns
+    /// of the fit window (the default; [`crate::signal::motion_zero`]).
+    #[default]
+    Motion,
+    /// The still disk's edge after the halt (the thesis's choice).
+    Rest,
+}
+
 /// The disk: a preset, optionally with measured values overriding it.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -131,10 +144,15 @@ pub struct FitConfig {
     /// Length of the fit window before the halt [s].
     pub window_s: Option<f64>,
     pub halt: Option<HaltChoice>,
+    /// Where the zero of z_rim comes from (default: the motion).
+    pub rim_zero: Option<RimZeroChoice>,
     /// 1σ uncertainty of the zero of z_rim [px], carried into the interval of n
-    /// (default: the one measured for how the rim was read,
-    /// [`RimReading::zero_uncertainty_px`](crate::vision::RimReading::zero_uncertainty_px);
+    /// (default: the motion's ([`RimReading::motion_zero_uncertainty_px`]), else the
+    /// one measured for how the rim was read
+    /// ([`RimReading::zero_uncertainty_px`](crate::vision::RimReading::zero_uncertainty_px));
     /// 0 leaves it out).
+    ///
+    /// [`RimReading::motion_zero_uncertainty_px`]: crate::vision::RimReading::motion_zero_uncertainty_px
     pub rim_zero_uncertainty_px: Option<f64>,
 }
 
@@ -366,6 +384,14 @@ impl ExperimentConfig {
     pub fn rim_zero_uncertainty_px(&self) -> Option<f64> {
         self.fit.as_ref().and_then(|f| f.rim_zero_uncertainty_px)
     }
+
+    /// Where the zero of z_rim comes from ([`FitConfig::rim_zero`]).
+    pub fn rim_zero(&self) -> RimZeroChoice {
+        self.fit
+            .as_ref()
+            .and_then(|f| f.rim_zero)
+            .unwrap_or_default()
+    }
 }
 
 /// The band's half-width when the config names none: [`BAND_FRACTION`] of the disk's
@@ -501,6 +527,7 @@ mod tests {
             "[calibration]\nx_l = 10\nx_r = 5\nz_t = 1\nz_base = 2",
             "[calibration]\nx_l = 1\nx_r = 5\nz_t = 3\nz_base = 2",
             "[fit]\nwindow_s = -1",
+            "[fit]\nrim_zero = \"still\"",
             "plate = \"shiny\"",
         ] {
             assert!(
@@ -508,6 +535,14 @@ mod tests {
                 "{text}"
             );
         }
+    }
+
+    #[test]
+    fn the_zero_of_z_rim_is_the_motions_unless_the_rest_is_asked_for() {
+        let parse = |text| ExperimentConfig::parse(text, Path::new("z.toml")).expect(text);
+        assert_eq!(parse("fps = 480\n").rim_zero(), RimZeroChoice::Motion);
+        let rest = parse("fps = 480\n[fit]\nrim_zero = \"rest\"\n");
+        assert_eq!(rest.rim_zero(), RimZeroChoice::Rest);
     }
 
     #[test]
