@@ -1652,10 +1652,10 @@ pub fn analyse_clip_keeping(
         ));
     }
 
-    // The zero of z_rim (the edge at rest) is shared by every height, so an error in
-    // it moves n without a trace in the residuals: each fit is made again with the
-    // zero moved down and up by its uncertainty, and half the change of n enters
-    // n's interval.
+    // The zero of z_rim (placed by the motion, or the edge at rest) is shared by every
+    // height, so an error in it moves n without a trace in the residuals: each fit is
+    // made again with the zero moved down and up by its uncertainty, and half the
+    // change of n enters n's interval.
     let zero_px = config
         .rim_zero_uncertainty_px()
         .unwrap_or_else(|| match &zero {
