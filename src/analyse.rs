@@ -1281,7 +1281,7 @@ pub fn analyse_clip_keeping(
                 Plate::Dark => (tail_rest_window(&windows, pass1, tail), *edge0),
                 Plate::Light => (pass1.clone(), *edge0),
             });
-        let rim = match &rest_window {
+        let mut rim = match &rest_window {
             Some((rest_window, edge0)) => {
                 let mut heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
                 let refit = match side_config.plate {
@@ -1455,6 +1455,17 @@ pub fn analyse_clip_keeping(
         .map_err(|error| signal_error(clip, &fps, error))?;
         if let Some(zero) = &zero {
             rim_zero_row_px -= zero.shift_m / metres_per_px;
+            let shift_px = zero.shift_m / metres_per_px;
+            rim += &format!(
+                "; the motion places the zero of z_rim {:.3} ± {:.3} px {} the still disk's \
+                 edge, at row {rim_zero_row_px:.2} px (signal::motion_zero, {} windows, the \
+                 profile at ε = {:.2}°)",
+                shift_px.abs(),
+                zero.zero.se / metres_per_px,
+                if shift_px >= 0.0 { "above" } else { "below" },
+                zero.zero.windows,
+                zero.camera_elevation.to_degrees()
+            );
         }
         Ok(MeasuredSpan {
             frames,
@@ -1615,9 +1626,12 @@ pub fn analyse_clip_keeping(
             // windows' scatter, but the zero row follows it.
             if let Some(again) = zero_again {
                 rim_zero_row_px -= again.shift_m / metres_per_px;
-                zero = zero.map(|z| ZeroFromMotion {
-                    shift_m: z.shift_m + again.shift_m,
-                    ..again
+                zero = Some(match zero {
+                    Some(z) => ZeroFromMotion {
+                        shift_m: z.shift_m + again.shift_m,
+                        ..again
+                    },
+                    None => again,
                 });
             }
         }

@@ -309,11 +309,14 @@ fn zero_source(plan: &ExperimentPlan) -> String {
     ) {
         (true, _, _) => " (set in the config)".into(),
         (false, Some(z), _) => format!(
-            " (placed by the motion: the rim's profile at ε = {:.2}° fitted with an offset over              {} windows of the turns, {:+.3} ± {:.3} px from the still disk's edge; that and              the profile's own {} px in quadrature)",
+            " (placed by the motion: the rim's profile at ε = {:.2}° fitted with an offset over \
+             {} windows of the turns, {:.3} ± {:.3} px {} the still disk's edge; that and the \
+             profile's own {} px in quadrature)",
             z.camera_elevation.to_degrees(),
             z.zero.windows,
-            px(z.zero.offset),
+            px(z.shift_m).abs(),
             px(z.zero.se),
+            if z.shift_m >= 0.0 { "above" } else { "below" },
             crate::vision::MOTION_ZERO_PROFILE_PX
         ),
         (false, None, Some(reading)) => format!(" (as measured for {})", reading.describe()),
@@ -523,7 +526,7 @@ fn experiment_page(
             "Energy exponent "
             strong { (format!("n = {:.3}", e.peaks_fit.fit.n)) }
             (format!(" (95 % CI {:.3} … {:.3}) from {} peaks in the last {} s before the halt; \
-                the interval includes ± {:.3} from the zero of z_rim, known to {} px{} (the fits \
+                the interval includes ± {:.3} from the zero of z_rim, known to {:.3} px{} (the fits \
                 made again with it moved by that much).",
                 e.peaks_fit.fit.ci95_n.0, e.peaks_fit.fit.ci95_n.1, e.peaks_fit.fit.points, plan.window_s,
                 1.96 * e.peaks_fit.fit.se_n_zero, plan.rim_zero_uncertainty_px, zero_source(plan)))
