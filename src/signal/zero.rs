@@ -13,13 +13,13 @@
 //! R sin φ and its swing about the mean R sin φ too, so the heights' mean and their
 //! swing disagree by exactly an offset c. Over windows of `state_window_periods`
 //! turns, one after another through the fit window, the local model (φ = φ₀ + φ₁τ,
-//! χ = χ₀ + ωτ + ½ω̇τ²) is fitted with c as a fifth term ([`Terms::offset`]); the
+//! χ = χ₀ + ωτ + ½ω̇τ²) is fitted with c as one more term ([`Terms::offset`]); the
 //! zero is the windows' mean of c, its standard error their standard deviation over
 //! √N. Not a mean weighted by each window's own error: those errors (from the
 //! residuals and the window's geometry) range over a factor of seven, and on a light
-//! plate brighter than the disk (robustness scene s05) one window of the
-//! seventeen, with a fifth of the others' error, read 0.09 px and moved the weighted
-//! zero 0.04 px off, the plain mean 0.01 px.
+//! plate brighter than the disk (robustness scene s05, in the prototype) one window
+//! of the seventeen, with a fifth of the others' error, read 0.09 px and moved the
+//! weighted zero 0.04 px off, the plain mean 0.01 px.
 //!
 //! The profile must be the camera's: a camera at elevation ε sees the front rim move
 //! by H φ cos χ in depth, which tilts the swing against the mean by (H/R) tan ε and
