@@ -447,7 +447,8 @@ pub struct ExperimentPlan {
     #[serde(default)]
     pub rim_zero_row_px: Option<f64>,
     /// The zero the motion placed, and how far it moved the heights from the rest
-    /// edge's; `None` when too few turns fitted, and in results written before it.
+    /// edge's; `None` when too few turns fitted or the camera's elevation is not
+    /// known, with `fit.rim_zero = "rest"`, and in results written before it.
     #[serde(default)]
     pub rim_zero_from_motion: Option<ZeroFromMotion>,
     /// 1σ uncertainty of that zero [px], carried into the intervals of n
@@ -1443,13 +1444,27 @@ pub fn analyse_clip_keeping(
 
         // Signal.
         let signal_config = signal_config(window_s, metres_per_px);
+        // The motion's zero needs the camera's profile: without its elevation (no top
+        // face seen) the first-order profile would read 0.05–0.12 px of offset where
+        // there is none (BENCHMARKS.md, "The zero from the motion").
+        let zero_choice = match (config.rim_zero(), scale.near_rim_elevation_rad) {
+            (RimZeroChoice::Motion, None) => {
+                warnings.push(
+                    "the camera's elevation is not known (the silhouette's top was not found \
+                     above the top face): the zero of z_rim stays the still disk's edge"
+                        .into(),
+                );
+                RimZeroChoice::Rest
+            }
+            (choice, _) => choice,
+        };
         let (series, zero) = signal_series(
             &mut frames,
             &repeated,
             two_view,
             &signal_config,
             &scale.side_view_rim(&params),
-            config.rim_zero(),
+            zero_choice,
             metres_per_px,
         )
         .map_err(|error| signal_error(clip, &fps, error))?;
@@ -1525,7 +1540,11 @@ pub fn analyse_clip_keeping(
     } = measured;
     let decoded = plan_span.decoded(first, attempts, frames.len());
     let halt_choice = config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default();
-    let zero_choice = config.rim_zero();
+    // As the span was measured: the rest edge when the camera's elevation is unknown.
+    let zero_choice = match scale.near_rim_elevation_rad {
+        Some(_) => config.rim_zero(),
+        None => RimZeroChoice::Rest,
+    };
     // `bounded`: t_φ was bounded by the energy law ([`law_bound`]), which leaves the
     // halt seen no measurement of t0.
     let halt_for = |series: &StateSeries, bounded: bool| match halt_choice {
