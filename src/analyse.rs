@@ -342,10 +342,9 @@ struct MeasuredSpan {
 pub struct ZeroFromMotion {
     /// The windows' offset c above the rest tail's level, and its standard error [m].
     pub zero: signal::MotionZero,
-    /// How far every height moved down: the rest tail's level plus c [m].
+    /// How far every height moved down: the rest tail's level plus c [m]. The
+    /// profile fitted is the camera's at [`ScaleReport::near_rim_elevation_rad`].
     pub shift_m: f64,
-    /// ε of the profile fitted ([`SideViewRim::camera_elevation`]) [rad].
-    pub camera_elevation: f64,
 }
 
 /// Why a clip could not be analysed. Every message names the clip; vision errors
@@ -613,13 +612,14 @@ impl ScaleReport {
     }
 
     /// The rim's profile as this camera sees it: [`SideViewRim`] at the near rim's
-    /// elevation (0 when it is not known).
-    pub fn side_view_rim(&self, disk: &DiskParams) -> SideViewRim {
-        SideViewRim {
-            radius: disk.radius,
-            half_thickness: disk.half_thickness,
-            camera_elevation: self.near_rim_elevation_rad.unwrap_or(0.0),
-        }
+    /// elevation; `None` when the elevation is not known.
+    pub fn side_view_rim(&self, disk: &DiskParams) -> Option<SideViewRim> {
+        self.near_rim_elevation_rad
+            .map(|camera_elevation| SideViewRim {
+                radius: disk.radius,
+                half_thickness: disk.half_thickness,
+                camera_elevation,
+            })
     }
 
     /// The scale used [m/px].
@@ -1444,33 +1444,27 @@ pub fn analyse_clip_keeping(
 
         // Signal.
         let signal_config = signal_config(window_s, metres_per_px);
-        // The motion's zero needs the camera's profile: without its elevation (no top
-        // face seen) the first-order profile would read 0.05–0.12 px of offset where
-        // there is none (BENCHMARKS.md, "The zero from the motion").
-        let zero_choice = match (config.rim_zero(), scale.near_rim_elevation_rad) {
-            (RimZeroChoice::Motion, None) => {
-                warnings.push(
-                    "the camera's elevation is not known (the silhouette's top was not found \
-                     above the top face): the zero of z_rim stays the still disk's edge"
-                        .into(),
-                );
-                RimZeroChoice::Rest
-            }
-            (choice, _) => choice,
-        };
+        let profile = motion_profile(config.rim_zero(), &scale, &params);
+        if config.rim_zero() == RimZeroChoice::Motion && profile.is_none() {
+            warnings.push(
+                "the camera's elevation is not known (the silhouette's top was not found above \
+                 the top face): the zero of z_rim stays the still disk's edge"
+                    .into(),
+            );
+        }
         let (series, zero) = signal_series(
             &mut frames,
             &repeated,
             two_view,
             &signal_config,
-            &scale.side_view_rim(&params),
-            zero_choice,
+            params.radius,
+            profile.as_ref(),
             metres_per_px,
         )
         .map_err(|error| signal_error(clip, &fps, error))?;
         if let Some(zero) = &zero {
-            rim_zero_row_px -= zero.shift_m / metres_per_px;
             let shift_px = zero.shift_m / metres_per_px;
+            rim_zero_row_px -= shift_px;
             rim += &format!(
                 "; the motion places the zero of z_rim {:.3} ± {:.3} px {} the still disk's \
                  edge, at row {rim_zero_row_px:.2} px (signal::motion_zero, {} windows, the \
@@ -1479,7 +1473,7 @@ pub fn analyse_clip_keeping(
                 zero.zero.se / metres_per_px,
                 if shift_px >= 0.0 { "above" } else { "below" },
                 zero.zero.windows,
-                zero.camera_elevation.to_degrees()
+                scale.near_rim_elevation_rad.unwrap_or(0.0).to_degrees()
             );
         }
         Ok(MeasuredSpan {
@@ -1540,11 +1534,7 @@ pub fn analyse_clip_keeping(
     } = measured;
     let decoded = plan_span.decoded(first, attempts, frames.len());
     let halt_choice = config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default();
-    // As the span was measured: the rest edge when the camera's elevation is unknown.
-    let zero_choice = match scale.near_rim_elevation_rad {
-        Some(_) => config.rim_zero(),
-        None => RimZeroChoice::Rest,
-    };
+    let profile = motion_profile(config.rim_zero(), &scale, &params);
     // `bounded`: t_φ was bounded by the energy law ([`law_bound`]), which leaves the
     // halt seen no measurement of t0.
     let halt_for = |series: &StateSeries, bounded: bool| match halt_choice {
@@ -1619,8 +1609,8 @@ pub fn analyse_clip_keeping(
             &repeated,
             two_view,
             &config,
-            &scale.side_view_rim(&params),
-            zero_choice,
+            params.radius,
+            profile.as_ref(),
             metres_per_px,
         )
         .ok()
@@ -1801,8 +1791,8 @@ fn signal_series(
     repeated: &[footage::RepeatedFrame],
     two_view: bool,
     config: &SignalConfig,
-    camera: &SideViewRim,
-    zero_choice: RimZeroChoice,
+    radius: f64,
+    motion_profile: Option<&SideViewRim>,
     metres_per_px: f64,
 ) -> Result<(StateSeries, Option<ZeroFromMotion>), SignalError> {
     let (t, z) = rim_series(frames);
@@ -1812,28 +1802,20 @@ fn signal_series(
             .map(|f| f.beta_raw.unwrap_or(f64::NAN))
             .collect()
     });
-    let thesis = ThesisRim {
-        radius: camera.radius,
-    };
+    let thesis = ThesisRim { radius };
     let mut series = signal::analyse(&t, &z, beta.as_deref(), &thesis, config)?;
     // The heights from the zero the motion places (signal::motion_zero), with the
     // camera's own profile: every height moves by the rest level and the motion's
     // offset from it, and the peaks and states are found again on them.
-    let motion = match zero_choice {
-        RimZeroChoice::Motion => signal::motion_zero(&t, &z, &series, camera, config),
-        RimZeroChoice::Rest => None,
-    };
+    let motion =
+        motion_profile.and_then(|camera| signal::motion_zero(&t, &z, &series, camera, config));
     let zero = motion.map(|zero| {
         let shift_m = series.halt.rest_level + zero.offset;
         for record in frames.iter_mut() {
             record.z_rim_m = record.z_rim_m.map(|z| z - shift_m);
             record.z_rim_px = record.z_rim_px.map(|z| z - shift_m / metres_per_px);
         }
-        ZeroFromMotion {
-            zero,
-            shift_m,
-            camera_elevation: camera.camera_elevation,
-        }
+        ZeroFromMotion { zero, shift_m }
     });
     if zero.is_some() {
         let (t, z) = rim_series(frames);
@@ -1866,6 +1848,22 @@ fn signal_series(
         record.t = *shifted;
     }
     Ok((series, zero))
+}
+
+/// The rim's profile the motion's zero is fitted with ([`signal::motion_zero`]): the
+/// camera's ([`ScaleReport::side_view_rim`]) when `choice` asks for the motion's zero.
+/// `None` keeps the still disk's edge: asked for, or the camera's elevation not known,
+/// where the first-order profile would read 0.05–0.12 px of offset that is not there
+/// (BENCHMARKS.md, "The zero from the motion").
+fn motion_profile(
+    choice: RimZeroChoice,
+    scale: &ScaleReport,
+    disk: &DiskParams,
+) -> Option<SideViewRim> {
+    match choice {
+        RimZeroChoice::Motion => scale.side_view_rim(disk),
+        RimZeroChoice::Rest => None,
+    }
 }
 
 /// The frames' capture times [s] and rim heights z_rim [m] (NaN: no edge), as the

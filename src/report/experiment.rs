@@ -312,7 +312,10 @@ fn zero_source(plan: &ExperimentPlan) -> String {
             " (placed by the motion: the rim's profile at ε = {:.2}° fitted with an offset over \
              {} windows of the turns, {:.3} ± {:.3} px {} the still disk's edge; that and the \
              profile's own {} px in quadrature)",
-            z.camera_elevation.to_degrees(),
+            plan.scale
+                .near_rim_elevation_rad
+                .unwrap_or(0.0)
+                .to_degrees(),
             z.zero.windows,
             px(z.shift_m).abs(),
             px(z.zero.se),

@@ -403,13 +403,7 @@ pub fn frame_states(
 ) -> Vec<FrameState> {
     let track = peaks::phase_track(&peaks.peaks, &peaks.troughs);
     let frame = peaks::nominal_period(t);
-    let ts = &halt.shifted_t;
-    let idx: Vec<usize> = finite_samples(t, z_rim)
-        .into_iter()
-        .filter(|&i| i <= halt.index)
-        .collect();
-    let st: Vec<f64> = idx.iter().map(|&i| ts[i]).collect();
-    let v: Vec<f64> = idx.iter().map(|&i| z_rim[i] - halt.rest_level).collect();
+    let (idx, st, v) = samples_to_the_halt(t, z_rim, halt);
     // One independent local fit per frame: spread over the cores.
     idx.par_iter()
         .enumerate()
@@ -619,6 +613,18 @@ pub fn with_zero_moved(
         states,
         ..series.clone()
     })
+}
+
+/// The samples the local fits take: those up to the halt with a rim height, as their
+/// indices, their times from the halt [s] and their heights above the rest level [m].
+fn samples_to_the_halt(t: &[f64], z_rim: &[f64], halt: &Halt) -> (Vec<usize>, Vec<f64>, Vec<f64>) {
+    let idx: Vec<usize> = finite_samples(t, z_rim)
+        .into_iter()
+        .filter(|&i| i <= halt.index)
+        .collect();
+    let st = idx.iter().map(|&i| halt.shifted_t[i]).collect();
+    let v = idx.iter().map(|&i| z_rim[i] - halt.rest_level).collect();
+    (idx, st, v)
 }
 
 /// Checks that `t` and `values` pair up and that `t` is finite and increasing.

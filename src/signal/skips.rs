@@ -6,7 +6,7 @@
 
 use super::local::{LocalInit, PhaseTrack, Terms, fit_local};
 use super::peaks::nominal_period;
-use super::{Halt, RimModel, SignalConfig, finite_samples, mad_sigma};
+use super::{Halt, RimModel, SignalConfig, finite_samples, mad_sigma, samples_to_the_halt};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -337,13 +337,7 @@ pub(crate) fn rim_phase_steps(
     config: &SignalConfig,
 ) -> Vec<FrameFlag> {
     let frame = nominal_period(t);
-    let ts = &halt.shifted_t;
-    let idx: Vec<usize> = finite_samples(t, z_rim)
-        .into_iter()
-        .filter(|&i| i <= halt.index)
-        .collect();
-    let v: Vec<f64> = idx.iter().map(|&i| z_rim[i] - halt.rest_level).collect();
-    let st: Vec<f64> = idx.iter().map(|&i| ts[i]).collect();
+    let (idx, st, v) = samples_to_the_halt(t, z_rim, halt);
     // (sample k, statistic, phase step, half-width in samples) of each candidate.
     // Two independent local fits per sample: spread over the cores.
     let candidates: Vec<(usize, f64, f64, usize)> = (1..idx.len())

@@ -31,7 +31,7 @@ use std::f64::consts::PI;
 use serde::{Deserialize, Serialize};
 
 use super::local::{LocalInit, Terms, fit_local};
-use super::{RimModel, SignalConfig, StateSeries, finite_samples, peaks, skips};
+use super::{RimModel, SignalConfig, StateSeries, peaks, samples_to_the_halt, skips};
 
 /// Fewest windows the zero is taken from: fewer do not show whether they agree.
 pub const MIN_WINDOWS: usize = 5;
@@ -60,12 +60,7 @@ pub fn motion_zero(
 ) -> Option<MotionZero> {
     let halt = &series.halt;
     let frame = peaks::nominal_period(t);
-    let idx: Vec<usize> = finite_samples(t, z_rim)
-        .into_iter()
-        .filter(|&i| i <= halt.index)
-        .collect();
-    let st: Vec<f64> = idx.iter().map(|&i| halt.shifted_t[i]).collect();
-    let v: Vec<f64> = idx.iter().map(|&i| z_rim[i] - halt.rest_level).collect();
+    let (idx, st, v) = samples_to_the_halt(t, z_rim, halt);
     let states = &series.states;
     let mut offsets = Vec::new();
     let mut k = states.partition_point(|s| s.t < series.peaks.window.0);
