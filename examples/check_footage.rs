@@ -63,6 +63,11 @@ struct Truth {
     peak_t: Vec<f64>,
     peak_phi: Vec<f64>,
     peak_detectable: Vec<bool>,
+    /// The elevation of the side camera's ray to the disk's near bottom rim at rest
+    /// [rad], from `cameras` (the first whose name starts with "side"), the disk's final
+    /// place `trajectory.X_f, Y_f` and its radius `disk.R`: atan(z_cam / (d_c − R)), d_c
+    /// the camera's horizontal distance from the disk's centre. `None` without a camera.
+    near_rim_elevation_rad: Option<f64>,
 }
 
 fn f64s(v: &Value, what: &str) -> Result<Vec<f64>, String> {
@@ -108,8 +113,25 @@ impl Truth {
                 .iter()
                 .map(|b| b.as_bool().unwrap_or(false))
                 .collect(),
+            near_rim_elevation_rad: near_rim_elevation(v),
         })
     }
+}
+
+/// See [`Truth::near_rim_elevation_rad`].
+fn near_rim_elevation(v: &Value) -> Option<f64> {
+    let (_, camera) = v["cameras"]
+        .as_object()?
+        .iter()
+        .find(|(name, _)| name.starts_with("side"))?;
+    let pos = f64s(&camera["pos"], "pos").ok()?;
+    let trajectory = &v["trajectory"];
+    let (x, y) = (
+        trajectory["X_f"].as_f64().unwrap_or(0.0),
+        trajectory["Y_f"].as_f64().unwrap_or(0.0),
+    );
+    let d_c = (pos.first()? - x).hypot(pos.get(1)? - y);
+    Some(pos.get(2)?.atan2(d_c - v["disk"]["R"].as_f64()?))
 }
 
 // ---------------------------------------------------------------- metrics
@@ -287,6 +309,33 @@ fn zrim_rms(truth: &Truth, measured: &BTreeMap<i64, f64>) -> (Option<f64>, usize
     ((count > 0).then(|| (sum / count as f64).sqrt()), misses)
 }
 
+/// The heights' offset and gain against the truth over the last 0.5 s: the least-squares
+/// line z − z_true = a + b·z_true [px, 1]. a is the error of z_rim's zero (the row
+/// heights are counted from), b a scale or swing error; `None` with fewer than 3 frames.
+fn height_offset_and_gain(truth: &Truth, measured: &BTreeMap<i64, f64>) -> Option<(f64, f64)> {
+    let pairs: Vec<(f64, f64)> = (0..truth.index.len())
+        .filter(|&k| (truth.t0 - WINDOW_S..=truth.t0).contains(&truth.t_true[k]))
+        .filter_map(|k| {
+            let z = *measured.get(&(truth.index[k] as i64))?;
+            z.is_finite()
+                .then(|| (truth.z_rim_px[k], z - truth.z_rim_px[k]))
+        })
+        .collect();
+    if pairs.len() < 3 {
+        return None;
+    }
+    let m = pairs.len() as f64;
+    let (sx, sy) = pairs
+        .iter()
+        .fold((0.0, 0.0), |(sx, sy), &(x, y)| (sx + x, sy + y));
+    let (mx, my) = (sx / m, sy / m);
+    let (sxx, sxy) = pairs.iter().fold((0.0, 0.0), |(sxx, sxy), &(x, y)| {
+        (sxx + (x - mx).powi(2), sxy + (x - mx) * (y - my))
+    });
+    let b = sxy / sxx;
+    Some((my - b * mx, b))
+}
+
 // ---------------------------------------------------------------- eulerdisk's output
 
 /// A power-law fit from `result.json` (`peaks_fit.fit` or `frames_fit.fit`).
@@ -322,6 +371,9 @@ struct Measured {
     peaks: Vec<(f64, f64)>,
     /// Flagged file frames.
     flags: Vec<i64>,
+    /// `plan.scale.near_rim_elevation_rad`: the camera's elevation at the near rim as
+    /// measured [rad].
+    near_rim_elevation_rad: Option<f64>,
 }
 
 fn read_csv(path: &Path) -> Result<Vec<BTreeMap<String, String>>, String> {
@@ -378,6 +430,7 @@ impl Measured {
                 f.dedup();
                 f
             },
+            near_rim_elevation_rad: result["plan"]["scale"]["near_rim_elevation_rad"].as_f64(),
         })
     }
 }
@@ -427,6 +480,12 @@ struct Score {
     /// Two-view: (t_β − t_φ) − truth [frames].
     t_beta_err_frames: Option<f64>,
     drops: Option<DropScore>,
+    /// For information: the heights' offset a [px] and gain b of z − z_true = a + b·z_true
+    /// over the last 0.5 s ([`height_offset_and_gain`]).
+    height_offset_px: Option<f64>,
+    height_gain: Option<f64>,
+    /// For information: measured − true elevation of the camera at the near rim [°].
+    elevation_err_deg: Option<f64>,
     /// Targets missed, by short name (see the legend).
     failed: Vec<&'static str>,
 }
@@ -458,6 +517,12 @@ fn score(clip: &str, truth: &Truth, m: Option<&Measured>, error: Option<String>)
     s.t_phi_err_frames = Some(t_phi_err / FRAME_S);
     // z_rim RMS over the last 0.5 s.
     (s.zrim_rms_px, s.zrim_misses) = zrim_rms(truth, &m.z_rim_px);
+    (s.height_offset_px, s.height_gain) = height_offset_and_gain(truth, &m.z_rim_px)
+        .map_or((None, None), |(a, b)| (Some(a), Some(b)));
+    s.elevation_err_deg = m
+        .near_rim_elevation_rad
+        .zip(truth.near_rim_elevation_rad)
+        .map(|(got, want)| (got - want).to_degrees());
     // Peaks found, none spurious; φ at the peaks.
     let meas_t: Vec<f64> = m.peaks.iter().map(|&(t, _)| cap(m.t_phi + t)).collect();
     let pm = match_peaks(
@@ -607,6 +672,42 @@ fn row(s: &Score) -> String {
 
 const HEADER: &str = "| clip | measured | n peaks fit (Δ, CI) | n per-frame fit (Δ, CI) | t0 err ms | tφ err frames | z_rim RMS px | peaks found/true, spurious | φ med err % | tβ−tφ err frames | drops flagged/true, false | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|";
 
+/// The information table: what the targets rest on, not scored.
+const INFO_HEADER: &str = "| clip | heights' offset a px | heights' gain b % | ε at the near rim, err ° |\n|---|---|---|---|";
+
+fn info_row(s: &Score) -> String {
+    let show = |x: Option<f64>, scale: f64, digits: usize| {
+        x.map_or("–".into(), |x| format!("{:+.*}", digits, scale * x))
+    };
+    format!(
+        "| {} | {} | {} | {} |",
+        s.clip,
+        show(s.height_offset_px, 1.0, 3),
+        show(s.height_gain, 100.0, 2),
+        show(s.elevation_err_deg, 1.0, 2)
+    )
+}
+
+/// RMS and largest magnitude of the values present, as "RMS r (largest m)".
+fn rms_and_largest(values: impl Iterator<Item = Option<f64>>) -> String {
+    let v: Vec<f64> = values.flatten().collect();
+    if v.is_empty() {
+        return "–".into();
+    }
+    let rms = (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+    let largest = v
+        .iter()
+        .copied()
+        .fold(0.0, |m: f64, x| if x.abs() > m.abs() { x } else { m });
+    format!("RMS {rms:.3} (largest {largest:+.3})")
+}
+
+const INFO_LEGEND: &str = "\
+For information, not targets: the heights against the truth over the same 0.5 s as a least-squares
+line z − z_true = a + b·z_true (a: the error of z_rim's zero, b: of its scale or swing), and the
+camera's elevation at the near bottom rim as measured (plan.json scale.near_rim_elevation_rad)
+against the truth's side camera.";
+
 const LEGEND: &str = "\
 Targets (issue 12 §5), per clip, no config: measured; n within ±0.02 of the truth (±0.03 when the
 truth's φ oscillates, trajectory.osc_amp > 0) and the 95 % CI covering it, for both fits (n_peaks,
@@ -750,6 +851,15 @@ fn run() -> Result<bool, String> {
         println!("{}", row(&s));
         scores.push(s);
     }
+    println!("\n{INFO_HEADER}");
+    for s in &scores {
+        println!("{}", info_row(s));
+    }
+    println!(
+        "| over the clips | offset {} px | | ε err {} ° |\n\n{INFO_LEGEND}",
+        rms_and_largest(scores.iter().map(|s| s.height_offset_px)),
+        rms_and_largest(scores.iter().map(|s| s.elevation_err_deg))
+    );
     let measured = scores.iter().filter(|s| s.measured).count();
     let passed = scores.iter().filter(|s| s.failed.is_empty()).count();
     println!(
@@ -950,6 +1060,9 @@ mod tests {
         assert!((s.t_phi_err_frames.unwrap()).abs() < 1e-9);
         assert!((s.t0_err_ms.unwrap() - 1.0).abs() < 1e-9);
         assert!((s.zrim_rms_px.unwrap() - 0.1).abs() < 1e-9);
+        // Every height 0.1 px high: an offset, no gain.
+        assert!((s.height_offset_px.unwrap() - 0.1).abs() < 1e-9);
+        assert!(s.height_gain.unwrap().abs() < 1e-9);
         assert!((s.phi_median_err.unwrap() - 0.01).abs() < 1e-9);
         let unmeasured = score("c", &truth, None, Some("error: x".into()));
         assert_eq!(unmeasured.failed, vec!["measured"]);

@@ -10,8 +10,10 @@
 //! resolution and the targets of issue 12 §5 (see [`Tolerances`]).
 //!
 //! The test prints one row per scene (`cargo test --release --test robustness --
-//! --nocapture`) and fails listing every scene that misses a target, with the metric
-//! and by how much. `EULERDISK_ROBUSTNESS_KEEP=DIR` keeps the clips (`sNN.mp4`) and
+//! --ignored --nocapture`) and fails listing every scene that misses a target, with the
+//! metric and by how much. Two columns are for information only: the heights' offset
+//! (a of z − z_true = a + b·z_true over the scored window, the error of z_rim's zero)
+//! and the error of the camera's elevation at the near rim as measured. `EULERDISK_ROBUSTNESS_KEEP=DIR` keeps the clips (`sNN.mp4`) and
 //! their ground truths (`sNN.truth.json`) in DIR; `EULERDISK_ROBUSTNESS_SEED=N` draws
 //! another 24 scenes (the gate's verdicts are for the default seed).
 
@@ -297,7 +299,7 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
         Err(err) => {
             return Score {
                 row: format!(
-                    "| {} | {} | **not measured**: {} | | | | | | | |",
+                    "| {} | {} | **not measured**: {} | | | | | | | | | |",
                     scene.name,
                     scene.conditions(),
                     err.lines().next().unwrap_or("").replace('|', "/")
@@ -382,6 +384,34 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
         }
     }
     let rms = (sum_sq / count.max(1) as f64).sqrt();
+    // For information: the heights' offset a of z − z_true = a + b·z_true over the same
+    // frames (the error of z_rim's zero), and the camera's elevation at the near bottom
+    // rim (0, −R, 0) as measured against the truth's.
+    let offset = {
+        let pairs: Vec<(f64, f64)> = e
+            .frames
+            .iter()
+            .zip(&truth.frames)
+            .filter(|(_, t)| t.t < 0.0 && t.t >= -WINDOW_S)
+            .filter_map(|(m, t)| Some((t.z_rim_px?, m.z_rim_px? - t.z_rim_px?)))
+            .collect();
+        let k = pairs.len() as f64;
+        let (mx, my) = pairs
+            .iter()
+            .fold((0.0, 0.0), |(a, b), &(x, y)| (a + x / k, b + y / k));
+        let (sxx, sxy) = pairs.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
+            (a + (x - mx).powi(2), b + (x - mx) * (y - my))
+        });
+        my - sxy / sxx * mx
+    };
+    let true_elevation = cam.position_m.map_or(truth.elevation, |p| {
+        p[2].atan2(p[0].hypot(-truth.disk.radius - p[1]))
+    });
+    let elevation_err_deg = e
+        .plan
+        .scale
+        .near_rim_elevation_rad
+        .map(|got| (got - true_elevation).to_degrees());
     if rms > Z_RIM_RMS_PX || missing > 0 || e.frames.len() != truth.frames.len() {
         failures.push(format!(
             "z_rim RMS {rms:.3} px (≤ {Z_RIM_RMS_PX}), {missing} frames without an edge"
@@ -450,7 +480,7 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
     let halt_frames = (t_phi - truth.halt_time) * FPS;
     let t0_ms = 1e3 * (t_phi + e.peaks_fit.fit.t0 - truth.halt_time);
     let row = format!(
-        "| {} | {} | {} {:+.2} | {:+.2} / {:.2} | {:.3} | {found}/{}, {spurious} | {:.1} ({:+.1}) / {:.1} | {:+.3}{} / {} / {:.3} | {:+.1} | {:+.1} | {} |",
+        "| {} | {} | {} {:+.2} | {:+.2} / {:.2} | {:.3} | {:+.3} / {} | {found}/{}, {spurious} | {:.1} ({:+.1}) / {:.1} | {:+.3}{} / {} / {:.3} | {:+.1} | {:+.1} | {} |",
         scene.name,
         scene.conditions(),
         worst_cal.0,
@@ -458,6 +488,8 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
         100.0 * scale_err,
         100.0 * tol.scale,
         rms,
+        offset,
+        elevation_err_deg.map_or("–".into(), |d| format!("{d:+.2}")),
         detectable.len(),
         100.0 * phi_med,
         100.0 * phi_signed,
@@ -481,7 +513,7 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
     Score { row, failures }
 }
 
-const HEADER: &str = "| scene | conditions | worst cal. point, err px | scale err % / tol | z_rim RMS px | peaks found/true ≥0.5 px, spurious | φ med abs (signed) err % / tol | Δn peaks (95 % CI covers?) / per frame / tol | t_φ err frames | fitted t0 err ms | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|";
+const HEADER: &str = "| scene | conditions | worst cal. point, err px | scale err % / tol | z_rim RMS px | heights' offset px / ε err ° | peaks found/true ≥0.5 px, spurious | φ med abs (signed) err % / tol | Δn peaks (95 % CI covers?) / per frame / tol | t_φ err frames | fitted t0 err ms | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 #[test]
 #[ignore = "3 of 24 scenes miss a target (BENCHMARKS.md, \"Robustness scenes\", \
