@@ -89,7 +89,7 @@ const COPY_FRACTION: f64 = 1e-3;
 /// for the level to be a held picture without a repeated reading ([`held`]): well
 /// beyond the noise, so that motion too small to resolve, read near the threshold,
 /// stays motion.
-const RESOLVED_SIGMAS: f64 = 4.0;
+pub(crate) const RESOLVED_SIGMAS: f64 = 4.0;
 /// Re-measurements of the rest segment before t_φ is taken as settled.
 const MAX_HALT_ITERATIONS: usize = 8;
 /// Fewest rim heights a rest tail needs to measure its noise.
@@ -112,8 +112,11 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 /// 3. t_φ is the last frame of motion, the last rise before the first span with
 ///    none as long as `rest_tail_s` or [`MISSED_TURNS`] final turns (the median
 ///    interval of the last [`PERIOD_TURNS`] turns' peaks; module docs) and holding
-///    [`MIN_REST_FRAMES`] readings, where a rise inside a picture held level for
-///    [`HELD_TURN_FRACTION`] of the final turn ([`held`]) is no rise; the noise is
+///    [`MIN_REST_FRAMES`] readings, where a rise that repeats an earlier reading
+///    exactly (a reference picture shown again, [`repeated`]) within
+///    [`RESOLVED_SIGMAS`] σ of the threshold, or lies inside a picture held level
+///    for [`HELD_TURN_FRACTION`] of the final turn ([`held`]), is no rise; the
+///    noise is
 ///    then re-measured over every frame after t_φ, the threshold raised to
 ///    [`BAND_WIDENING`] × the deepest reading below the rest level there (noise: the
 ///    rim is never below its rest) and × the highest reading more than that span
@@ -122,7 +125,8 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 /// 4. t_φ then follows the final descent: each next frame that lies lower than the
 ///    one before and more than σ above both the rest level and the rest right after
 ///    it (the median of the next [`MIN_REST_FRAMES`] readings) is still motion,
-///    unless it is a rise inside a held picture.
+///    unless it is a rise inside a held picture (a repeated reading may be motion
+///    here: a descent is no rise).
 ///
 /// With [`SignalConfig::motion_until`] set, no frame after it is motion in steps 3
 /// and 4 (the energy law fitted to the clip has the disk flat by then).
@@ -225,9 +229,22 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             })
         };
         for (n, &i) in samples.iter().enumerate().skip(first + 1) {
+            let copy = repeated(&samples, z_rim, n, noise, config.quantum)
+                && z_rim[i] - level <= threshold + RESOLVED_SIGMAS * noise;
             let still = !motion(i, level, threshold)
-                || final_turn(&turns)
-                    .is_some_and(|p| held(&samples, t, z_rim, n, p, level, threshold, noise));
+                || copy
+                || final_turn(&turns).is_some_and(|p| {
+                    held(
+                        &samples,
+                        t,
+                        z_rim,
+                        n,
+                        p,
+                        level,
+                        threshold,
+                        (noise, config.quantum),
+                    )
+                });
             if still {
                 low = low.min(z_rim[i]);
                 continue;
@@ -306,9 +323,23 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // the test's).
     while let Some(n) = samples.iter().position(|&i| i > index && t[i] <= until) {
         let next = samples[n];
-        // A rise that the search above took for a held picture is no descent either.
+        // A rise that the search above took for a held picture is no descent either
+        // (a repeated reading may be: the decoder may show a picture again while the
+        // rim comes down, robustness scene s22: frame 311 repeats 309's reading to
+        // 1e-8 px, 0.25 px, a frame before the halt, true 0.26 px).
         if moving(next, level, threshold)
-            && period.is_some_and(|p| held(&samples, t, z_rim, n, p, level, threshold, noise))
+            && period.is_some_and(|p| {
+                held(
+                    &samples,
+                    t,
+                    z_rim,
+                    n,
+                    p,
+                    level,
+                    threshold,
+                    (noise, config.quantum),
+                )
+            })
         {
             break;
         }
@@ -380,7 +411,7 @@ fn held(
     period: f64,
     level: f64,
     threshold: f64,
-    noise: f64,
+    (noise, quantum): (f64, Option<f64>),
 ) -> bool {
     let span = HELD_TURN_FRACTION * period;
     let time = |m: usize| t[samples[m]];
@@ -394,12 +425,7 @@ fn held(
     };
     // Some reading of the window repeats an earlier one, in it or among the
     // encoder's references before it.
-    let copied = |a: usize, b: usize| {
-        (a..=b).any(|m| {
-            (a.saturating_sub(REFERENCE_PICTURES)..m)
-                .any(|j| (z[samples[m]] - z[samples[j]]).abs() <= COPY_FRACTION * noise)
-        })
-    };
+    let copied = |a: usize, b: usize| (a..=b).any(|m| repeated(samples, z, m, noise, quantum));
     // Every reading of the window clearly above the threshold.
     let resolved = |a: usize, b: usize| {
         samples[a..=b]
@@ -419,6 +445,26 @@ fn held(
         }
     }
     false
+}
+
+/// Whether the reading at position `n` of `samples` repeats one of the
+/// [`REFERENCE_PICTURES`] readings before it to [`COPY_FRACTION`] of the `noise` σ
+/// (never for readings on whole pixels, [`SignalConfig::quantum`]): the
+/// decoder showed a picture it holds for reference again. A moving rim, or a still
+/// one under sensor noise, never reads the same twice; an encoder shows a picture
+/// again where the frame differs from it by less than its quantiser resolves, so the
+/// copy says only that the rim is near the copied height. Near the threshold that is
+/// no evidence of motion; well above it, it is (seed 7's s06: frame 308 repeats
+/// 304's 0.39 px, true 0.40 and 0.43 px, 0.31 px over the rest level at a 0.10 px
+/// threshold and σ 0.02 px). Seed 7's two-view scene s16 of `tests/robustness.rs`
+/// (crf 28, halt at frame 312): the P pictures 310, 314 and 318 read 0.107 px, as
+/// frames 305, 306 and 309 did, 0.15 px over the rest level at a 0.10 px threshold,
+/// between B pictures that read 0.03 and −0.05 px, so no span of them is level; t_φ
+/// fell on the last copy, 6 frames late, and that copy counted as a spurious peak.
+fn repeated(samples: &[usize], z: &[f64], n: usize, noise: f64, quantum: Option<f64>) -> bool {
+    quantum.is_none()
+        && (n.saturating_sub(REFERENCE_PICTURES)..n)
+            .any(|j| (z[samples[n]] - z[samples[j]]).abs() <= COPY_FRACTION * noise)
 }
 
 /// The precession turn near the end of the motion: the median interval between the

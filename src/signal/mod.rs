@@ -156,6 +156,12 @@ pub struct SignalConfig {
     /// Lower bound of the noise σ [m]; for edges quantised to pixels of δ metres
     /// (eq. 3.10) a constant rest tail has MAD 0, and δ/√12 is a sensible floor.
     pub noise_floor: f64,
+    /// The step [m] in which the heights are read, when they are read on whole pixels
+    /// (δ of eq. 3.10, as the thesis did); `None` for sub-pixel readings. Sub-pixel
+    /// readings never repeat exactly unless the decoder showed a picture again, which
+    /// the halt then takes as no new motion (`halt::repeated`); readings on whole
+    /// pixels repeat all the time.
+    pub quantum: Option<f64>,
     /// A peak needs a prominence above this many noise σ.
     pub prominence_sigmas: f64,
     /// A peak needs a prominence above this [m] in any case (e.g. one pixel).
@@ -196,6 +202,7 @@ impl Default for SignalConfig {
             rest_tail_s: 0.1,
             motion_sigmas: 5.0,
             noise_floor: 0.0,
+            quantum: None,
             prominence_sigmas: 6.0,
             min_prominence: 0.0,
             state_window_periods: 1.5,

@@ -370,14 +370,16 @@ fn an_excursion_turns_after_the_halt_is_not_motion() {
 /// The encoder's frame-type cadence after the halt (robustness scene s14: 0.07,
 /// 0.12, 0.07, 0 px, a turn of 4 frames like the last true turns, for 12 frames) is
 /// read as motion on its own; with `motion_until` at the energy law's halt it is not,
-/// and t_φ is found within a frame.
+/// and t_φ is found within a frame. Each reading differs from the others by a
+/// thousandth of the threshold or more, as pictures coded under flicker do (readings
+/// that repeat exactly are the next test's).
 #[test]
 fn rises_after_the_laws_halt_are_not_motion() {
     let (t, z, truth, config, before) = clip_and_halt();
     let (last, level, threshold) = (before.index, before.rest_level, before.threshold);
     let mut coded = z.clone();
     for (k, reading) in coded[last + 2..last + 14].iter_mut().enumerate() {
-        *reading = level + threshold * [0.6, 1.2, 0.6, 0.0][k % 4];
+        *reading = level + threshold * ([0.6, 1.2, 0.6, 0.0][k % 4] + 1e-3 * k as f64);
     }
     let fooled = halt_time(&t, &coded, &config).expect("halt");
     assert!(fooled.index > last + 8, "t_φ at {}", fooled.index);
@@ -387,6 +389,49 @@ fn rises_after_the_laws_halt_are_not_motion() {
     };
     let halt = halt_time(&t, &coded, &bounded).expect("halt");
     assert_halt_within_a_frame(&halt, &truth);
+}
+
+/// A picture the decoder shows again after the halt (seed 7's robustness scene s16,
+/// crf 28: the P pictures 310, 314 and 318 read 0.107 px as frames 305, 306 and 309
+/// did, 0.15 px over the rest level at a 0.10 px threshold, the halt at 312) is no
+/// motion: a copy says only that the rim is within the coder's resolution of the
+/// copied height. A copy of a height well above the threshold is motion (seed 7's
+/// s06: frame 308 repeats 304's 0.39 px, true 0.40 and 0.43 px).
+#[test]
+fn a_picture_shown_again_is_motion_only_when_resolved() {
+    let (t, z, truth, config, before) = clip_and_halt();
+    let (last, level) = (before.index, before.rest_level);
+    let (threshold, resolved) = (
+        before.threshold,
+        before.threshold + halt::RESOLVED_SIGMAS * before.noise,
+    );
+    // Readings of the last turns, among the decoder's references for a picture two
+    // frames after t_φ: a trough read just over the threshold (as s16's 305), and a
+    // reading well over it.
+    let recent = last - 14..=last;
+    let height = |i: usize| z[i] - level;
+    let trough = recent
+        .clone()
+        .min_by(|&a, &b| height(a).total_cmp(&height(b)))
+        .expect("readings");
+    let high = recent
+        .clone()
+        .find(|&i| height(i) > resolved)
+        .expect("a reading well over the threshold");
+    let mut copies = z.clone();
+    copies[trough] = level + 0.5 * (threshold + resolved);
+    // That trough's picture shown again every fourth frame for 12 frames, at rest
+    // between.
+    for k in (0..12).step_by(4) {
+        copies[last + 2 + k] = copies[trough];
+    }
+    let seen_through = halt_time(&t, &copies, &config).expect("halt");
+    assert_halt_within_a_frame(&seen_through, &truth);
+    // The second shown again once.
+    let mut resolved_copy = z.clone();
+    resolved_copy[last + 2] = z[high];
+    let moving = halt_time(&t, &resolved_copy, &config).expect("halt");
+    assert!(moving.index >= last + 2, "t_φ at {}", moving.index);
 }
 
 /// A picture held after the halt, level for most of a final turn though above the
@@ -1141,6 +1186,7 @@ fn pixel_quantised_rim_heights() {
         .collect();
     let config = SignalConfig {
         noise_floor: delta / 12f64.sqrt(),
+        quantum: Some(delta),
         min_prominence: delta,
         ..SignalConfig::default()
     };
