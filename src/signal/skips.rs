@@ -182,11 +182,14 @@ const CONSISTENT_SIGMAS: f64 = 4.0;
 /// turns, within 3.2 errors of one. Of flags within 6 frames, the largest step is
 /// kept.
 ///
-/// Only frames before `t_beta`, the strip's stop, are flagged: a stopped strip shows
-/// no skip, and a strip that stops at once (o07 of the open footage, 3.4 frames
-/// after the fall) puts a kink in the windows across its stop, which a quadratic
-/// does not follow: it read as a step of 1.4 frames' turn one frame after the stop.
-/// The spread of the steps is still taken over the whole clip.
+/// Only frames before `t_beta`, the strip's stop, are flagged, and the window after
+/// such a frame ends at the stop (at least 4 frames, else no step is measured
+/// there): a stopped strip shows no skip, and a strip that stops at once (o07 of the
+/// open footage, 3.4 frames after the fall) puts a kink in the windows across its
+/// stop, which a quadratic does not follow: it read as a step of 1.4 frames' turn
+/// one frame after the stop, and on o07 re-encoded at CRF 20 as 0.88 of a turn
+/// (6.3 spreads) two frames before it. The spread of the steps is still taken over
+/// the whole clip.
 pub fn strip_angle_steps(
     t: &[f64],
     beta_unwrapped: &[f64],
@@ -211,7 +214,14 @@ pub fn strip_angle_steps(
         .filter_map(|k| {
             let t_mid = 0.5 * (t[idx[k - 1]] + t[idx[k]]);
             let before = fit(&idx[k - n..k], t_mid)?;
-            let after = fit(&idx[k..k + n], t_mid)?;
+            // Before the stop, the window after the boundary ends at it.
+            let rotating = t[idx[k]] < t_beta;
+            let after: Vec<usize> = idx[k..k + n]
+                .iter()
+                .copied()
+                .take_while(|&i| !rotating || t[i] < t_beta)
+                .collect();
+            let after = fit(&after, t_mid)?;
             let step = after.value - before.value;
             let frame_turn = 0.5 * (before.slope + after.slope) * frame;
             let turn_se = 0.5 * before.slope_se.hypot(after.slope_se) * frame;
