@@ -95,8 +95,9 @@ pub enum VisionError {
 
     /// No row separates the mirror side view from the plan view.
     #[error(
-        "frame {frame}: no dark, uniform row separates the side view (top) from the plan \
-         view (bottom); give it as `vision.split_row` [px] in the config"
+        "frame {frame}: neither a dark band nor a band of uniform rows separates the side \
+         view (top) from the plan view (bottom); give it as `vision.split_row` [px] in the \
+         config"
     )]
     NoSplit { frame: usize },
 

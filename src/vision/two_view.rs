@@ -61,8 +61,15 @@ pub fn split_views<'a>(
 /// middle three quarters of the frame. Each row there is scored by its mean
 /// intensity plus its mean absolute deviation; the best row must score at most
 /// half the median row's and be dark (score ≤ 64 of 255). The middle row of the
-/// run of adjacent rows scoring at most 1.5 × best + 2 is returned. Scans the whole frame:
-/// call it once per clip, e.g. on the calibration frame.
+/// run of adjacent rows scoring at most 1.5 × best + 2 is returned.
+///
+/// Without a dark band (a light plate in both views, two camera images stacked),
+/// the views are still apart where no disk is: the plate below the side view's
+/// disk and shadow and above the plan view's disk, whose rows are uniform. The
+/// middle of the longest run of rows whose mean absolute deviation is at most
+/// [`UNIFORM_FRACTION`] of the 90th percentile row's (rows across a disk) is
+/// returned, the run at least 1 % of the frame tall. Scans the whole frame: call it once per clip, e.g. on the calibration
+/// frame.
 pub fn find_split_row(frame: &FrameView, index: usize) -> Result<usize, VisionError> {
     check_frame(frame, index)?;
     let (w, h) = (frame.width, frame.height);
@@ -70,7 +77,8 @@ pub fn find_split_row(frame: &FrameView, index: usize) -> Result<usize, VisionEr
     if hi <= lo + 2 {
         return Err(VisionError::NoSplit { frame: index });
     }
-    let scores: Vec<f32> = (lo..hi)
+    // (mean, mean absolute deviation) of each row's intensity.
+    let rows: Vec<(f32, f32)> = (lo..hi)
         .map(|y| {
             let row = frame.row(y);
             let values = row
@@ -78,9 +86,10 @@ pub fn find_split_row(frame: &FrameView, index: usize) -> Result<usize, VisionEr
                 .map(|p| (f32::from(p[0]) + f32::from(p[1]) + f32::from(p[2])) / 3.0);
             let mean = values.clone().sum::<f32>() / w as f32;
             let dev = values.map(|v| (v - mean).abs()).sum::<f32>() / w as f32;
-            mean + dev
+            (mean, dev)
         })
         .collect();
+    let scores: Vec<f32> = rows.iter().map(|(mean, dev)| mean + dev).collect();
     let mut sorted = scores.clone();
     sorted.sort_by(f32::total_cmp);
     let median = sorted[sorted.len() / 2];
@@ -91,7 +100,10 @@ pub fn find_split_row(frame: &FrameView, index: usize) -> Result<usize, VisionEr
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .ok_or(VisionError::NoSplit { frame: index })?;
     if best_score > 0.5 * median || best_score > 64.0 {
-        return Err(VisionError::NoSplit { frame: index });
+        let deviations: Vec<f32> = rows.iter().map(|r| r.1).collect();
+        return uniform_band(&deviations, h)
+            .map(|middle| lo + middle)
+            .ok_or(VisionError::NoSplit { frame: index });
     }
     // Rows nearly as dark and uniform as the best one belong to the divider.
     let near = 1.5 * best_score + 2.0;
@@ -105,6 +117,43 @@ pub fn find_split_row(frame: &FrameView, index: usize) -> Result<usize, VisionEr
         .last()
         .unwrap_or(best);
     Ok(lo + (first + last) / 2)
+}
+
+/// A row is uniform, for [`find_split_row`]'s band without a dark divider, when its
+/// mean absolute deviation is at most this fraction of the 90th percentile row's
+/// (a row across a disk: the disk against the plate). A plate's grain leaves its
+/// rows a deviation of their own: a textured light plate (`render --texture 0.1`)
+/// 7–12 grey levels, against 30–55 across a disk.
+const UNIFORM_FRACTION: f32 = 0.25;
+
+/// The middle of the longest run of uniform rows ([`UNIFORM_FRACTION`]) among rows
+/// of mean absolute deviations `deviations` (an index into it), the run at least
+/// 1 % of the `height` of the frame; `None` without one.
+fn uniform_band(deviations: &[f32], height: usize) -> Option<usize> {
+    let mut sorted = deviations.to_vec();
+    sorted.sort_by(f32::total_cmp);
+    let p90 = *sorted.get(sorted.len() * 9 / 10)?;
+    let limit = UNIFORM_FRACTION * p90;
+    let mut best: Option<(usize, usize)> = None;
+    let mut start = None;
+    for (k, &dev) in deviations
+        .iter()
+        .chain(std::iter::once(&f32::INFINITY))
+        .enumerate()
+    {
+        match (dev <= limit, start) {
+            (true, None) => start = Some(k),
+            (false, Some(s)) => {
+                if best.is_none_or(|(a, b)| k - s > b - a) {
+                    best = Some((s, k));
+                }
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    let (a, b) = best.filter(|(a, b)| b - a >= (height / 100).max(4))?;
+    Some((a + b) / 2)
 }
 
 /// Whether a frame is a two-view frame (thesis fig. 3.20), and why.
@@ -140,7 +189,7 @@ pub fn detect_two_view(frame: &FrameView, index: usize) -> LayoutDetection {
         evidence,
     };
     let Ok(row) = find_split_row(frame, index) else {
-        return side("no dark full-width band to divide two views".into());
+        return side("no dark or uniform full-width band to divide two views".into());
     };
     let Ok((upper, plan)) = split_views(frame, row, index) else {
         return side(format!("no plan view below row {row}"));
@@ -153,7 +202,7 @@ pub fn detect_two_view(frame: &FrameView, index: usize) -> LayoutDetection {
         .filter(|&(x, y)| upper.intensity(x, y) > level)
         .count();
     if bright * 100 < upper.width * upper.height {
-        return side(format!("nothing bright above the dark band at row {row}"));
+        return side(format!("nothing bright above the band at row {row}"));
     }
     let min_pixels = (plan.width * plan.height / 1000).max(StripFinder::MIN_PIXELS);
     // Red, not merely redder than the rest (white paper over a bluish plate is).
@@ -166,7 +215,7 @@ pub fn detect_two_view(frame: &FrameView, index: usize) -> LayoutDetection {
         .count();
     if red < min_pixels {
         return side(format!(
-            "{red} red pixels below the dark band at row {row}, fewer than a strip's {min_pixels}"
+            "{red} red pixels below the band at row {row}, fewer than a strip's {min_pixels}"
         ));
     }
     let strip = auto_colour_thresholds(&plan, index).ok().and_then(|t| {
@@ -179,16 +228,16 @@ pub fn detect_two_view(frame: &FrameView, index: usize) -> LayoutDetection {
         Some(s) if s.eccentricity >= MIN_STRIP_ECCENTRICITY => LayoutDetection {
             two_view: true,
             evidence: format!(
-                "dark divider at row {row}; below it a red strip of {} px, eccentricity {:.3}",
+                "views divided at row {row} (a dark or uniform band); below it a red strip of {} px, eccentricity {:.3}",
                 s.pixels, s.eccentricity
             ),
         },
         Some(s) => side(format!(
-            "below the dark band at row {row} the red component ({} px) is not a strip: \
+            "below the band at row {row} the red component ({} px) is not a strip: \
              eccentricity {:.3} < {MIN_STRIP_ECCENTRICITY}",
             s.pixels, s.eccentricity
         )),
-        None => side(format!("no red strip below the dark band at row {row}")),
+        None => side(format!("no red strip below the band at row {row}")),
     }
 }
 
@@ -354,10 +403,13 @@ fn mean_intensity(frame: &FrameView) -> f64 {
 ///
 /// With every channel divided by the image mean, the pixels are split by
 /// Otsu's method on their redness r − max(g, b); the redder class is the strip.
-/// r_thresh lies halfway between the strip's mean r and the rest's; g_thresh
-/// and b_thresh halfway between the strip's mean and that of the non-strip
-/// pixels bright enough to pass r_thresh (the grey or white top face), or of
-/// the rest when none is.
+/// g_thresh and b_thresh lie halfway between the strip's mean and that of the
+/// non-strip pixels brighter than the strip in g or b (the grey or white top
+/// face, a light plate), or of the rest when none is; r_thresh halfway between
+/// the strip's mean r and that of the non-strip pixels below both (a dark plate,
+/// a shadow), or 0 when none is. On a light plate the strip's r is below the
+/// plate's, so a threshold halfway to the rest's mean r (most of it plate)
+/// shut the strip out.
 pub fn auto_colour_thresholds(
     plan: &FrameView,
     index: usize,
@@ -403,14 +455,16 @@ pub fn auto_colour_thresholds(
     if n_red < StripFinder::MIN_PIXELS || n_rest < n_red || redness(&red) < 0.2 {
         return Err(no_strip(n_red));
     }
-    let r = 0.5 * (red[0] + rest[0]);
-    let (bright, n_bright) = mean_of(&|p| !is_red(p) && p[0] > r);
+    // g and b shut out what is brighter than the strip in them (a white or grey top
+    // face, a light plate)...
+    let (bright, n_bright) = mean_of(&|p| !is_red(p) && p[1].max(p[2]) > red[1].max(red[2]));
     let others = if n_bright > 0 { bright } else { rest };
-    Ok(ColourThresholds {
-        r,
-        g: 0.5 * (red[1] + others[1]),
-        b: 0.5 * (red[2] + others[2]),
-    })
+    let (g, b) = (0.5 * (red[1] + others[1]), 0.5 * (red[2] + others[2]));
+    // ...and r what they let through, darker than the strip (a dark plate, a
+    // shadow, the disk's side).
+    let (dark, n_dark) = mean_of(&|p| !is_red(p) && p[1] < g && p[2] < b);
+    let r = 0.5 * (red[0] + if n_dark > 0 { dark[0] } else { 0.0 });
+    Ok(ColourThresholds { r, g, b })
 }
 
 #[cfg(test)]
@@ -422,9 +476,20 @@ mod tests {
 
     /// Plan view: a grey disk on a dark plate, a red strip of `length × width`
     /// px through (cx, cy) at angle β (counter-clockwise from +x, y up).
-    fn plan_view(beta: f64, (cx, cy): (f64, f64), length: f64, width: f64) -> Canvas {
+    fn plan_view(beta: f64, centre: (f64, f64), length: f64, width: f64) -> Canvas {
+        plan_view_on(30.0, beta, centre, length, width)
+    }
+
+    /// [`plan_view`] on a plate of grey level `plate`.
+    fn plan_view_on(
+        plate: f64,
+        beta: f64,
+        (cx, cy): (f64, f64),
+        length: f64,
+        width: f64,
+    ) -> Canvas {
         let (w, h) = (400, 300);
-        let mut c = Canvas::new(w, h, grey(30.0));
+        let mut c = Canvas::new(w, h, grey(plate));
         let (dx, dy) = (200.0, 150.0);
         c.shape(
             (60.0, 10.0, 340.0, 290.0),
@@ -622,5 +687,40 @@ mod tests {
             Err(VisionError::NoSplit { frame: 9 })
         ));
         assert!(split_views(&frame, 0, 0).is_err());
+    }
+
+    /// Two camera images stacked with no divider, a light plate in both (the side
+    /// view's plate reaching its last row, the plan view's around the disk): the
+    /// views are split in the uniform plate rows between the side view's shadow and
+    /// the plan view's disk, and the frame is detected as two-view.
+    #[test]
+    fn split_without_a_dark_divider_on_a_light_plate() {
+        let side = SideScene::standard();
+        let top = side.light_plate(0.0, 4.0);
+        let plan = plan_view_on(210.0, 0.7, (200.0, 150.0), 180.0, 12.0);
+        let (w, rows) = (400, 300);
+        let top_bytes = top.to_bgr(0);
+        let mut bytes = Vec::new();
+        for r in 0..rows {
+            // The side view's middle 400 columns from its row 100 (the dark above
+            // the disk, a dark band of its own, stays in the frame's top eighth),
+            // its plate continued below its last row.
+            let r = (r + 100).min(top.h - 1);
+            bytes.extend_from_slice(&top_bytes[r * 3 * top.w + 3 * 120..r * 3 * top.w + 3 * 520]);
+        }
+        bytes.extend(plan.to_bgr(0));
+        let frame = FrameView {
+            width: w,
+            height: 2 * rows,
+            stride: 3 * w,
+            order: crate::footage::ChannelOrder::Bgr,
+            data: &bytes,
+        };
+        // Between the shadow's last row and the plan view's disk (its top at 300 + 15).
+        let shadow_end = (side.z_base + 4.0).ceil() as usize - 100;
+        let split = find_split_row(&frame, 0).unwrap();
+        assert!((shadow_end..rows + 15).contains(&split), "split {split}");
+        let found = detect_two_view(&frame, 0);
+        assert!(found.two_view, "{}", found.evidence);
     }
 }
