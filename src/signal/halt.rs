@@ -165,6 +165,20 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     let until = config.motion_until.unwrap_or(f64::INFINITY);
     let motion =
         |i: usize, level: f64, threshold: f64| t[i] <= until && moving(i, level, threshold);
+    // The reading at position n of `samples` in a held picture, over the final turn p.
+    let in_held_picture = |n: usize, p: f64, level: f64, threshold: f64, noise: f64| {
+        held(
+            &samples,
+            t,
+            z_rim,
+            n,
+            p,
+            level,
+            threshold,
+            noise,
+            config.quantum,
+        )
+    };
     // A disk still moving at the clip's end lifts its rim once a turn, turn after turn,
     // or holds it up: the tail is refused for rises in two runs or more, or in one
     // run of more than [`REFRESH_FRAMES`] readings. A frame that repeats the previous
@@ -233,18 +247,8 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
                 && z_rim[i] - level <= threshold + RESOLVED_SIGMAS * noise;
             let still = !motion(i, level, threshold)
                 || copy
-                || final_turn(&turns).is_some_and(|p| {
-                    held(
-                        &samples,
-                        t,
-                        z_rim,
-                        n,
-                        p,
-                        level,
-                        threshold,
-                        (noise, config.quantum),
-                    )
-                });
+                || final_turn(&turns)
+                    .is_some_and(|p| in_held_picture(n, p, level, threshold, noise));
             if still {
                 low = low.min(z_rim[i]);
                 continue;
@@ -328,18 +332,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         // rim comes down, robustness scene s22: frame 311 repeats 309's reading to
         // 1e-8 px, 0.25 px, a frame before the halt, true 0.26 px).
         if moving(next, level, threshold)
-            && period.is_some_and(|p| {
-                held(
-                    &samples,
-                    t,
-                    z_rim,
-                    n,
-                    p,
-                    level,
-                    threshold,
-                    (noise, config.quantum),
-                )
-            })
+            && period.is_some_and(|p| in_held_picture(n, p, level, threshold, noise))
         {
             break;
         }
@@ -411,7 +404,8 @@ fn held(
     period: f64,
     level: f64,
     threshold: f64,
-    (noise, quantum): (f64, Option<f64>),
+    noise: f64,
+    quantum: Option<f64>,
 ) -> bool {
     let span = HELD_TURN_FRACTION * period;
     let time = |m: usize| t[samples[m]];

@@ -183,13 +183,14 @@ const CONSISTENT_SIGMAS: f64 = 4.0;
 /// kept.
 ///
 /// Only frames before `t_beta`, the strip's stop, are flagged, and the window after
-/// such a frame ends at the stop (at least 4 frames, else no step is measured
-/// there): a stopped strip shows no skip, and a strip that stops at once (o07 of the
-/// open footage, 3.4 frames after the fall) puts a kink in the windows across its
-/// stop, which a quadratic does not follow: it read as a step of 1.4 frames' turn
-/// one frame after the stop, and on o07 re-encoded at CRF 20 as 0.88 of a turn
-/// (6.3 spreads) two frames before it. The spread of the steps is still taken over
-/// the whole clip.
+/// such a frame is fitted with the quadratic held at its value from the stop on: a
+/// stopped strip shows no skip, and a strip that stops at once (o07 of the open
+/// footage, 3.4 frames after the fall) puts a kink in the windows across its stop,
+/// which a quadratic does not follow: it read as a step of 1.4 frames' turn one
+/// frame after the stop, and on o07 re-encoded at CRF 20 as 0.88 of a turn (6.3
+/// spreads) two frames before it. A window ending at the stop instead keeps too few
+/// frames to see a drop three frames after the fall, with the strip still turning
+/// (`tests/analyse.rs`). The spread of the steps is still taken over the whole clip.
 pub fn strip_angle_steps(
     t: &[f64],
     beta_unwrapped: &[f64],
@@ -202,8 +203,13 @@ pub fn strip_angle_steps(
     if frame.is_nan() || frame <= 0.0 {
         return Vec::new();
     }
-    let fit = |range: &[usize], t_mid: f64| {
-        QuadraticFit::new(range.iter().map(|&i| (t[i] - t_mid, beta_unwrapped[i])))
+    // A quadratic in the stamped time, held at its value from `stop` on.
+    let fit = |range: &[usize], t_mid: f64, stop: f64| {
+        QuadraticFit::new(
+            range
+                .iter()
+                .map(|&i| (t[i].min(stop) - t_mid, beta_unwrapped[i])),
+        )
     };
     let n = STEP_NEIGHBOURS;
     if idx.len() < 2 * n {
@@ -213,15 +219,14 @@ pub fn strip_angle_steps(
     let boundaries: Vec<(usize, f64, f64, f64, f64)> = (n..=idx.len() - n)
         .filter_map(|k| {
             let t_mid = 0.5 * (t[idx[k - 1]] + t[idx[k]]);
-            let before = fit(&idx[k - n..k], t_mid)?;
-            // Before the stop, the window after the boundary ends at it.
-            let rotating = t[idx[k]] < t_beta;
-            let after: Vec<usize> = idx[k..k + n]
-                .iter()
-                .copied()
-                .take_while(|&i| !rotating || t[i] < t_beta)
-                .collect();
-            let after = fit(&after, t_mid)?;
+            let before = fit(&idx[k - n..k], t_mid, f64::INFINITY)?;
+            // Before the stop, the window after the boundary stops with the strip.
+            let stop = if t[idx[k]] < t_beta {
+                t_beta
+            } else {
+                f64::INFINITY
+            };
+            let after = fit(&idx[k..k + n], t_mid, stop)?;
             let step = after.value - before.value;
             let frame_turn = 0.5 * (before.slope + after.slope) * frame;
             let turn_se = 0.5 * before.slope_se.hypot(after.slope_se) * frame;

@@ -1009,7 +1009,7 @@ fn an_abrupt_strip_stop_is_not_a_skip() {
 /// 0.88 of a frame's turn, 6.3 spreads, two frames before it). A window after a
 /// boundary just before the stop held two turning frames and ten still ones, which a
 /// quadratic does not follow: 74 of these 100 draws were flagged. The window after
-/// a boundary now ends at the stop.
+/// a boundary is now fitted with the quadratic held from the stop on.
 #[test]
 fn a_strip_slowing_to_its_stop_is_not_a_skip() {
     let t: Vec<f64> = (0..400).map(|i| i as f64 * FRAME).collect();

@@ -403,13 +403,15 @@ fn mean_intensity(frame: &FrameView) -> f64 {
 ///
 /// With every channel divided by the image mean, the pixels are split by
 /// Otsu's method on their redness r − max(g, b); the redder class is the strip.
-/// g_thresh and b_thresh lie halfway between the strip's mean and that of the
-/// non-strip pixels brighter than the strip in g or b (the grey or white top
-/// face, a light plate), or of the rest when none is; r_thresh halfway between
-/// the strip's mean r and that of the non-strip pixels below both (a dark plate,
-/// a shadow), or 0 when none is. On a light plate the strip's r is below the
-/// plate's, so a threshold halfway to the rest's mean r (most of it plate)
-/// shut the strip out.
+/// r_thresh lies halfway between the strip's mean r and the rest's; g_thresh
+/// and b_thresh halfway between the strip's mean and that of the non-strip
+/// pixels bright enough to pass r_thresh (the grey or white top face), or of
+/// the rest when none is. On a light plate the rest's mean r is above the strip's
+/// (a white plate's red over the image mean is 1.0–1.1, the strip's 0.9), and that
+/// r_thresh shut the strip out: there g_thresh and b_thresh lie halfway between the
+/// strip's mean and that of the pixels brighter than the strip in g or b, and
+/// r_thresh halfway between the strip's mean r and that of the pixels those let
+/// through (a shadow, the disk's side), or half the strip's when none is.
 pub fn auto_colour_thresholds(
     plan: &FrameView,
     index: usize,
@@ -455,13 +457,20 @@ pub fn auto_colour_thresholds(
     if n_red < StripFinder::MIN_PIXELS || n_rest < n_red || redness(&red) < 0.2 {
         return Err(no_strip(n_red));
     }
-    // g and b shut out what is brighter than the strip in them (a white or grey top
-    // face, a light plate)...
+    let halfway = |a: [f64; 3], b: [f64; 3]| [0, 1, 2].map(|c| 0.5 * (a[c] + b[c]));
+    // r halfway to the rest's mean r, g and b halfway to what passes that r (the grey
+    // or white top face)...
+    let r = halfway(red, rest)[0];
+    if r < red[0] {
+        let (bright, n_bright) = mean_of(&|p| !is_red(p) && p[0] > r);
+        let [_, g, b] = halfway(red, if n_bright > 0 { bright } else { rest });
+        return Ok(ColourThresholds { r, g, b });
+    }
+    // ...unless the rest is redder than the strip (a light plate): then g and b
+    // shut out what is brighter than the strip in them, and r what they let through
+    // (a shadow, the disk's side), or nothing darker than half the strip's r.
     let (bright, n_bright) = mean_of(&|p| !is_red(p) && p[1].max(p[2]) > red[1].max(red[2]));
-    let others = if n_bright > 0 { bright } else { rest };
-    let (g, b) = (0.5 * (red[1] + others[1]), 0.5 * (red[2] + others[2]));
-    // ...and r what they let through, darker than the strip (a dark plate, a
-    // shadow, the disk's side).
+    let [_, g, b] = halfway(red, if n_bright > 0 { bright } else { rest });
     let (dark, n_dark) = mean_of(&|p| !is_red(p) && p[1] < g && p[2] < b);
     let r = 0.5 * (red[0] + if n_dark > 0 { dark[0] } else { 0.0 });
     Ok(ColourThresholds { r, g, b })
