@@ -116,8 +116,7 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    exactly (a reference picture shown again, [`repeated`]) within
 ///    [`RESOLVED_SIGMAS`] σ of the threshold, or lies inside a picture held level
 ///    for [`HELD_TURN_FRACTION`] of the final turn ([`held`]), is no rise; the
-///    noise is
-///    then re-measured over every frame after t_φ, the threshold raised to
+///    noise is then re-measured over every frame after t_φ, the threshold raised to
 ///    [`BAND_WIDENING`] × the deepest reading below the rest level there (noise: the
 ///    rim is never below its rest) and × the highest reading more than that span
 ///    after t_φ (noise: a flat disk does not rise again), and t_φ found again, until
@@ -368,9 +367,9 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
 /// window of consecutive readings that contains it and spans at least
 /// [`HELD_TURN_FRACTION`] of the final turn `period` [s] has all its readings
 /// within half the motion `threshold` of each other, and either one of them repeats
-/// an earlier reading (in the window or among the [`REFERENCE_PICTURES`] before it)
-/// to [`COPY_FRACTION`] of the `noise` σ, or all of them stand more than
-/// [`RESOLVED_SIGMAS`] σ above the threshold over the rest `level`.
+/// one of the [`REFERENCE_PICTURES`] readings before it ([`repeated`]; in the window
+/// or before it), or all of them stand more than [`RESOLVED_SIGMAS`] σ above the
+/// threshold over the rest `level`.
 ///
 /// The rim of a rolling disk comes down to the plate once a turn, z_rim = R sin φ
 /// (1 + cos χ): three quarters of a turn sampled at least four times a turn, at any

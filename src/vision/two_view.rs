@@ -68,8 +68,9 @@ pub fn split_views<'a>(
 /// disk and shadow and above the plan view's disk, whose rows are uniform. The
 /// middle of the longest run of rows whose mean absolute deviation is at most
 /// [`UNIFORM_FRACTION`] of the 90th percentile row's (rows across a disk) is
-/// returned, the run at least 1 % of the frame tall. Scans the whole frame: call it once per clip, e.g. on the calibration
-/// frame.
+/// returned, the run at least 1 % of the frame tall.
+///
+/// Scans the whole frame: call it once per clip, e.g. on the calibration frame.
 pub fn find_split_row(frame: &FrameView, index: usize) -> Result<usize, VisionError> {
     check_frame(frame, index)?;
     let (w, h) = (frame.width, frame.height);
