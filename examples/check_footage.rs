@@ -374,6 +374,9 @@ struct Measured {
     /// `plan.scale.near_rim_elevation_rad`: the camera's elevation at the near rim as
     /// measured [rad].
     near_rim_elevation_rad: Option<f64>,
+    /// `precession`: the heights' φ over the precession's at the window's mean, k + c/x̄
+    /// (eulerdisk::precession).
+    precession_agreement: Option<f64>,
 }
 
 fn read_csv(path: &Path) -> Result<Vec<BTreeMap<String, String>>, String> {
@@ -431,6 +434,17 @@ impl Measured {
                 f
             },
             near_rim_elevation_rad: result["plan"]["scale"]["near_rim_elevation_rad"].as_f64(),
+            precession_agreement: {
+                let p = &result["precession"];
+                match (
+                    p["ratio"].as_f64(),
+                    p["offset"].as_f64(),
+                    p["mean_sin_phi"].as_f64(),
+                ) {
+                    (Some(k), Some(c), Some(mean)) => Some(k + c / mean),
+                    _ => None,
+                }
+            },
         })
     }
 }
@@ -486,6 +500,10 @@ struct Score {
     height_gain: Option<f64>,
     /// For information: measured − true elevation of the camera at the near rim [°].
     elevation_err_deg: Option<f64>,
+    /// φ at the peaks, signed median of φ/φ_true − 1 (information).
+    phi_signed_median_err: Option<f64>,
+    /// The precession check's heights' φ over the precession's, − 1 (information).
+    precession_err: Option<f64>,
     /// Targets missed, by short name (see the legend).
     failed: Vec<&'static str>,
 }
@@ -532,11 +550,18 @@ fn score(clip: &str, truth: &Truth, m: Option<&Measured>, error: Option<String>)
         truth.t0,
         WINDOW_S,
     );
-    s.phi_median_err = median_rel_error(
+    let phi_pairs = || {
         pm.pairs
             .iter()
-            .map(|&(i, j)| (m.peaks[i].1, truth.peak_phi[j])),
-    );
+            .map(|&(i, j)| (m.peaks[i].1, truth.peak_phi[j]))
+    };
+    s.phi_median_err = median_rel_error(phi_pairs());
+    s.phi_signed_median_err = {
+        let mut e: Vec<f64> = phi_pairs().map(|(m, t)| m / t - 1.0).collect();
+        e.sort_by(f64::total_cmp);
+        (!e.is_empty()).then(|| e[e.len() / 2])
+    };
+    s.precession_err = m.precession_agreement.map(|a| a - 1.0);
     s.peaks = Some(pm);
     // Two-view: t_β − t_φ within 2 frames.
     if let Some(truth_gap) = truth.t_beta_minus_t_phi {
@@ -673,18 +698,20 @@ fn row(s: &Score) -> String {
 const HEADER: &str = "| clip | measured | n peaks fit (Δ, CI) | n per-frame fit (Δ, CI) | t0 err ms | tφ err frames | z_rim RMS px | peaks found/true, spurious | φ med err % | tβ−tφ err frames | drops flagged/true, false | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 /// The information table: what the targets rest on, not scored.
-const INFO_HEADER: &str = "| clip | heights' offset a px | heights' gain b % | ε at the near rim, err ° |\n|---|---|---|---|";
+const INFO_HEADER: &str = "| clip | heights' offset a px | heights' gain b % | ε at the near rim, err ° | φ at the peaks, signed median err % | precession check: φ heights/precession − 1, % |\n|---|---|---|---|---|---|";
 
 fn info_row(s: &Score) -> String {
     let show = |x: Option<f64>, scale: f64, digits: usize| {
         x.map_or("–".into(), |x| format!("{:+.*}", digits, scale * x))
     };
     format!(
-        "| {} | {} | {} | {} |",
+        "| {} | {} | {} | {} | {} | {} |",
         s.clip,
         show(s.height_offset_px, 1.0, 3),
         show(s.height_gain, 100.0, 2),
-        show(s.elevation_err_deg, 1.0, 2)
+        show(s.elevation_err_deg, 1.0, 2),
+        show(s.phi_signed_median_err, 100.0, 2),
+        show(s.precession_err, 100.0, 2)
     )
 }
 
@@ -706,7 +733,10 @@ const INFO_LEGEND: &str = "\
 For information, not targets: the heights against the truth over the same 0.5 s as a least-squares
 line z − z_true = a + b·z_true (a: the error of z_rim's zero, b: of its scale or swing), and the
 camera's elevation at the near bottom rim as measured (plan.json scale.near_rim_elevation_rad)
-against the truth's side camera.";
+against the truth's side camera; φ at the peaks' signed error, and the precession check
+(result.json precession: φ from the heights over φ that stationary rolling, eq. 2.29 corrected,
+gives the precession rate, at the window's mean), which needs no truth. This footage's truth
+follows eq. 2.29 as printed, whose φ(ψ̇) is 0.3–1.3 % smaller at φ = 0.005–0.02 rad.";
 
 const LEGEND: &str = "\
 Targets (issue 12 §5), per clip, no config: measured; n within ±0.02 of the truth (±0.03 when the
@@ -856,9 +886,10 @@ fn run() -> Result<bool, String> {
         println!("{}", info_row(s));
     }
     println!(
-        "| over the clips | offset {} px | | ε err {} ° |\n\n{INFO_LEGEND}",
+        "| over the clips | offset {} px | | ε err {} ° | | {} % |\n\n{INFO_LEGEND}",
         rms_and_largest(scores.iter().map(|s| s.height_offset_px)),
-        rms_and_largest(scores.iter().map(|s| s.elevation_err_deg))
+        rms_and_largest(scores.iter().map(|s| s.elevation_err_deg)),
+        rms_and_largest(scores.iter().map(|s| s.precession_err.map(|x| 100.0 * x)))
     );
     let measured = scores.iter().filter(|s| s.measured).count();
     let passed = scores.iter().filter(|s| s.failed.is_empty()).count();

@@ -35,6 +35,7 @@ use crate::footage::{self, CaptureFps, FootageError, FrameSource, FrameTiming, F
 use crate::model::closed_form;
 use crate::model::params::DiskParams;
 use crate::overlay::{FrameKeeper, KeptFrames, LayoutGeometry, OverlaySpec};
+use crate::precession::{self, PrecessionCheck};
 use crate::report::diagnostics;
 use crate::signal::{self, SideViewRim, SignalConfig, SignalError, StateSeries, ThesisRim};
 use crate::vision::{
@@ -694,6 +695,11 @@ pub struct Experiment {
     pub full_state_fit: Option<EnergyFit>,
     /// Flagged frames inside the fit window.
     pub skips_in_window: usize,
+    /// φ from the heights against φ from the precession rate over the fit window
+    /// ([`precession::precession_check`]); `None` with too few states, and in results
+    /// written before it was recorded.
+    #[serde(default)]
+    pub precession: Option<PrecessionCheck>,
     pub warnings: Vec<String>,
     /// Diagnostic images (PNG): the calibration frame with its points, and the
     /// frame of the highest rim thresholded with the band and the edge found.
@@ -1726,6 +1732,24 @@ pub fn analyse_clip_keeping(
         )
     });
 
+    // φ from the heights against φ from the precession rate (crate::precession): a
+    // check of the scale and the zero that shares neither; reported, never applied.
+    let precession = precession::precession_check(
+        &series.states,
+        &params,
+        (-window_s, 0.0),
+        signal_config(window_s, metres_per_px).state_window_periods,
+    );
+    if let Some(check) = precession.filter(|c| !c.agrees()) {
+        warnings.push(format!(
+            "the heights' φ and the precession's disagree by more than {:.0} %: {}. Check the \
+             scale (the near top rim z_t, the disk's R, H and inertia in the config) and the \
+             zero of z_rim",
+            100.0 * precession::AGREEMENT,
+            check.describe()
+        ));
+    }
+
     let threshold_png = highest.map_or_else(Vec::new, |(_, edge_row, frame)| {
         png(&diagnostics::threshold_image(
             &frame.view(),
@@ -1773,6 +1797,7 @@ pub fn analyse_clip_keeping(
         frames_fit,
         full_state_fit,
         skips_in_window,
+        precession,
         warnings,
         diagnostics: Diagnostics {
             calibration_png,

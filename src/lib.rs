@@ -7,6 +7,7 @@ pub mod energy;
 pub mod footage;
 pub mod model;
 pub mod overlay;
+pub mod precession;
 pub mod render;
 pub mod report;
 pub mod reproduce;

@@ -11,9 +11,11 @@
 //!
 //! The test prints one row per scene (`cargo test --release --test robustness --
 //! --ignored --nocapture`) and fails listing every scene that misses a target, with the
-//! metric and by how much. Two columns are for information only: the heights' offset
-//! (a of z − z_true = a + b·z_true over the scored window, the error of z_rim's zero)
-//! and the error of the camera's elevation at the near rim as measured. `EULERDISK_ROBUSTNESS_KEEP=DIR` keeps the clips (`sNN.mp4`) and
+//! metric and by how much. One column is for information only: the heights' offset
+//! (a of z − z_true = a + b·z_true over the scored window, the error of z_rim's zero),
+//! the error of the camera's elevation at the near rim as measured, and the precession
+//! check (`eulerdisk::precession`: φ from the heights over φ from the precession rate,
+//! − 1, which our renders' stationary rolling makes the heights' φ error). `EULERDISK_ROBUSTNESS_KEEP=DIR` keeps the clips (`sNN.mp4`) and
 //! their ground truths (`sNN.truth.json`) in DIR; `EULERDISK_ROBUSTNESS_SEED=N` draws
 //! another 24 scenes (the gate's verdicts are for the default seed).
 
@@ -480,7 +482,7 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
     let halt_frames = (t_phi - truth.halt_time) * FPS;
     let t0_ms = 1e3 * (t_phi + e.peaks_fit.fit.t0 - truth.halt_time);
     let row = format!(
-        "| {} | {} | {} {:+.2} | {:+.2} / {:.2} | {:.3} | {:+.3} / {} | {found}/{}, {spurious} | {:.1} ({:+.1}) / {:.1} | {:+.3}{} / {} / {:.3} | {:+.1} | {:+.1} | {} |",
+        "| {} | {} | {} {:+.2} | {:+.2} / {:.2} | {:.3} | {:+.3} / {} / {} | {found}/{}, {spurious} | {:.1} ({:+.1}) / {:.1} | {:+.3}{} / {} / {:.3} | {:+.1} | {:+.1} | {} |",
         scene.name,
         scene.conditions(),
         worst_cal.0,
@@ -490,6 +492,10 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
         rms,
         offset,
         elevation_err_deg.map_or("–".into(), |d| format!("{d:+.2}")),
+        e.precession.map_or("–".into(), |c| format!(
+            "{:+.1}",
+            100.0 * (c.agreement() - 1.0)
+        )),
         detectable.len(),
         100.0 * phi_med,
         100.0 * phi_signed,
@@ -513,7 +519,7 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
     Score { row, failures }
 }
 
-const HEADER: &str = "| scene | conditions | worst cal. point, err px | scale err % / tol | z_rim RMS px | heights' offset px / ε err ° | peaks found/true ≥0.5 px, spurious | φ med abs (signed) err % / tol | Δn peaks (95 % CI covers?) / per frame / tol | t_φ err frames | fitted t0 err ms | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|";
+const HEADER: &str = "| scene | conditions | worst cal. point, err px | scale err % / tol | z_rim RMS px | heights' offset px / ε err ° / precession % | peaks found/true ≥0.5 px, spurious | φ med abs (signed) err % / tol | Δn peaks (95 % CI covers?) / per frame / tol | t_φ err frames | fitted t0 err ms | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 /// Two-view clips on light plates, one brighter than the disk's side and one darker
 /// and textured, measured with no config to the same targets: the views split where

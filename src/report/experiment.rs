@@ -26,6 +26,7 @@ use super::{ReportError, write_atomic, write_csv, write_json};
 use crate::analyse::{EnergyFit, Experiment, ExperimentPlan};
 use crate::energy::{self, SightingUse};
 use crate::overlay::{OverlayIndex, OverlaySpec, write_measurement_overlays};
+use crate::precession;
 
 #[derive(Serialize)]
 struct FrameRow {
@@ -482,6 +483,26 @@ fn experiment_page(
                     .camera_distance_m
                     .map(|d| format!(", camera ≈ {d:.2} m from the near rim"))
                     .unwrap_or_default()
+            ),
+        ],
+        vec![
+            "precession check".into(),
+            e.precession.as_ref().map_or_else(
+                || "not made (fewer than 10 states with a precession rate)".into(),
+                |check| {
+                    format!(
+                        "{} ({}; a check of the scale and the zero, not applied)",
+                        check.describe(),
+                        if check.agrees() {
+                            format!("within ±{:.0} %", 100.0 * precession::AGREEMENT)
+                        } else {
+                            format!(
+                                "beyond ±{:.0} %: see the warnings",
+                                100.0 * precession::AGREEMENT
+                            )
+                        }
+                    )
+                },
             ),
         ],
         vec![
