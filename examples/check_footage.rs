@@ -336,6 +336,30 @@ fn height_offset_and_gain(truth: &Truth, measured: &BTreeMap<i64, f64>) -> Optio
     Some((my - b * mx, b))
 }
 
+/// The codec's smoothing over time, for information
+/// ([`eulerdisk::footage::smoothing_by_picture_type`]): over the scored window, each
+/// frame's error against the true second difference of the heights (per frame, from
+/// the frames captured just before and after it, so not beside a dropped frame).
+fn codec_smoothing(
+    truth: &Truth,
+    measured: &BTreeMap<i64, f64>,
+    types: &BTreeMap<i64, char>,
+) -> [Option<f64>; 2] {
+    let frames = (1..truth.index.len().saturating_sub(1)).filter_map(|k| {
+        let consecutive = truth.capture_index[k - 1] + 1 == truth.capture_index[k]
+            && truth.capture_index[k] + 1 == truth.capture_index[k + 1];
+        if !consecutive || !(truth.t0 - WINDOW_S..=truth.t0).contains(&truth.t_true[k]) {
+            return None;
+        }
+        let file = truth.index[k] as i64;
+        let z = *measured.get(&file)?;
+        let second = truth.z_rim_px[k + 1] - 2.0 * truth.z_rim_px[k] + truth.z_rim_px[k - 1];
+        z.is_finite()
+            .then(|| (types.get(&file).copied(), second, z - truth.z_rim_px[k]))
+    });
+    eulerdisk::footage::smoothing_by_picture_type(frames)
+}
+
 // ---------------------------------------------------------------- eulerdisk's output
 
 /// A power-law fit from `result.json` (`peaks_fit.fit` or `frames_fit.fit`).
@@ -367,6 +391,8 @@ struct Measured {
     t_beta: Option<f64>,
     /// File index → z_rim [px] (NaN: no value).
     z_rim_px: BTreeMap<i64, f64>,
+    /// File index → the codec's picture type (frames.csv `picture_type`).
+    picture_types: BTreeMap<i64, char>,
     /// Peaks: time relative to t_φ [s], φ [rad].
     peaks: Vec<(f64, f64)>,
     /// Flagged file frames.
@@ -415,6 +441,13 @@ impl Measured {
             peaks_fit: fit(&result["peaks_fit"]["fit"]),
             frames_fit: fit(&result["frames_fit"]["fit"]),
             t_beta: result["series"]["strip"]["stop"]["t_beta"].as_f64(),
+            picture_types: frames
+                .iter()
+                .filter_map(|r| {
+                    let kind = r.get("picture_type")?.chars().next()?;
+                    Some((field(r, "index") as i64, kind))
+                })
+                .collect(),
             z_rim_px: frames
                 .iter()
                 .map(|r| (field(r, "index") as i64, field(r, "z_rim_px")))
@@ -500,6 +533,8 @@ struct Score {
     height_gain: Option<f64>,
     /// For information: measured − true elevation of the camera at the near rim [°].
     elevation_err_deg: Option<f64>,
+    /// The codec's smoothing over time, α of P and B pictures [frame²] (information).
+    smoothing: [Option<f64>; 2],
     /// φ at the peaks, signed median of φ/φ_true − 1 (information).
     phi_signed_median_err: Option<f64>,
     /// The precession check's heights' φ over the precession's, − 1 (information).
@@ -535,6 +570,7 @@ fn score(clip: &str, truth: &Truth, m: Option<&Measured>, error: Option<String>)
     s.t_phi_err_frames = Some(t_phi_err / FRAME_S);
     // z_rim RMS over the last 0.5 s.
     (s.zrim_rms_px, s.zrim_misses) = zrim_rms(truth, &m.z_rim_px);
+    s.smoothing = codec_smoothing(truth, &m.z_rim_px, &m.picture_types);
     (s.height_offset_px, s.height_gain) = height_offset_and_gain(truth, &m.z_rim_px)
         .map_or((None, None), |(a, b)| (Some(a), Some(b)));
     s.elevation_err_deg = m
@@ -698,20 +734,22 @@ fn row(s: &Score) -> String {
 const HEADER: &str = "| clip | measured | n peaks fit (Δ, CI) | n per-frame fit (Δ, CI) | t0 err ms | tφ err frames | z_rim RMS px | peaks found/true, spurious | φ med err % | tβ−tφ err frames | drops flagged/true, false | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 /// The information table: what the targets rest on, not scored.
-const INFO_HEADER: &str = "| clip | heights' offset a px | heights' gain b % | ε at the near rim, err ° | φ at the peaks, signed median err % | precession check: φ heights/precession − 1, % |\n|---|---|---|---|---|---|";
+const INFO_HEADER: &str = "| clip | heights' offset a px | heights' gain b % | ε at the near rim, err ° | φ at the peaks, signed median err % | precession check: φ heights/precession − 1, % | codec smoothing α P / B, frame² |\n|---|---|---|---|---|---|---|";
 
 fn info_row(s: &Score) -> String {
     let show = |x: Option<f64>, scale: f64, digits: usize| {
         x.map_or("–".into(), |x| format!("{:+.*}", digits, scale * x))
     };
     format!(
-        "| {} | {} | {} | {} | {} | {} |",
+        "| {} | {} | {} | {} | {} | {} | {} / {} |",
         s.clip,
         show(s.height_offset_px, 1.0, 3),
         show(s.height_gain, 100.0, 2),
         show(s.elevation_err_deg, 1.0, 2),
         show(s.phi_signed_median_err, 100.0, 2),
-        show(s.precession_err, 100.0, 2)
+        show(s.precession_err, 100.0, 2),
+        show(s.smoothing[0], 1.0, 3),
+        show(s.smoothing[1], 1.0, 3)
     )
 }
 
@@ -736,7 +774,10 @@ camera's elevation at the near bottom rim as measured (plan.json scale.near_rim_
 against the truth's side camera; φ at the peaks' signed error, and the precession check
 (result.json precession: φ from the heights over φ that stationary rolling, eq. 2.29 corrected,
 gives the precession rate, at the window's mean), which needs no truth. This footage's truth
-follows eq. 2.29 as printed, whose φ(ψ̇) is 0.3–1.3 % smaller at φ = 0.005–0.02 rad.";
+follows eq. 2.29 as printed, whose φ(ψ̇) is 0.3–1.3 % smaller at φ = 0.005–0.02 rad. Last, the
+codec's smoothing over time: each frame's error against the true heights' second difference per
+frame, e = a + α z″, one α for the P and one for the B pictures (frames.csv picture_type): a
+temporal low-pass of variance 2α frame² that reads the peaks low and the troughs high.";
 
 const LEGEND: &str = "\
 Targets (issue 12 §5), per clip, no config: measured; n within ±0.02 of the truth (±0.03 when the
@@ -886,7 +927,7 @@ fn run() -> Result<bool, String> {
         println!("{}", info_row(s));
     }
     println!(
-        "| over the clips | offset {} px | | ε err {} ° | | {} % |\n\n{INFO_LEGEND}",
+        "| over the clips | offset {} px | | ε err {} ° | | {} % | |\n\n{INFO_LEGEND}",
         rms_and_largest(scores.iter().map(|s| s.height_offset_px)),
         rms_and_largest(scores.iter().map(|s| s.elevation_err_deg)),
         rms_and_largest(scores.iter().map(|s| s.precession_err.map(|x| 100.0 * x)))
@@ -1097,5 +1138,57 @@ mod tests {
         assert!((s.phi_median_err.unwrap() - 0.01).abs() < 1e-9);
         let unmeasured = score("c", &truth, None, Some("error: x".into()));
         assert_eq!(unmeasured.failed, vec!["measured"]);
+    }
+
+    /// Heights low-passed over time by α = 0.02 frame² on P pictures and 0.15 on B
+    /// (e = 0.03 + α z″, I pictures only offset), in a GOP of I B B P …, with capture
+    /// frame 300 dropped: both α come back, and the frames beside the gap, whose
+    /// second difference spans it, are left out.
+    #[test]
+    fn codec_smoothing_per_picture_type() {
+        let n_frames = 480;
+        let capture: Vec<i64> = (0..n_frames)
+            .map(|i| if i < 300 { i } else { i + 1 })
+            .collect();
+        let t_true: Vec<f64> = capture.iter().map(|&c| c as f64 / 480.0).collect();
+        let height = |c: f64| 3.0 * (1.0 + (0.6 * c).cos());
+        let z_rim_px: Vec<f64> = capture.iter().map(|&c| height(c as f64)).collect();
+        let truth = Truth {
+            t0: 1.0,
+            index: (0..n_frames).map(|i| i as f64).collect(),
+            capture_index: capture.clone(),
+            t_true,
+            z_rim_px,
+            ..Truth::default()
+        };
+        let kind = |i: i64| match i % 12 {
+            0 => 'I',
+            k if k % 3 == 0 => 'P',
+            _ => 'B',
+        };
+        let measured = capture
+            .iter()
+            .enumerate()
+            .map(|(i, &c)| {
+                let c = c as f64;
+                let second = height(c + 1.0) - 2.0 * height(c) + height(c - 1.0);
+                let alpha = match kind(i as i64) {
+                    'P' => 0.02,
+                    'B' => 0.15,
+                    _ => 0.0,
+                };
+                // Beside the gap the true second difference is not this one.
+                let gap = if i == 299 || i == 300 { 5.0 } else { 0.0 };
+                (i as i64, height(c) + 0.03 + alpha * second + gap)
+            })
+            .collect();
+        let types = (0..n_frames).map(|i| (i, kind(i))).collect();
+        let [p, b] = codec_smoothing(&truth, &measured, &types);
+        assert!((p.unwrap() - 0.02).abs() < 1e-9, "{p:?}");
+        assert!((b.unwrap() - 0.15).abs() < 1e-9, "{b:?}");
+        assert_eq!(
+            codec_smoothing(&truth, &measured, &BTreeMap::new()),
+            [None, None]
+        );
     }
 }

@@ -645,6 +645,10 @@ pub struct FrameRecord {
     pub t: f64,
     /// The container's presentation time [s, playback clock], when it has one.
     pub container_time_s: Option<f64>,
+    /// How the codec coded the frame: 'I', 'P' or 'B' (libavutil's picture type);
+    /// `None` for frame folders and in results written before it was recorded.
+    #[serde(default)]
+    pub picture_type: Option<char>,
     /// Rim height above the plate line [px]; 0 when the rim touches; `None`
     /// when no edge was found.
     pub z_rim_px: Option<f64>,
@@ -1231,6 +1235,7 @@ pub fn analyse_clip_keeping(
                 t_capture: f64::NAN,
                 t: f64::NAN,
                 container_time_s: frame.container_time_s,
+                picture_type: frame.picture_type,
                 z_rim_px,
                 z_rim_m: None,
                 beta_raw,

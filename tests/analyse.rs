@@ -138,6 +138,44 @@ fn dark_plate_clip_matches_its_ground_truth() {
     assert!((lo..=hi).contains(&true_n), "95 % CI {lo}…{hi}");
 }
 
+/// Every frame carries the codec's picture type, as libavcodec decoded it: the MP4's
+/// own list of key frames (its sync samples, read without decoding) are I pictures,
+/// the fixture's x264 stream also holds P and B pictures, and a frame folder has
+/// none.
+#[test]
+fn frames_carry_their_picture_type() {
+    let e = analyse("side-dark-n050.mp4", "fps = 480\n");
+    let index = eulerdisk::footage::FrameSource::open(&fixture("side-dark-n050.mp4"))
+        .unwrap()
+        .stream_index()
+        .unwrap()
+        .expect("an MP4's index");
+    assert!(!index.key_frames.is_empty());
+    for &k in &index.key_frames {
+        assert_eq!(e.frames[k].picture_type, Some('I'), "key frame {k}");
+    }
+    let count = |kind: char| {
+        e.frames
+            .iter()
+            .filter(|f| f.picture_type == Some(kind))
+            .count()
+    };
+    assert_eq!(
+        count('I') + count('P') + count('B'),
+        e.frames.len(),
+        "every frame I, P or B"
+    );
+    assert!(
+        count('P') > 0 && count('B') > 0,
+        "P {} B {}",
+        count('P'),
+        count('B')
+    );
+    let mut folder = eulerdisk::footage::FrameSource::open(&fixture("side-dark-png")).unwrap();
+    let first = folder.next_frame().unwrap().expect("a frame");
+    assert_eq!(first.picture_type, None);
+}
+
 /// The precession check (`eulerdisk::precession`) reads the scale through a relation
 /// that shares nothing with it. The fixture's disk rolls by eq. 2.29 (corrected), so
 /// the check's ratio of the heights' φ to the precession's is the states' own error
@@ -481,6 +519,65 @@ fn a_thin_top_face_gives_the_near_top_rim() {
     ]);
     let (near, far) = assert_near_top_rim(&e, &truth, 0.5);
     assert!(near - far > 1.0, "the top face is {} px tall", near - far);
+}
+
+/// The same on a light plate lit from 60° above (a scene of an earlier robustness
+/// draw): the top face, 4 px tall seen from 2.8° at 0.32 m under a 0.94 px blur and
+/// crf 23, showed no plateau to the two-plateau readings, and the light plate's
+/// calibration took the silhouette's top (the far rim) for z_t, 4.1 px high, the
+/// scale 7 % small. The three-level fit, now tried on light plates too, reads the
+/// near rim (−0.35 px).
+#[test]
+fn a_thin_top_face_on_a_light_plate_gives_the_near_top_rim() {
+    let (e, truth) = render_and_analyse(&[
+        "--n",
+        "0.5146069",
+        "--halt",
+        "0.65",
+        "--after-halt",
+        "0.15",
+        "--size",
+        "320x180",
+        "--plate",
+        "light",
+        "--paper-grey",
+        "238",
+        "--texture",
+        "0.1336208",
+        "--fill-elevation",
+        "60",
+        "--elevation",
+        "2.841181",
+        "--camera-distance",
+        "0.31517475",
+        "--blur",
+        "0.93518455",
+        "--noise",
+        "1.7135416",
+        "--shot-noise",
+        "0.0378719",
+        "--flicker",
+        "0.03683777",
+        "--flicker-50",
+        "0.0087993",
+        "--flicker-phase-100",
+        "4.0455808",
+        "--flicker-phase-50",
+        "5.7794672",
+        "--exposure",
+        "0.0005",
+        "--exposure-samples",
+        "2",
+        "--psi-halt",
+        "2.9665177",
+        "--beta0",
+        "0.3",
+        "--seed",
+        "1003",
+    ]);
+    assert!(e.plan.plate.starts_with("light"), "{}", e.plan.plate);
+    let (near, far) = assert_near_top_rim(&e, &truth, 0.5);
+    assert!(near - far > 3.0, "the top face is {} px tall", near - far);
 }
 
 /// The strip on the top face resting 82° from across the view (ψ_h + β0 = 1.43 rad),

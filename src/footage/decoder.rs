@@ -576,6 +576,23 @@ impl VideoDecoder {
         }
     }
 
+    /// How the codec coded the frame at hand: 'I' (intra), 'P' (predicted from
+    /// earlier pictures), 'B' (from pictures on both sides), or another of
+    /// libavutil's letters (S, i, p, b); `None` when the decoder does not say.
+    pub(super) fn picture_type(&self) -> Option<char> {
+        use ff::picture::Type;
+        match self.yuv.kind() {
+            Type::None => None,
+            Type::I => Some('I'),
+            Type::P => Some('P'),
+            Type::B => Some('B'),
+            Type::S => Some('S'),
+            Type::SI => Some('i'),
+            Type::SP => Some('p'),
+            Type::BI => Some('b'),
+        }
+    }
+
     fn time(&self) -> Option<f64> {
         self.yuv
             .timestamp()

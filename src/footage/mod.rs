@@ -27,6 +27,7 @@ mod frame;
 mod info;
 mod orientation;
 mod repeats;
+mod smoothing;
 mod source;
 mod timing;
 
@@ -42,5 +43,6 @@ pub use info::{
 };
 pub use orientation::{Orientation, PixelMap};
 pub use repeats::{RepeatGauge, RepeatKind, RepeatedFrame};
+pub use smoothing::smoothing_by_picture_type;
 pub use source::{Frame, FrameSource, StreamIndex, Yuv420};
 pub use timing::{FrameTiming, TimeSection, TimeSource, frame_times, time_sections};

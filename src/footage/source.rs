@@ -22,6 +22,9 @@ pub struct Frame<'a> {
     /// The container's presentation time of this frame [s, playback clock], when
     /// the container has per-frame timestamps (videos); `None` for frame folders.
     pub container_time_s: Option<f64>,
+    /// How the codec coded it: 'I', 'P' or 'B' (libavutil's picture type); `None` for
+    /// frame folders.
+    pub picture_type: Option<char>,
     pub view: FrameView<'a>,
 }
 
@@ -314,6 +317,7 @@ impl FrameSource {
                 Ok(Some(Frame {
                     index,
                     container_time_s: None,
+                    picture_type: None,
                     view: FrameView::from_rgb(frame),
                 }))
             }
@@ -335,6 +339,7 @@ impl FrameSource {
                 Ok(Some(Frame {
                     index,
                     container_time_s: time_s.filter(|t| t.is_finite() && *t >= 0.0),
+                    picture_type: decoder.picture_type(),
                     view: bgr_view(decoder.bgr()?, width, height),
                 }))
             }

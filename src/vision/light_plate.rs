@@ -29,7 +29,7 @@ use super::VisionError;
 use super::calibration::{Calibration, band};
 use super::components::Component;
 use super::profile::{area_edge, column_band_mean, row_band_mean};
-use super::top_rim::{CentreBand, near_top_rim, near_top_rim_across};
+use super::top_rim::{CentreBand, near_top_rim, near_top_rim_across, thin_top_face};
 use crate::footage::FrameView;
 
 /// Least departure from the side's level that ends it, 0–255 intensity, and as a
@@ -114,8 +114,39 @@ pub(super) fn calibrate(
         side_end: i,
         contrast: windowed(k),
     };
+    // A face too thin for the plateaus is looked for only below a silhouette that
+    // is the disk's top: where the level just above the edge is still the
+    // backdrop's (the rows at the top of the search, above any face), within three
+    // of their robust standard deviations (at least one grey level). A top face
+    // darker than both the backdrop and the side makes the near rim the largest
+    // step, and the blur of that edge was read as a thin face below it (robustness
+    // scene s05: backdrop 11, face 60, side 177; z_t 0.64 px low); such an edge is
+    // itself the near rim.
+    let median = |rows: std::ops::Range<usize>| {
+        let mut v = p[rows].to_vec();
+        v.sort_by(f32::total_cmp);
+        v[v.len() / 2]
+    };
+    let backdrop_rows = lo - REACH..lo + REACH + 1;
+    let backdrop = median(backdrop_rows.clone());
+    let spread = {
+        let mut d: Vec<f32> = p[backdrop_rows]
+            .iter()
+            .map(|v| (v - backdrop).abs())
+            .collect();
+        d.sort_by(f32::total_cmp);
+        (1.4826 * d[d.len() / 2]).max(1.0)
+    };
+    let above = j.saturating_sub(2 * REACH).max(lo - REACH);
+    let top_is_backdrop = above + 1 >= j.saturating_sub(REACH)
+        || (median(above..j.saturating_sub(REACH)) - backdrop).abs() <= 3.0 * spread;
     let z_t = near_top_rim_across(frame, &centre)
         .or_else(|| near_top_rim(&p, j + 1, i, windowed(k), 0.0))
+        .or_else(|| {
+            top_is_backdrop
+                .then(|| thin_top_face(&p, silhouette, i, windowed(k)))
+                .flatten()
+        })
         .unwrap_or(silhouette);
     Ok(Calibration {
         x_l,
