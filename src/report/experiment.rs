@@ -238,6 +238,20 @@ pub fn write_experiment(
     let phi: Vec<f64> = e.series.states.iter().map(|s| s.phi).collect();
     let psi: Vec<f64> = e.series.states.iter().map(|s| s.psi).collect();
     let psi_dot: Vec<f64> = e.series.states.iter().map(|s| s.psi_dot).collect();
+    // The precession check per state: φ from the heights over the φ that stationary
+    // rolling gives its ψ̇ (eq. 2.29), − 1; where that φ is known to better than the
+    // check's reach (2σ_ψ̇/ψ̇ below precession::AGREEMENT; the last turns' ψ̇ is not).
+    let against_precession: Vec<f64> = e
+        .series
+        .states
+        .iter()
+        .map(|s| {
+            let known = 2.0 * s.sigma_psi_dot < precession::AGREEMENT * s.psi_dot.abs();
+            precession::stationary_sin_phi(&e.plan.disk, s.psi_dot)
+                .filter(|_| known)
+                .map_or(f64::NAN, |x| 100.0 * (s.phi.sin() / x - 1.0))
+        })
+        .collect();
     let state_panels = [
         Panel {
             label: "φ [rad]",
@@ -252,6 +266,11 @@ pub fn write_experiment(
         Panel {
             label: "ψ̇ [rad/s]",
             values: &psi_dot,
+            log_y: false,
+        },
+        Panel {
+            label: "φ/φ(ψ̇) − 1 [%]",
+            values: &against_precession,
             log_y: false,
         },
     ];
@@ -586,7 +605,7 @@ fn experiment_page(
             (frame_linked(svg, &frame_times, overlay, "Rim height and, for two-view clips, the strip angle and its rate."))
         }
         @if let Some(svg) = &states_svg {
-            (frame_linked(svg, &state_times, overlay, "Per-frame φ, ψ, ψ̇ from local fits of the rim-height model."))
+            (frame_linked(svg, &state_times, overlay, "Per-frame φ, ψ, ψ̇ from local fits of the rim-height model, and φ against the φ that stationary rolling gives ψ̇ (eq. 2.29, the precession check)."))
         }
         @if let Some(overlay) = overlay {
             (footage_section(e, overlay, dir))
