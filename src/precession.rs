@@ -2,7 +2,8 @@
 //! rolling gives the measured precession rate.
 //!
 //! The heights give φ through the scale (eq. 3.9 with δ of eq. 3.10) and the zero of
-//! z_rim; the turns give ψ̇ with neither, from the times of the peaks alone. Stationary
+//! z_rim; the turns give ψ̇ with neither, from the phase of the heights' oscillation
+//! alone (a scale or an offset moves no turn in time). Stationary
 //! rolling ties the two (eq. 2.29 = eq. 4.40, the sign of its c h sin²φ term
 //! corrected, [`stationary_precession_squared`]):
 //!
