@@ -2293,6 +2293,7 @@ pub fn summary(
         points: fit.points,
         fps: experiment.plan.fps.fps,
         fps_source: format!("{:?}", experiment.plan.fps.source),
+        phi_vs_precession: experiment.precession.map(|c| c.agreement() - 1.0),
         warnings: experiment.warnings.clone(),
     }
 }

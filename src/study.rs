@@ -413,6 +413,11 @@ pub struct ExperimentSummary {
     /// Frames per second used, and where that number came from.
     pub fps: f64,
     pub fps_source: String,
+    /// The precession check: φ from the heights over φ from the precession rate at
+    /// the window's mean, − 1 ([`crate::precession::PrecessionCheck::agreement`]);
+    /// `None` when not made, and in summaries written before it was recorded.
+    #[serde(default)]
+    pub phi_vs_precession: Option<f64>,
     /// Warnings and frame flags a reader should see beside the number.
     pub warnings: Vec<String>,
 }
@@ -944,6 +949,7 @@ mod tests {
                 points: 10,
                 fps: 480.0,
                 fps_source: "config".into(),
+                phi_vs_precession: None,
                 warnings: vec![],
             })
         }

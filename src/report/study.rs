@@ -162,17 +162,19 @@ pub fn write_study_report(
                 fmt(e.r_squared, 4),
                 e.points.to_string(),
                 format!("{} ({})", fmt(e.fps, 0), e.fps_source),
+                e.phi_vs_precession
+                    .map_or("–".into(), |d| format!("{:+.1}", 100.0 * d)),
                 e.warnings.len().to_string(),
             ]
         })
         .collect();
     let mut csv = String::from(
-        "clip,disk,material,orientation,run,n,n_ci_low,n_ci_high,t0_s,r_squared,points,fps,fps_source\n",
+        "clip,disk,material,orientation,run,n,n_ci_low,n_ci_high,t0_s,r_squared,points,fps,fps_source,phi_vs_precession\n",
     );
     for e in &results.experiments {
         let m = &e.meta;
         csv += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             e.clip,
             m.disk.as_deref().unwrap_or(""),
             m.material.as_deref().unwrap_or(""),
@@ -185,7 +187,8 @@ pub fn write_study_report(
             e.r_squared,
             e.points,
             e.fps,
-            e.fps_source
+            e.fps_source,
+            e.phi_vs_precession.map_or(String::new(), |d| d.to_string())
         );
     }
     write_atomic(&tables.join("exponents.csv"), csv.as_bytes())?;
@@ -347,10 +350,15 @@ pub fn write_study_report(
         }
         h2 { "Exponents" }
         (table(
-            &["clip", "disk", "material", "n", "95 % CI", "R²", "points", "fps (source)", "warnings"],
+            &["clip", "disk", "material", "n", "95 % CI", "R²", "points", "fps (source)", "φ vs precession %", "warnings"],
             &experiment_rows,
             |_, _| false,
         ))
+        p class="note" {
+            "φ vs precession: φ from the rim heights over the φ that stationary rolling (eq. 2.29) \
+             gives the measured precession rate, at the fit window's mean, − 1: a check of the \
+             scale and the zero that shares neither (a warning beyond ±3 %; see each clip's page)."
+        }
         p class="note" { "Each clip's own page: " code { "experiments/<clip>/index.html" } "." }
         h2 { "Per material" }
         (table(&summary_header, &summary_rows, |_, _| false))
@@ -460,6 +468,7 @@ mod tests {
             points: 20,
             fps: 480.0,
             fps_source: "config".into(),
+            phi_vs_precession: Some(-0.01),
             warnings: vec![],
         }
     }
