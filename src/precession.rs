@@ -147,10 +147,18 @@ struct Pair {
     sigma_y: f64,
 }
 
+impl Pair {
+    /// The pair's weight about a line of slope `k` with extra scatter `tau2`:
+    /// 1/(σ_y² + k² σ_x² + τ²).
+    fn weight(&self, k: f64, tau2: f64) -> f64 {
+        1.0 / (self.sigma_y.powi(2) + k * k * self.sigma_x.powi(2) + tau2)
+    }
+}
+
 /// The weighted line through `pairs` at slope guess `k` and extra scatter `tau2`:
 /// (slope, intercept, weighted mean of x, sum of weights, weighted Σ(x − x̄)²).
 fn weighted_line(pairs: &[Pair], k: f64, tau2: f64) -> (f64, f64, f64, f64, f64) {
-    let weight = |p: &Pair| 1.0 / (p.sigma_y.powi(2) + k * k * p.sigma_x.powi(2) + tau2);
+    let weight = |p: &Pair| p.weight(k, tau2);
     let (mut total, mut sx, mut sy) = (0.0, 0.0, 0.0);
     for p in pairs {
         let w = weight(p);
@@ -169,7 +177,7 @@ fn weighted_line(pairs: &[Pair], k: f64, tau2: f64) -> (f64, f64, f64, f64, f64)
 
 /// The check over the `states` with `window.0 <= t <= window.1` (times from the halt,
 /// s), each fitted over `state_window_periods` turns (so that neighbouring states
-/// share heights, and the line's standard errors are widened by the states per
+/// share heights, and the line's standard errors are widened by the frames per
 /// window); `None` with fewer than [`MIN_STATES`] usable states or no spread in φ.
 pub fn precession_check(
     states: &[FrameState],
@@ -185,9 +193,15 @@ pub fn precession_check(
                 && s.sigma_phi.is_finite()
         })
         .collect();
+    // The frame interval, from the states' frame numbers and times.
+    let (first, last) = (usable.first()?, usable.last()?);
+    let frame = (last.t - first.t) / last.index.saturating_sub(first.index).max(1) as f64;
+    if frame.is_nan() || frame <= 0.0 {
+        return None;
+    }
     let mut pairs = Vec::new();
-    let mut states_per_window = 0.0;
-    for (i, s) in usable.iter().enumerate() {
+    let mut frames_per_window = 0.0;
+    for s in &usable {
         let rate = s.psi_dot.abs();
         let Some(x) = stationary_sin_phi(disk, rate) else {
             continue;
@@ -206,24 +220,18 @@ pub fn precession_check(
             y: s.phi.sin(),
             sigma_y: s.phi.cos() * s.sigma_phi,
         });
-        // The states within this one's window of turns, from the states' spacing.
-        let spacing = match (usable.get(i.saturating_sub(1)), usable.get(i + 1)) {
-            (Some(a), Some(b)) if b.t > a.t => (b.t - a.t) / (b.index - a.index).max(1) as f64,
-            _ => continue,
-        };
-        states_per_window += state_window_periods * std::f64::consts::TAU / rate / spacing;
+        // The frames within this state's window of turns.
+        frames_per_window += state_window_periods * std::f64::consts::TAU / rate / frame;
     }
     if pairs.len() < MIN_STATES {
         return None;
     }
-    let inflation = (states_per_window / pairs.len() as f64).max(1.0);
+    let inflation = (frames_per_window / pairs.len() as f64).max(1.0);
     let dof = (pairs.len() - 2) as f64;
     let chi2 = |k: f64, c: f64, tau2: f64| {
         pairs
             .iter()
-            .map(|p| {
-                (p.y - k * p.x - c).powi(2) / (p.sigma_y.powi(2) + k * k * p.sigma_x.powi(2) + tau2)
-            })
+            .map(|p| (p.y - k * p.x - c).powi(2) * p.weight(k, tau2))
             .sum::<f64>()
     };
     let (mut k, mut tau2) = (1.0, 0.0);

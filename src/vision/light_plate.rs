@@ -31,6 +31,7 @@ use super::components::Component;
 use super::profile::{area_edge, column_band_mean, row_band_mean};
 use super::top_rim::{CentreBand, near_top_rim, near_top_rim_across, thin_top_face};
 use crate::footage::FrameView;
+use crate::signal::{mad_sigma, median};
 
 /// Least departure from the side's level that ends it, 0–255 intensity, and as a
 /// fraction of that level: above codec noise and the side's shading.
@@ -122,24 +123,15 @@ pub(super) fn calibrate(
     // step, and the blur of that edge was read as a thin face below it (robustness
     // scene s05: backdrop 11, face 60, side 177; z_t 0.64 px low); such an edge is
     // itself the near rim.
-    let median = |rows: std::ops::Range<usize>| {
-        let mut v = p[rows].to_vec();
-        v.sort_by(f32::total_cmp);
-        v[v.len() / 2]
+    let levels = |rows: std::ops::Range<usize>| -> Vec<f64> {
+        p[rows].iter().map(|&v| f64::from(v)).collect()
     };
-    let backdrop_rows = lo - REACH..lo + REACH + 1;
-    let backdrop = median(backdrop_rows.clone());
-    let spread = {
-        let mut d: Vec<f32> = p[backdrop_rows]
-            .iter()
-            .map(|v| (v - backdrop).abs())
-            .collect();
-        d.sort_by(f32::total_cmp);
-        (1.4826 * d[d.len() / 2]).max(1.0)
-    };
+    let backdrop_levels = levels(lo - REACH..lo + REACH + 1);
+    let backdrop = median(&backdrop_levels);
+    let spread = mad_sigma(&backdrop_levels, backdrop).max(1.0);
     let above = j.saturating_sub(2 * REACH).max(lo - REACH);
     let top_is_backdrop = above + 1 >= j.saturating_sub(REACH)
-        || (median(above..j.saturating_sub(REACH)) - backdrop).abs() <= 3.0 * spread;
+        || (median(&levels(above..j.saturating_sub(REACH))) - backdrop).abs() <= 3.0 * spread;
     let z_t = near_top_rim_across(frame, &centre)
         .or_else(|| near_top_rim(&p, j + 1, i, windowed(k), 0.0))
         .or_else(|| {
