@@ -335,6 +335,8 @@ struct MeasuredSpan {
     kept: Option<KeptFrames>,
     /// The duplicated and interpolated frames, flagged by the signal stage.
     repeated: Vec<footage::RepeatedFrame>,
+    /// The near top rim from the frames leaning towards the camera, when read.
+    top_rim_leaning: Option<TopRimLeaning>,
 }
 
 /// The zero of z_rim as the motion places it ([`signal::motion_zero`]), and how far it
@@ -427,7 +429,14 @@ pub struct ExperimentPlan {
     /// Two-view clips: the first row of the plan view [px] and whether it came from
     /// the config.
     pub split_row: Option<(usize, bool)>,
+    /// The rest frames' calibration; its z_t is [`Self::top_rim_leaning`]'s when that
+    /// was read.
     pub calibration: CalibrationReport,
+    /// The near top rim z_t from the frames in which the disk leans towards the
+    /// camera, which the scale uses; `None` when too few frames showed the top face
+    /// resolved, when the config gives z_t, and in results written before it.
+    #[serde(default)]
+    pub top_rim_leaning: Option<TopRimLeaning>,
     /// Scale at the near bottom rim, where z_rim is read [m/px].
     pub metres_per_px: f64,
     /// How the scale was found: both estimates and the perspective they imply.
@@ -487,6 +496,17 @@ impl ExperimentPlan {
         let roi = self.config.vision.as_ref().and_then(|v| v.roi);
         roi.map_or((0, 0), |[x, y, _, _]| (x as usize, y as usize))
     }
+}
+
+/// The near top rim z_t read from the frames in which the rolling disk leans
+/// towards the camera ([`vision::near_top_rim_leaning`]): there the top face is
+/// several pixels tall even when, at rest, it is thinner than the blur and the
+/// rest frame's readings cannot tell its near rim from its far one.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TopRimLeaning {
+    pub reading: vision::LeaningTopRim,
+    /// The rest frame's reading of z_t, which it replaced [px].
+    pub rest_z_t: f64,
 }
 
 /// The side view's two scales and what they say about the camera.
@@ -1098,6 +1118,11 @@ pub fn analyse_clip_keeping(
         side0.height,
     )
     .map_err(vision_err)?;
+    // The profile across the disk's top on the centre line, read in every frame for
+    // the near top rim of the frames that lean towards the camera
+    // (vision::near_top_rim_leaning).
+    let lean_gauge =
+        vision::LeanGauge::new(&cal, silhouette_top, gauge.band_columns(), side0.height);
     // Dark plate: rim heights below 2 px from the darkness of the gap (vision::gap),
     // then, on either plate, every height re-measured with a model of the rim's
     // edge learned from the clip (vision::mirror_edge on a dark plate,
@@ -1182,6 +1207,7 @@ pub fn analyse_clip_keeping(
         let span_frames = expected - first;
         let mut frames = Vec::with_capacity(span_frames);
         let mut gaps = Vec::with_capacity(if gap_gauge.is_some() { span_frames } else { 0 });
+        let mut profiles = Vec::with_capacity(if lean_gauge.is_some() { span_frames } else { 0 });
         let mut windows = Vec::with_capacity(if rest_window.is_some() {
             span_frames
         } else {
@@ -1223,6 +1249,9 @@ pub fn analyse_clip_keeping(
             };
             if let Some(gauge) = &gap_gauge {
                 gaps.push(gauge.measure(&side));
+            }
+            if let Some(gauge) = &lean_gauge {
+                profiles.push(Some(gauge.read(&side)));
             }
             let strip = match (&mut strip_finder, plan) {
                 (Some(finder), Some(plan)) => finder.measure(&plan, index).ok(),
@@ -1405,10 +1434,32 @@ pub fn analyse_clip_keeping(
                 list.join(", ")
             ));
         }
+        // The near top rim from the frames that lean towards the camera, unless the
+        // config gives z_t (TopRimLeaning).
+        let top_rim_leaning = lean_gauge
+            .as_ref()
+            .filter(|_| given.is_none_or(|g| g.z_t.is_none()))
+            .and_then(|gauge| {
+                let heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
+                let kinds: Vec<Option<char>> = frames.iter().map(|f| f.picture_type).collect();
+                vision::near_top_rim_leaning(gauge, &profiles, &heights, &kinds)
+            })
+            .map(|reading| TopRimLeaning {
+                reading,
+                rest_z_t: cal.z_t,
+            });
+        drop(profiles);
+        let mut cal = cal;
+        if let Some(leaning) = &top_rim_leaning {
+            cal.z_t = leaning.reading.z_t;
+        }
         // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
         // z_rim in metres once, after every correction of z_rim in px.
-        let scale = ScaleReport::new(&calibration.calibration, bottom_rim_row, &params)
-            .with_near_rim_elevation(&calibration.calibration, silhouette_top, &params);
+        let scale = ScaleReport::new(&cal, bottom_rim_row, &params).with_near_rim_elevation(
+            &cal,
+            silhouette_top,
+            &params,
+        );
         let metres_per_px = scale.metres_per_px();
         if !scale.at_near_rim() {
             warnings.push(format!("scale from the {}", scale.used));
@@ -1504,6 +1555,7 @@ pub fn analyse_clip_keeping(
             rest_tail_s: signal_config.rest_tail_s,
             kept: keeper.and_then(FrameKeeper::finish),
             repeated,
+            top_rim_leaning,
         })
     };
     let mut first = plan_span.first_span();
@@ -1541,6 +1593,7 @@ pub fn analyse_clip_keeping(
         rest_tail_s,
         kept,
         repeated,
+        top_rim_leaning,
         ..
     } = measured;
     let decoded = plan_span.decoded(first, attempts, frames.len());
@@ -1781,7 +1834,14 @@ pub fn analyse_clip_keeping(
         layout,
         plate,
         split_row,
-        calibration,
+        calibration: CalibrationReport {
+            calibration: vision::Calibration {
+                z_t: top_rim_leaning.map_or(calibration.calibration.z_t, |l| l.reading.z_t),
+                ..calibration.calibration
+            },
+            ..calibration
+        },
+        top_rim_leaning,
         metres_per_px,
         scale,
         band_half_width_px: side_config.half_width_px,

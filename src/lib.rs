@@ -5,6 +5,7 @@ pub mod config;
 pub mod demo;
 pub mod energy;
 pub mod footage;
+pub(crate) mod lsq;
 pub mod model;
 pub mod overlay;
 pub mod precession;

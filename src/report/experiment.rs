@@ -488,6 +488,25 @@ fn experiment_page(
             ),
         ],
         vec![
+            "near top rim z_t".into(),
+            plan.top_rim_leaning.map_or_else(
+                || "read on the rest frames".into(),
+                |l| {
+                    format!(
+                        "{:.2} ± {:.2} px from {} frames in which the disk leans towards the \
+                         camera (the face up to {:.1} px tall there); the rest frames, whose \
+                         face is under {:.0} px tall, read {:.2} px",
+                        l.reading.z_t,
+                        l.reading.se,
+                        l.reading.frames,
+                        l.reading.tallest_face_px,
+                        crate::vision::THIN_AT_REST_PX,
+                        l.rest_z_t
+                    )
+                },
+            ),
+        ],
+        vec![
             "scale δ at the near rim".into(),
             format!(
                 "{:.4e} m/px from the {}",

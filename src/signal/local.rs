@@ -11,7 +11,7 @@
 //! itself places it ([`super::motion_zero`]).
 
 use super::RimModel;
-use super::lsq::levenberg_marquardt;
+use crate::lsq::levenberg_marquardt;
 use std::f64::consts::PI;
 
 /// Starting values of a local fit.

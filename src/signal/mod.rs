@@ -115,7 +115,6 @@
 
 mod halt;
 mod local;
-mod lsq;
 mod peaks;
 mod rim;
 mod skips;

@@ -40,6 +40,7 @@ mod calibration;
 mod components;
 mod error;
 mod gap;
+mod leaning_face;
 mod light_plate;
 mod mirror_edge;
 mod profile;
@@ -61,6 +62,7 @@ pub use calibration::{
 };
 pub use error::VisionError;
 pub use gap::{GapGauge, GapSample};
+pub use leaning_face::{LeanGauge, LeaningTopRim, THIN_AT_REST_PX, near_top_rim_leaning};
 pub use mirror_edge::{
     EdgeTemplate, MirrorEdgeModel, SHARP_RIM_PX, remeasure as remeasure_dark_rim,
 };

@@ -18,6 +18,9 @@
 //! 3. [`thin_top_face`]: a face too thin for the plateaus, fitted with its blur.
 //!
 //! When none sees a face the silhouette's top (the far top rim) stands for z_t.
+//! A face under [`super::leaning_face::THIN_AT_REST_PX`] is read again, in the
+//! frames in which the rolling disk leans towards the camera and shows it several
+//! pixels tall ([`super::leaning_face`]), and `analyse` takes that reading.
 
 use nalgebra::{Matrix3, Vector3};
 

@@ -1,5 +1,6 @@
-//! A small Levenberg–Marquardt least-squares solver for the local rim fits (a handful
-//! of parameters, tens of residuals), and the linearised covariance s² (JᵀJ)⁻¹,
+//! A small Levenberg–Marquardt least-squares solver for the local rim fits
+//! (`signal`) and the leaning top face's profile (`vision`) (a handful of
+//! parameters, tens of residuals), and the linearised covariance s² (JᵀJ)⁻¹,
 //! s² = SSR/dof, at the optimum. The Jacobian is the caller's: the local fits build
 //! it from the rim model's partial derivatives, which is most of their speed.
 
