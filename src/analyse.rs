@@ -1251,7 +1251,7 @@ pub fn analyse_clip_keeping(
                 gaps.push(gauge.measure(&side));
             }
             if let Some(gauge) = &lean_gauge {
-                profiles.push(Some(gauge.read(&side)));
+                profiles.push(gauge.read(&side));
             }
             let strip = match (&mut strip_finder, plan) {
                 (Some(finder), Some(plan)) => finder.measure(&plan, index).ok(),

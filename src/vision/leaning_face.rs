@@ -133,7 +133,7 @@ pub struct LeaningTopRim {
     pub tallest_face_px: f64,
 }
 
-/// z_t from the frames' `profiles` (from `gauge`, `None` where not read), their rim
+/// z_t from the frames' `profiles` (from `gauge`), their rim
 /// heights `z_rim_px` (from the rest edge, `None` where not measured) and the
 /// codec's `picture_types` ('I', 'P', 'B'; `None` for a folder of frames), or `None`
 /// when fewer than [`MIN_FRAMES`] frames show the face resolved.
@@ -146,7 +146,7 @@ pub struct LeaningTopRim {
 /// px lower on two; lossless, the frames read within 0.05 px of the truth.
 pub fn near_top_rim_leaning(
     gauge: &LeanGauge,
-    profiles: &[Option<Vec<f32>>],
+    profiles: &[Vec<f32>],
     z_rim_px: &[Option<f64>],
     picture_types: &[Option<char>],
 ) -> Option<LeaningTopRim> {
@@ -159,7 +159,7 @@ pub fn near_top_rim_leaning(
         .zip(picture_types)
         .filter_map(|((p, z), kind)| {
             let z = (*z)?;
-            let face = resolved_face(p.as_ref()?, gauge.rest_near - origin - z)?;
+            let face = resolved_face(p, gauge.rest_near - origin - z)?;
             Some((
                 origin + face.near + z,
                 face.near - face.far,
@@ -327,13 +327,13 @@ mod tests {
             let lift = 2.0 * (0.5 * chi).cos().powi(2);
             let face = 0.8 + 5.0 * (0.5 * chi).sin().powi(2);
             let near = rest_near - lift - origin;
-            profiles.push(Some(drawn(
+            profiles.push(drawn(
                 [15.0, 150.0, 210.0],
                 near - face,
                 near,
                 0.9,
                 rows.len(),
-            )));
+            ));
             heights.push(Some(lift));
         }
         let reading = near_top_rim_leaning(&gauge, &profiles, &heights, &vec![None; heights.len()])
