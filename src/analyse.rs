@@ -541,8 +541,10 @@ pub struct ScaleReport {
     /// "diameter (…reason)".
     pub used: String,
     /// The silhouette's top on the centre line at rest, the top face's far rim [px]
-    /// ([`vision::silhouette_top`]); `None` when not seen, and in results written
-    /// before it was recorded.
+    /// ([`vision::silhouette_top`]; where that sees no face 1.5 px above the rest
+    /// frames' z_t and the leaning frames read the near top rim
+    /// ([`TopRimLeaning`]), the rest frames' z_t, which is then the silhouette's
+    /// top); `None` when not seen, and in results written before it was recorded.
     #[serde(default)]
     pub silhouette_top_px: Option<f64>,
     /// ε: the elevation of the camera's ray to the near bottom rim [rad], where
@@ -1453,6 +1455,11 @@ pub fn analyse_clip_keeping(
         if let Some(leaning) = &top_rim_leaning {
             cal.z_t = leaning.reading.z_t;
         }
+        // No face 1.5 px above the rest frames' z_t (vision::silhouette_top): their
+        // z_t is then the silhouette's top, the far top rim, unless below the
+        // leaning frames' near rim.
+        let silhouette_top =
+            silhouette_top.or_else(|| top_rim_leaning.map(|l| l.rest_z_t.min(l.reading.z_t)));
         // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
         // z_rim in metres once, after every correction of z_rim in px.
         let scale = ScaleReport::new(&cal, bottom_rim_row, &params).with_near_rim_elevation(
