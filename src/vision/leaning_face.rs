@@ -28,12 +28,14 @@
 //! p_k = B + (T − B) c_k(far) + (S − T) c_k(near),   c_k(e) = ∫_k^{k+1} Φ((u − e)/σ) du.
 //! ```
 //!
-//! A frame counts when its face is resolved: at least 2σ tall (closer, the face's
-//! level and height trade off), with levels inside the profile's range and a face
-//! level apart from the side's. The rest of the frames, the disk leaning away or the
-//! face lit like the side, are left out.
+//! A frame counts when its face is resolved: at least 3σ tall (closer, the face's
+//! level and height trade off, and a coded picture's near rim drifts), with levels
+//! inside the profile's range and a face level apart from the side's. The rest of
+//! the frames, the disk leaning away or the face lit like the side, are left out,
+//! and so are B pictures when enough others count ([`near_top_rim_leaning`]).
+//! `analyse` reads z_t so only when the rest frame's face is under
+//! [`THIN_AT_REST_PX`]: a face the rest frame resolves is read there, still.
 
-use std::f64::consts::{PI, SQRT_2};
 use std::ops::Range;
 
 use nalgebra::DMatrix;
@@ -41,7 +43,7 @@ use serde::{Deserialize, Serialize};
 
 use super::Calibration;
 use super::calibration::REACH;
-use super::profile::row_band_mean;
+use super::profile::{blurred_step_coverage as coverage, row_band_mean};
 use crate::footage::FrameView;
 use crate::lsq::levenberg_marquardt;
 use crate::signal::{mad_sigma, median};
@@ -193,29 +195,6 @@ pub fn near_top_rim_leaning(
 struct Face {
     far: f64,
     near: f64,
-}
-
-/// ∫Φ = x Φ(x) + φ(x).
-fn integral(x: f64) -> f64 {
-    x * cdf(x) + pdf(x)
-}
-
-fn cdf(x: f64) -> f64 {
-    0.5 * (1.0 + statrs::function::erf::erf(x / SQRT_2))
-}
-
-fn pdf(x: f64) -> f64 {
-    (-0.5 * x * x).exp() / (2.0 * PI).sqrt()
-}
-
-/// Coverage of row k by a step at e blurred by σ, and its derivatives in e and ln σ.
-fn coverage(k: f64, e: f64, sigma: f64) -> (f64, f64, f64) {
-    let (a, b) = ((k + 1.0 - e) / sigma, (k - e) / sigma);
-    (
-        sigma * (integral(a) - integral(b)),
-        -(cdf(a) - cdf(b)),
-        sigma * (pdf(a) - pdf(b)),
-    )
 }
 
 /// The three-level fit of one profile (module docs), started from the near rim at

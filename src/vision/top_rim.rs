@@ -25,7 +25,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::calibration::REACH;
-use super::profile::{area_edge, row_band_mean};
+use super::profile::{area_edge, blurred_step_coverage, row_band_mean};
 use crate::footage::FrameView;
 
 /// Farthest band from the centre line, as a fraction of the disk's half-width a.
@@ -260,14 +260,7 @@ pub(super) fn thin_top_face(p: &[f32], far: f64, side_end: usize, contrast: f32)
     let first = (far.floor() as usize).checked_sub(REACH)?;
     let last = side_end.min(top + REACH + 5);
     let rows: Vec<(f64, f64)> = (first..last).map(|k| (k as f64, f64::from(p[k]))).collect();
-    // ∫Φ = x Φ(x) + φ(x): the area of a blurred step over one pixel.
-    let integral = |x: f64| {
-        let cdf = 0.5 * (1.0 + statrs::function::erf::erf(x / std::f64::consts::SQRT_2));
-        x * cdf + (-0.5 * x * x).exp() / (2.0 * std::f64::consts::PI).sqrt()
-    };
-    let coverage = |k: f64, e: f64, sigma: f64| {
-        sigma * (integral((k + 1.0 - e) / sigma) - integral((k - e) / sigma))
-    };
+    let coverage = |k: f64, e: f64, sigma: f64| blurred_step_coverage(k, e, sigma).0;
     let yy: f64 = rows.iter().map(|r| r.1 * r.1).sum();
     // (SSR, face's height, σ, near, levels)
     let mut best: Option<(f64, f64, f64, f64, Vector3<f64>)> = None;
