@@ -116,6 +116,24 @@ pub(super) fn golden_section(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol
     0.5 * (a + b)
 }
 
+/// The fraction of row k (covering [k, k + 1)) below a step at e blurred by a
+/// Gaussian σ, c_k(e) = ∫_k^{k+1} Φ((u − e)/σ) du = σ [I(a) − I(b)] with
+/// I(x) = x Φ(x) + φ(x), a = (k + 1 − e)/σ, b = (k − e)/σ; with its derivatives in e
+/// and in ln σ. The sampled edge of the top-face fits (`top_rim::thin_top_face`,
+/// `leaning_face`).
+pub(super) fn blurred_step_coverage(k: f64, e: f64, sigma: f64) -> (f64, f64, f64) {
+    use std::f64::consts::{PI, SQRT_2};
+    let cdf = |x: f64| 0.5 * (1.0 + statrs::function::erf::erf(x / SQRT_2));
+    let pdf = |x: f64| (-0.5 * x * x).exp() / (2.0 * PI).sqrt();
+    let integral = |x: f64| x * cdf(x) + pdf(x);
+    let (a, b) = ((k + 1.0 - e) / sigma, (k - e) / sigma);
+    (
+        sigma * (integral(a) - integral(b)),
+        -(cdf(a) - cdf(b)),
+        sigma * (pdf(a) - pdf(b)),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -191,22 +209,4 @@ mod tests {
         assert!((x - 10.3).abs() < 1e-5, "found {x}");
         assert_eq!(area_edge(&[50.0; 8], 3, 3, 0.0), None);
     }
-}
-
-/// The fraction of row k (covering [k, k + 1)) below a step at e blurred by a
-/// Gaussian σ, c_k(e) = ∫_k^{k+1} Φ((u − e)/σ) du = σ [I(a) − I(b)] with
-/// I(x) = x Φ(x) + φ(x), a = (k + 1 − e)/σ, b = (k − e)/σ; with its derivatives in e
-/// and in ln σ. The sampled edge of the top-face fits (`top_rim::thin_top_face`,
-/// `leaning_face`).
-pub(super) fn blurred_step_coverage(k: f64, e: f64, sigma: f64) -> (f64, f64, f64) {
-    use std::f64::consts::{PI, SQRT_2};
-    let cdf = |x: f64| 0.5 * (1.0 + statrs::function::erf::erf(x / SQRT_2));
-    let pdf = |x: f64| (-0.5 * x * x).exp() / (2.0 * PI).sqrt();
-    let integral = |x: f64| x * cdf(x) + pdf(x);
-    let (a, b) = ((k + 1.0 - e) / sigma, (k - e) / sigma);
-    (
-        sigma * (integral(a) - integral(b)),
-        -(cdf(a) - cdf(b)),
-        sigma * (pdf(a) - pdf(b)),
-    )
 }
