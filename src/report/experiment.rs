@@ -493,12 +493,17 @@ fn experiment_page(
                 || "read on the rest frames".into(),
                 |l| {
                     format!(
-                        "{:.2} ± {:.2} px from {} frames in which the disk leans towards the \
-                         camera (the face up to {:.1} px tall there); the rest frames, whose \
-                         face is under {:.0} px tall, read {:.2} px",
+                        "{:.2} ± {:.2} px from {} frames{} in which the disk leans towards \
+                         the camera (the face up to {:.1} px tall there); the rest frames, \
+                         whose face is under {:.0} px tall, read {:.2} px",
                         l.reading.z_t,
                         l.reading.se,
                         l.reading.frames,
+                        if l.reading.b_pictures_left_out {
+                            " (P and I pictures; the B pictures left out)"
+                        } else {
+                            ""
+                        },
                         l.reading.tallest_face_px,
                         crate::vision::THIN_AT_REST_PX,
                         l.rest_z_t
