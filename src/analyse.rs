@@ -37,7 +37,9 @@ use crate::model::params::DiskParams;
 use crate::overlay::{FrameKeeper, KeptFrames, LayoutGeometry, OverlaySpec};
 use crate::precession::{self, PrecessionCheck};
 use crate::report::diagnostics;
-use crate::signal::{self, SideViewRim, SignalConfig, SignalError, StateSeries, ThesisRim};
+use crate::signal::{
+    self, RimModel, SideViewRim, SignalConfig, SignalError, StateSeries, ThesisRim,
+};
 use crate::vision::{
     self, BandWindow, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge, RimGauge,
     RimHeight, RimReading, SideViewConfig, StripFinder, ThresholdSource, VisionError,
@@ -1526,7 +1528,7 @@ pub fn analyse_clip_keeping(
             &repeated,
             two_view,
             &signal_config,
-            params.radius,
+            rim_model(&scale, &params).as_ref(),
             profile.as_ref(),
             metres_per_px,
         )
@@ -1680,7 +1682,7 @@ pub fn analyse_clip_keeping(
             &repeated,
             two_view,
             &config,
-            params.radius,
+            rim_model(&scale, &params).as_ref(),
             profile.as_ref(),
             metres_per_px,
         )
@@ -1756,9 +1758,7 @@ pub fn analyse_clip_keeping(
             Some(z) => RimReading::motion_zero_uncertainty_px(z.zero.se / metres_per_px),
             None => reading.zero_uncertainty_px(),
         });
-    let model = ThesisRim {
-        radius: params.radius,
-    };
+    let model = rim_model(&scale, &params);
     let (t, z) = rim_series(&frames);
     let moved = [-1.0, 1.0].map(|sign| {
         signal::with_zero_moved(
@@ -1766,7 +1766,7 @@ pub fn analyse_clip_keeping(
             &z,
             &series,
             sign * zero_px * metres_per_px,
-            &model,
+            model.as_ref(),
             &signal_config(window_s, metres_per_px),
         )
         .ok()
@@ -1888,7 +1888,7 @@ fn signal_series(
     repeated: &[footage::RepeatedFrame],
     two_view: bool,
     config: &SignalConfig,
-    radius: f64,
+    model: &dyn RimModel,
     motion_profile: Option<&SideViewRim>,
     metres_per_px: f64,
 ) -> Result<(StateSeries, Option<ZeroFromMotion>), SignalError> {
@@ -1899,8 +1899,7 @@ fn signal_series(
             .map(|f| f.beta_raw.unwrap_or(f64::NAN))
             .collect()
     });
-    let thesis = ThesisRim { radius };
-    let mut series = signal::analyse(&t, &z, beta.as_deref(), &thesis, config)?;
+    let mut series = signal::analyse(&t, &z, beta.as_deref(), model, config)?;
     // The heights from the zero the motion places (signal::motion_zero), with the
     // camera's own profile: every height moves by the rest level and the motion's
     // offset from it, and the peaks and states are found again on them.
@@ -1917,7 +1916,7 @@ fn signal_series(
     if zero.is_some() {
         let (t, z) = rim_series(frames);
         series.halt.rest_level = 0.0;
-        series = signal::with_zero_moved(&t, &z, &series, 0.0, &thesis, config)?;
+        series = signal::with_zero_moved(&t, &z, &series, 0.0, model, config)?;
     }
     for r in repeated {
         let (statistic, neighbours) = (r.statistic, r.neighbours);
@@ -1952,6 +1951,20 @@ fn signal_series(
 /// `None` keeps the still disk's edge: asked for, or the camera's elevation not known,
 /// where the first-order profile would read 0.05–0.12 px of offset that is not there
 /// (BENCHMARKS.md, "The zero from the motion").
+/// The rim's profile the peaks and the states are read with: the camera's
+/// ([`SideViewRim`]) when its elevation ε at the near rim is known, else eq. 3.9's
+/// level camera ([`ThesisRim`]). At the peaks the camera's profile is
+/// 2R sin φ − H φ tan ε, so eq. 3.9 reads φ low by H tan ε/(2R), 0.44 % at ε = 3°
+/// for Euler's disk.
+fn rim_model(scale: &ScaleReport, disk: &DiskParams) -> Box<dyn RimModel> {
+    match scale.side_view_rim(disk) {
+        Some(camera) => Box::new(camera),
+        None => Box::new(ThesisRim {
+            radius: disk.radius,
+        }),
+    }
+}
+
 fn motion_profile(
     choice: RimZeroChoice,
     scale: &ScaleReport,
