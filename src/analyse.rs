@@ -1946,11 +1946,6 @@ fn signal_series(
     Ok((series, zero))
 }
 
-/// The rim's profile the motion's zero is fitted with ([`signal::motion_zero`]): the
-/// camera's ([`ScaleReport::side_view_rim`]) when `choice` asks for the motion's zero.
-/// `None` keeps the still disk's edge: asked for, or the camera's elevation not known,
-/// where the first-order profile would read 0.05–0.12 px of offset that is not there
-/// (BENCHMARKS.md, "The zero from the motion").
 /// The rim's profile the peaks and the states are read with: the camera's
 /// ([`SideViewRim`]) when its elevation ε at the near rim is known, else eq. 3.9's
 /// level camera ([`ThesisRim`]). At the peaks the camera's profile is
@@ -1965,6 +1960,11 @@ fn rim_model(scale: &ScaleReport, disk: &DiskParams) -> Box<dyn RimModel> {
     }
 }
 
+/// The rim's profile the motion's zero is fitted with ([`signal::motion_zero`]): the
+/// camera's ([`ScaleReport::side_view_rim`]) when `choice` asks for the motion's zero.
+/// `None` keeps the still disk's edge: asked for, or the camera's elevation not known,
+/// where the first-order profile would read 0.05–0.12 px of offset that is not there
+/// (BENCHMARKS.md, "The zero from the motion").
 fn motion_profile(
     choice: RimZeroChoice,
     scale: &ScaleReport,
