@@ -1950,7 +1950,8 @@ fn signal_series(
 /// ([`SideViewRim`]) when its elevation ε at the near rim is known, else eq. 3.9's
 /// level camera ([`ThesisRim`]). At the peaks the camera's profile is
 /// 2R sin φ − H φ tan ε, so eq. 3.9 reads φ low by H tan ε/(2R), 0.44 % at ε = 3°
-/// for Euler's disk.
+/// for Euler's disk; the local fits, which weigh the turn's mean with its swing,
+/// read it low by about 2/3 of that (`signal::tests::exact_geometry_is_a_drop_in_model`).
 fn rim_model(scale: &ScaleReport, disk: &DiskParams) -> Box<dyn RimModel> {
     match scale.side_view_rim(disk) {
         Some(camera) => Box::new(camera),

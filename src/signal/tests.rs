@@ -701,7 +701,12 @@ fn check_states(seed: u64) {
 
 /// The exact side-view geometry (H, camera elevation) fitted with its own model gives
 /// φ at the peaks as well as the thesis model does on its own data; the thesis model
-/// on the same data is off by the O(h tan ε) term in the oscillating part.
+/// on the same data is off by the O(h tan ε) term in the oscillating part: at the
+/// peaks z = 2R sin φ − Hφ tan ε, so the peak alone (eq. 3.9) reads φ low by
+/// H tan ε/(2R), and a fit over whole turns, which weighs the turn's mean R sin φ
+/// with its swing R sin φ (1 − (H/R) tan ε) (power 1 : ½), by (H/R) tan ε/3; the
+/// local fit over 1.5 turns lies between (why `analyse` reads the peaks with the
+/// camera's profile where ε is known).
 #[test]
 fn exact_geometry_is_a_drop_in_model() {
     let exact = SideViewRim {
@@ -729,6 +734,25 @@ fn exact_geometry_is_a_drop_in_model() {
             );
         }
     }
+    let level = find_peaks(&t, &z, &halt, &thesis_model(), &config).expect("peaks");
+    let mut ratios: Vec<f64> = level
+        .peaks
+        .iter()
+        .zip(&series.peaks)
+        .filter(|(a, b)| (a.t - b.t).abs() < 1e-3 && b.phi > 0.002)
+        .map(|(a, b)| a.phi / b.phi)
+        .collect();
+    assert!(ratios.len() >= 10, "{} peaks paired", ratios.len());
+    ratios.sort_by(f64::total_cmp);
+    let low = 1.0 - ratios[ratios.len() / 2];
+    let h_tan = H / R * exact.camera_elevation.tan();
+    assert!(
+        (0.9 * h_tan / 3.0..=1.1 * h_tan / 2.0).contains(&low),
+        "the level camera's φ low by {low:.5}, not within (H/R) tan ε/3 = {:.5} … \
+         H tan ε/(2R) = {:.5}",
+        h_tan / 3.0,
+        h_tan / 2.0
+    );
 }
 
 #[test]
