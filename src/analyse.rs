@@ -1162,10 +1162,9 @@ pub fn analyse_clip_keeping(
         None => None,
     };
     let (width, height) = (last.width, last.height);
-    let calibration_png = png(&diagnostics::calibration_image(
-        &rest_sides[rest_sides.len() - 1],
-        &calibration.calibration,
-    ));
+    // The rest frame's side view, kept for the calibration diagnostic, which shows
+    // the z_t used (the leaning frames' when read).
+    let rest_side = OwnedFrame::copy(last.index, &rest_sides[rest_sides.len() - 1]);
     drop(rest_sides);
     drop(rest);
 
@@ -1824,6 +1823,17 @@ pub fn analyse_clip_keeping(
             Some(edge_row),
         ))
     });
+    let calibration = CalibrationReport {
+        calibration: vision::Calibration {
+            z_t: top_rim_leaning.map_or(calibration.calibration.z_t, |l| l.reading.z_t),
+            ..calibration.calibration
+        },
+        ..calibration
+    };
+    let calibration_png = png(&diagnostics::calibration_image(
+        &rest_side.view(),
+        &calibration.calibration,
+    ));
     let plan = ExperimentPlan {
         clip: clip.to_path_buf(),
         clip_hash: clip_hash(clip)?,
@@ -1841,13 +1851,7 @@ pub fn analyse_clip_keeping(
         layout,
         plate,
         split_row,
-        calibration: CalibrationReport {
-            calibration: vision::Calibration {
-                z_t: top_rim_leaning.map_or(calibration.calibration.z_t, |l| l.reading.z_t),
-                ..calibration.calibration
-            },
-            ..calibration
-        },
+        calibration,
         top_rim_leaning,
         metres_per_px,
         scale,
