@@ -554,6 +554,16 @@ pub struct ScaleReport {
     /// silhouette's top.
     #[serde(default)]
     pub near_rim_elevation_rad: Option<f64>,
+    /// s_b/δ: the camera's local vertical scale at the near bottom rim, where z_rim is
+    /// read, over eq. 3.10's δ, the mean over the rim's thickness
+    /// ([`Self::with_local_scale_at_near_rim`]); `None` (taken as 1) without the
+    /// camera's distance and elevation, and in results written before it was recorded.
+    #[serde(default)]
+    pub near_rim_local_factor: Option<f64>,
+    /// The row of the camera's principal point in the side view [px] that
+    /// [`Self::near_rim_local_factor`] assumes: the centre of the frame's side view.
+    #[serde(default)]
+    pub principal_row_px: Option<f64>,
 }
 
 /// The perspective factors eq. 3.10's thickness scale is trusted within: a camera
@@ -590,6 +600,8 @@ impl ScaleReport {
             used,
             silhouette_top_px: None,
             near_rim_elevation_rad: None,
+            near_rim_local_factor: None,
+            principal_row_px: None,
         }
     }
 
@@ -629,6 +641,50 @@ impl ScaleReport {
         self
     }
 
+    /// The scale at the point measured (issue 12 §2): eq. 3.10's δ = 2H/(z_b − z_t) is
+    /// the mean vertical scale over the near rim's thickness, while z_rim is read at its
+    /// bottom. Through a pinhole pitched down by p, a point at the horizontal distance d
+    /// seen θ below the horizontal has the vertical scale s(θ) = d cos²(θ − p)/(F cos²θ)
+    /// [m/px] (F the focal length in px), so at the near bottom rim, θ_b = ε
+    /// ([`Self::near_rim_elevation_rad`]),
+    ///
+    /// ```text
+    /// s_b/δ = d cos²(θ_b − p) [tan(θ_b − p) − tan(θ_t − p)] / (2H cos²θ_b),
+    /// tan θ_t = tan θ_b − 2H/d            (the near top rim, 2H higher),
+    /// tan(θ_b − p) = (z_b − c_y)/F,  F = (d + R)/δ_c,
+    /// ```
+    ///
+    /// with d the camera's distance from the near rim ([`Self::camera_distance_m`]),
+    /// δ_c the diameter's scale at the disk's centre and c_y the principal point's
+    /// row, `principal_row` (the centre of the frame's side view: both renderers and a
+    /// phone's camera have it there). To first order s_b/δ − 1 = (2H/d)(tan θ_b −
+    /// tan(θ_b − p)): +0.1 … +0.5 % for a camera 0.2–0.6 m away looking down by
+    /// 2–5°, where eq. 3.10 read the scale, and φ, that much small; 1 for a distant
+    /// camera. Left at 1 when δ is not used or the distance or ε is not known.
+    pub fn with_local_scale_at_near_rim(mut self, principal_row: f64, disk: &DiskParams) -> Self {
+        let (Some(d), Some(theta_b), Some(z_b)) = (
+            self.camera_distance_m,
+            self.near_rim_elevation_rad,
+            self.bottom_rim_row_px,
+        ) else {
+            return self;
+        };
+        if !self.at_near_rim() {
+            return self;
+        }
+        let thickness = 2.0 * disk.half_thickness;
+        let focal_px = (d + disk.radius) / self.diameter_metres_per_px;
+        let off_axis_b = (z_b - principal_row) / focal_px; // tan(θ_b − p)
+        let pitch = theta_b - off_axis_b.atan();
+        let theta_t = (theta_b.tan() - thickness / d).atan();
+        let off_axis_t = (theta_t - pitch).tan();
+        let factor = d * (off_axis_b.atan().cos().powi(2)) * (off_axis_b - off_axis_t)
+            / (thickness * theta_b.cos().powi(2));
+        self.near_rim_local_factor = factor.is_finite().then_some(factor);
+        self.principal_row_px = Some(principal_row);
+        self
+    }
+
     /// Whether eq. 3.10's scale at the near rim is used (its perspective factor is
     /// plausible), rather than the diameter's.
     pub fn at_near_rim(&self) -> bool {
@@ -647,10 +703,11 @@ impl ScaleReport {
             })
     }
 
-    /// The scale used [m/px].
+    /// The scale used [m/px]: at the near bottom rim, eq. 3.10's times
+    /// [`Self::near_rim_local_factor`].
     pub fn metres_per_px(&self) -> f64 {
         if self.at_near_rim() {
-            self.thickness_metres_per_px
+            self.thickness_metres_per_px * self.near_rim_local_factor.unwrap_or(1.0)
         } else {
             self.diameter_metres_per_px
         }
@@ -1463,11 +1520,13 @@ pub fn analyse_clip_keeping(
             silhouette_top.or_else(|| top_rim_leaning.map(|l| l.rest_z_t.min(l.reading.z_t)));
         // Scale at the near rim (eq. 3.10), checked against the diameter's (ScaleReport);
         // z_rim in metres once, after every correction of z_rim in px.
-        let scale = ScaleReport::new(&cal, bottom_rim_row, &params).with_near_rim_elevation(
-            &cal,
-            silhouette_top,
-            &params,
-        );
+        // The principal point: the centre of the frame's side view (above the split
+        // in a two-view clip), in the side view's rows.
+        let roi_top = roi.map_or(0.0, |r| f64::from(r[1]));
+        let side_rows = split.map_or(height as f64, |s| roi_top + s as f64);
+        let scale = ScaleReport::new(&cal, bottom_rim_row, &params)
+            .with_near_rim_elevation(&cal, silhouette_top, &params)
+            .with_local_scale_at_near_rim(0.5 * side_rows - roi_top, &params);
         let metres_per_px = scale.metres_per_px();
         if !scale.at_near_rim() {
             warnings.push(format!("scale from the {}", scale.used));
@@ -2441,6 +2500,48 @@ mod tests {
                 full_state: None,
             };
             assert_eq!(law_bound(&fits, frame_s), None, "t0 {t0}");
+        }
+    }
+
+    /// A pinhole 0.25 m from the near rim, 4° above it and pitched down by 3°, seen
+    /// exactly: eq. 3.10's δ, the mean over the thickness, is 0.3 % smaller than the
+    /// scale at the near bottom rim (the rows' derivative there), and the local factor
+    /// gives that scale to 0.02 %; a camera 50 m away needs none.
+    #[test]
+    fn the_scale_is_the_local_one_at_the_near_bottom_rim() {
+        let disk = DiskParams::solid_disk_thesis(0.4, 0.0381, 0.00635);
+        let (r, thickness) = (disk.radius, 2.0 * disk.half_thickness);
+        for (d, focal_px) in [(0.25, 1500.0), (50.0, 300_000.0)] {
+            let (elevation, pitch, principal_row) = (4f64.to_radians(), 3f64.to_radians(), 120.0);
+            let camera_height = d * elevation.tan();
+            // The row of a point `h` above the plate at the horizontal distance `x`.
+            let row = |h: f64, x: f64| {
+                principal_row + focal_px * (((camera_height - h) / x).atan() - pitch).tan()
+            };
+            let (z_b, z_t) = (row(0.0, d), row(thickness, d));
+            let half_diameter = focal_px * r / (d + r);
+            let cal = vision::Calibration {
+                x_l: 200.0 - half_diameter,
+                x_r: 200.0 + half_diameter,
+                z_t,
+                z_base: z_b,
+            };
+            let step = 1e-7;
+            let local = step / (row(0.0, d) - row(step, d));
+            let mut scale = ScaleReport::new(&cal, z_b, &disk);
+            scale.near_rim_elevation_rad = Some(elevation);
+            let eq_3_10 = scale.metres_per_px();
+            let scale = scale.with_local_scale_at_near_rim(principal_row, &disk);
+            if d < 1.0 {
+                let factor = scale.near_rim_local_factor.expect("a factor");
+                assert!(local / eq_3_10 - 1.0 > 0.002, "{local} vs {eq_3_10}");
+                let error = scale.metres_per_px() / local - 1.0;
+                assert!(error.abs() < 2e-4, "error {error:e}, factor {factor}");
+            } else {
+                // (No distance from a perspective factor under 1: no factor at all.)
+                let factor = scale.near_rim_local_factor.unwrap_or(1.0);
+                assert!((factor - 1.0).abs() < 1e-4, "factor {factor}");
+            }
         }
     }
 

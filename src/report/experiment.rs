@@ -521,13 +521,23 @@ fn experiment_page(
         vec![
             "perspective".into(),
             format!(
-                "diameter scale 2R/(x_r − x_l) = {:.4e} m/px at the disk's centre; factor {:.3}{}",
+                "diameter scale 2R/(x_r − x_l) = {:.4e} m/px at the disk's centre; factor {:.3}{}{}",
                 plan.scale.diameter_metres_per_px,
                 plan.scale.perspective_factor,
                 plan.scale
                     .camera_distance_m
                     .map(|d| format!(", camera ≈ {d:.2} m from the near rim"))
-                    .unwrap_or_default()
+                    .unwrap_or_default(),
+                match (
+                    plan.scale.near_rim_local_factor,
+                    plan.scale.principal_row_px
+                ) {
+                    (Some(f), Some(row)) => format!(
+                        "; eq. 3.10's δ (the mean over the thickness) × {f:.4} for the scale at \
+                         the near bottom rim (principal point taken at row {row:.0})"
+                    ),
+                    _ => String::new(),
+                }
             ),
         ],
         vec![
