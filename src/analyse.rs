@@ -656,11 +656,13 @@ impl ScaleReport {
     ///
     /// with d the camera's distance from the near rim ([`Self::camera_distance_m`]),
     /// δ_c the diameter's scale at the disk's centre and c_y the principal point's
-    /// row, `principal_row` (the centre of the frame's side view: both renderers and a
-    /// phone's camera have it there). To first order s_b/δ − 1 = (2H/d)(tan θ_b −
-    /// tan(θ_b − p)): +0.1 … +0.5 % for a camera 0.2–0.6 m away looking down by
-    /// 2–5°, where eq. 3.10 read the scale, and φ, that much small; 1 for a distant
-    /// camera. Left at 1 when δ is not used or the distance or ε is not known.
+    /// row, `principal_row`: the centre of the frame's side view, where a phone's
+    /// camera and the open footage's have it (ours aims at the disk's centre on the
+    /// plate, 0.05 of the rows lower, which moves the factor by about a tenth of its
+    /// departure from 1). To first order s_b/δ − 1 = (2H/d)(tan θ_b − tan(θ_b − p)):
+    /// +0.1 … +0.5 % for a camera 0.2–0.6 m away looking down by 2–5°, by which δ
+    /// alone read the scale, and so φ, too small; 1 for a distant camera. Left at 1
+    /// when δ is not used or the distance or ε is not known.
     pub fn with_local_scale_at_near_rim(mut self, principal_row: f64, disk: &DiskParams) -> Self {
         let (Some(d), Some(theta_b), Some(z_b)) = (
             self.camera_distance_m,
