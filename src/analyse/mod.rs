@@ -9,6 +9,8 @@
 //!   │        two-view: split row, colour thresholds             (§3.3.2)
 //!   │        pass 2, streamed: RimGauge per frame → z_rim [px]; StripFinder → β
 //!   │        dark plate: GapGauge per frame, then z_rim < 2 px from the gap's darkness
+//!   │        scale [`scale`]: eq. 3.10 at the near rim, the camera's distance and
+//!   │        elevation, the local scale at the near bottom rim  (§3.2.4, issue 12 §2)
 //!   ▼
 //! signal::   halt t_φ, peaks, φ (eq. 3.9), ψ, ψ̇ (eq. 3.11), per-frame states,
 //!   │        β unwrapped and smoothed, t_β, frame-skip flags    (§3.2.5, §3.3.3)
