@@ -514,8 +514,15 @@ fn experiment_page(
         vec![
             "scale δ at the near rim".into(),
             format!(
-                "{:.4e} m/px from the {}",
-                plan.metres_per_px, plan.scale.used
+                "{:.4e} m/px from the {}{}",
+                plan.metres_per_px,
+                plan.scale.used,
+                match plan.scale.near_rim_local_factor {
+                    Some(f) if plan.scale.at_near_rim() => {
+                        format!(", × {f:.4} for the near bottom rim (see perspective)")
+                    }
+                    _ => String::new(),
+                }
             ),
         ],
         vec![
