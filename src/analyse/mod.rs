@@ -42,14 +42,14 @@ use crate::report::diagnostics;
 use crate::signal::{
     self, RimModel, SideViewRim, SignalConfig, SignalError, StateSeries, ThesisRim,
 };
-mod scale;
-use scale::PERSPECTIVE_FACTOR_RANGE;
-pub use scale::ScaleReport;
-
 use crate::vision::{
     self, BandWindow, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge, RimGauge,
     RimHeight, RimReading, SideViewConfig, StripFinder, ThresholdSource, VisionError,
 };
+
+mod scale;
+use scale::PERSPECTIVE_FACTOR_RANGE;
+pub use scale::ScaleReport;
 
 /// Frames at the end of a clip that must show the disk at rest (calibration).
 pub const REST_FRAMES: usize = 5;
