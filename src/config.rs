@@ -171,6 +171,11 @@ pub struct ExperimentConfig {
     /// Plate orientation or any other grouping label of the study.
     pub orientation: Option<String>,
     pub disk: Option<DiskConfig>,
+    /// The camera's distance from the disk's near rim, measured along the plate [m]:
+    /// overrides the distance the perspective factor gives (`analyse::ScaleReport`),
+    /// from which the camera's elevation at the near rim and the local scale there
+    /// follow.
+    pub camera_distance_m: Option<f64>,
     pub vision: Option<VisionConfig>,
     pub calibration: Option<CalibrationConfig>,
     pub fit: Option<FitConfig>,
@@ -267,6 +272,7 @@ impl ExperimentConfig {
                 format!("`fps` = {fps} frames/s must lie within {MIN_FPS}–{MAX_FPS} frames/s"),
             );
         }
+        positive("camera_distance_m", self.camera_distance_m, "m")?;
         if let Some(disk) = &self.disk {
             positive("disk.mass_kg", disk.mass_kg, "kg")?;
             positive("disk.radius_m", disk.radius_m, "m")?;
@@ -529,6 +535,8 @@ mod tests {
             "[fit]\nwindow_s = -1",
             "[fit]\nrim_zero = \"still\"",
             "plate = \"shiny\"",
+            "camera_distance_m = 0",
+            "camera_distance_m = -0.3",
         ] {
             assert!(
                 ExperimentConfig::parse(text, Path::new("x.toml")).is_err(),

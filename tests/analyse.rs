@@ -616,6 +616,54 @@ fn a_strip_pointing_at_the_camera_leaves_the_near_top_rim() {
     assert_near_top_rim(&e, &truth, 0.3);
 }
 
+/// A camera distance measured with a tape and given in the config
+/// (`camera_distance_m`) replaces the perspective factor's: the plan and the page say
+/// so, and the camera's elevation at the near bottom rim follows from it. A camera
+/// 0.25 m from the near rim, 3° up: the ray to the near bottom rim is 3.46° down
+/// (the truth's camera position); from the config's distance ε is read within 0.1°
+/// (3.41°), from the perspective factor's 0.264 m 0.2° low.
+#[test]
+fn a_camera_distance_given_in_the_config_places_the_camera() {
+    let (dir, truth) = render_clip(&[
+        "--n",
+        "0.5",
+        "--halt",
+        "0.8",
+        "--size",
+        "240x160",
+        "--camera-distance",
+        "0.25",
+        "--elevation",
+        "3",
+        "--noise",
+        "1",
+    ]);
+    let camera = &truth["camera"];
+    let position = camera["position_m"].as_array().unwrap();
+    let e = analyse_clip(
+        &dir.path().join("clip.mp4"),
+        &config("fps = 480\ncamera_distance_m = 0.25\n"),
+        &|_, _| {},
+    )
+    .expect("analyse");
+    // The near bottom rim at rest is R in front of the disk's centre, on the plate.
+    let (behind, above) = (-f(&position[1]), f(&position[2]));
+    let elevation = (above / (behind - e.plan.disk.radius)).atan();
+    let scale = &e.plan.scale;
+    assert!(scale.camera_distance_from_config);
+    assert_eq!(scale.camera_distance_m, Some(0.25));
+    let measured = scale.near_rim_elevation_rad.expect("ε");
+    assert!(
+        (measured - elevation).abs() < 0.1f64.to_radians(),
+        "ε {:.3}° against the truth's {:.3}°",
+        measured.to_degrees(),
+        elevation.to_degrees()
+    );
+    let near = f(&camera["near_rim_metres_per_px"]);
+    let error = e.plan.metres_per_px / near - 1.0;
+    assert!(error.abs() < 0.01, "scale error {:+.2} %", 100.0 * error);
+}
+
 /// z_t within `tolerance` px of the truth's near top rim, and eq. 3.10's scale within
 /// 2 % of the truth's at the near rim; returns the near and far top rims' rows.
 fn assert_near_top_rim(e: &Experiment, truth: &Value, tolerance: f64) -> (f64, f64) {
@@ -683,6 +731,18 @@ fn a_blurred_sharp_rim_is_not_taken_for_a_rounded_one() {
 /// Renders a clip with `eulerdisk render ARGS` and analyses it at 480 fps: the
 /// experiment and the render's truth.
 fn render_and_analyse(args: &[&str]) -> (Experiment, Value) {
+    let (dir, truth) = render_clip(args);
+    let e = analyse_clip(
+        &dir.path().join("clip.mp4"),
+        &config("fps = 480\n"),
+        &|_, _| {},
+    )
+    .expect("analyse");
+    (e, truth)
+}
+
+/// `eulerdisk render ARGS -o clip.mp4` into a new folder; the folder and the truth.
+fn render_clip(args: &[&str]) -> (tempfile::TempDir, Value) {
     let dir = tempfile::tempdir().unwrap();
     let mut render = vec!["render"];
     render.extend_from_slice(args);
@@ -696,11 +756,5 @@ fn render_and_analyse(args: &[&str]) -> (Experiment, Value) {
     let truth: Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("clip.truth.json")).unwrap())
             .unwrap();
-    let e = analyse_clip(
-        &dir.path().join("clip.mp4"),
-        &config("fps = 480\n"),
-        &|_, _| {},
-    )
-    .expect("analyse");
-    (e, truth)
+    (dir, truth)
 }

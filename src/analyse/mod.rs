@@ -1328,6 +1328,7 @@ pub fn analyse_clip_keeping(
         let roi_top = roi.map_or(0.0, |r| f64::from(r[1]));
         let side_rows = split.map_or(height as f64, |s| roi_top + s as f64);
         let scale = ScaleReport::new(&cal, bottom_rim_row, &params)
+            .with_camera_distance(config.camera_distance_m)
             .with_near_rim_elevation(&cal, silhouette_top, &params)
             .with_local_scale_at_near_rim(0.5 * side_rows - roi_top, &params);
         let metres_per_px = scale.metres_per_px();

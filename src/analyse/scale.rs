@@ -34,8 +34,13 @@ pub struct ScaleReport {
     pub bottom_rim_row_px: Option<f64>,
     /// diameter ÷ thickness scale: 1 for a distant (orthographic) camera.
     pub perspective_factor: f64,
-    /// R/(f − 1) [m] when f > 1: the camera's distance from the near rim.
+    /// The camera's distance from the near rim [m]: R/(f − 1) when f > 1, or the
+    /// config's `camera_distance_m` ([`Self::camera_distance_from_config`]).
     pub camera_distance_m: Option<f64>,
+    /// Whether [`Self::camera_distance_m`] is the config's (false in results written
+    /// before it could be).
+    #[serde(default)]
+    pub camera_distance_from_config: bool,
     /// Which scale is used: "thickness (eq. 3.10, at the near rim)" or
     /// "diameter (…reason)".
     pub used: String,
@@ -94,12 +99,25 @@ impl ScaleReport {
             bottom_rim_row_px: Some(bottom_rim_row),
             perspective_factor: factor,
             camera_distance_m: (factor > 1.0 && factor <= hi).then(|| disk.radius / (factor - 1.0)),
+            camera_distance_from_config: false,
             used,
             silhouette_top_px: None,
             near_rim_elevation_rad: None,
             near_rim_local_factor: None,
             principal_row_px: None,
         }
+    }
+
+    /// The scale with the camera's distance from the near rim measured, `given` [m]
+    /// (the config's `camera_distance_m`), in place of the perspective factor's; the
+    /// scale itself stays eq. 3.10's, and the elevation and the local scale at the
+    /// near bottom rim follow from the distance.
+    pub fn with_camera_distance(mut self, given: Option<f64>) -> Self {
+        if let Some(d) = given {
+            self.camera_distance_m = Some(d);
+            self.camera_distance_from_config = true;
+        }
+        self
     }
 
     /// The scale with the elevation ε of the camera's ray to the near bottom rim,

@@ -16,7 +16,8 @@
 //!   centre's depth d + R cos ε) over the thickness's (2H/(z_base − z_t), at the
 //!   near rim's depth d, foreshortened by cos ε) is the perspective factor
 //!   f = cos ε (d + R cos ε)/d, so d = R cos² ε / (f − cos ε). Where f ≤ cos ε + 0.002
-//!   (a distant camera, or f not measured) the camera is orthographic.
+//!   (a distant camera, or f not measured) the camera is orthographic. The config's
+//!   `camera_distance_m`, when given, is taken instead.
 //! * **Placement.** The optical axis passes through the plate point under the
 //!   disk's rest centre, on the centre line x_centre; the row is chosen so that the
 //!   resting disk's near bottom rim (0, −R, 0) lands on the row where z_rim = 0.
@@ -50,8 +51,11 @@ impl CameraPose {
         let sin_e = ((c.z_t - z_top).max(0.0) * scale / (2.0 * radius)).min(0.5);
         let cos_e = (1.0 - sin_e * sin_e).sqrt();
         let factor = plan.scale.perspective_factor;
-        let distance_m = (plan.scale.at_near_rim() && factor > cos_e + 0.002)
+        let measured = (plan.scale.at_near_rim() && factor > cos_e + 0.002)
             .then(|| radius * cos_e * cos_e / (factor - cos_e));
+        // A distance the config gives was measured (along the plate; along the
+        // optical axis within cos ε).
+        let distance_m = plan.config.camera_distance_m.or(measured);
         Self {
             elevation: sin_e.asin(),
             distance_m,

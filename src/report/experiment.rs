@@ -533,7 +533,11 @@ fn experiment_page(
                 plan.scale.perspective_factor,
                 plan.scale
                     .camera_distance_m
-                    .map(|d| format!(", camera ≈ {d:.2} m from the near rim"))
+                    .map(|d| if plan.scale.camera_distance_from_config {
+                        format!(", camera {d:.3} m from the near rim (config)")
+                    } else {
+                        format!(", camera ≈ {d:.2} m from the near rim")
+                    })
                     .unwrap_or_default(),
                 match (
                     plan.scale.near_rim_local_factor,
