@@ -496,6 +496,22 @@ fn a_rounded_rim_is_scaled_from_the_plate_line() {
     assert!(rms < 0.15, "z_rim RMS error {rms} px");
 }
 
+/// A phone held close and a little above the plate: 0.25 m from the near rim, 3° up.
+const CLOSE_CAMERA: [&str; 12] = [
+    "--n",
+    "0.5",
+    "--halt",
+    "0.8",
+    "--size",
+    "240x160",
+    "--camera-distance",
+    "0.25",
+    "--elevation",
+    "3",
+    "--noise",
+    "1",
+];
+
 /// A phone held close and a little above the plate (0.25 m, 3°) sees the top face
 /// only 1–3 px tall above the side, too thin for the calibration's two plateaus; the
 /// fitted three-level profile (`vision::calibration::thin_top_face`) finds the near
@@ -503,20 +519,7 @@ fn a_rounded_rim_is_scaled_from_the_plate_line() {
 /// lies 2–3 px higher, so eq. 3.10's scale at the near rim holds.
 #[test]
 fn a_thin_top_face_gives_the_near_top_rim() {
-    let (e, truth) = render_and_analyse(&[
-        "--n",
-        "0.5",
-        "--halt",
-        "0.8",
-        "--size",
-        "240x160",
-        "--camera-distance",
-        "0.25",
-        "--elevation",
-        "3",
-        "--noise",
-        "1",
-    ]);
+    let (e, truth) = render_and_analyse(&CLOSE_CAMERA);
     let (near, far) = assert_near_top_rim(&e, &truth, 0.5);
     assert!(near - far > 1.0, "the top face is {} px tall", near - far);
 }
@@ -624,20 +627,7 @@ fn a_strip_pointing_at_the_camera_leaves_the_near_top_rim() {
 /// (3.41°), from the perspective factor's 0.264 m 0.2° low.
 #[test]
 fn a_camera_distance_given_in_the_config_places_the_camera() {
-    let (dir, truth) = render_clip(&[
-        "--n",
-        "0.5",
-        "--halt",
-        "0.8",
-        "--size",
-        "240x160",
-        "--camera-distance",
-        "0.25",
-        "--elevation",
-        "3",
-        "--noise",
-        "1",
-    ]);
+    let (dir, truth) = render_clip(&CLOSE_CAMERA);
     let camera = &truth["camera"];
     let position = camera["position_m"].as_array().unwrap();
     let e = analyse_clip(
