@@ -517,12 +517,10 @@ fn experiment_page(
                 "{:.4e} m/px from the {}{}",
                 plan.metres_per_px,
                 plan.scale.used,
-                match plan.scale.near_rim_local_factor {
-                    Some(f) if plan.scale.at_near_rim() => {
-                        format!(", × {f:.4} for the near bottom rim (see perspective)")
-                    }
-                    _ => String::new(),
-                }
+                plan.scale
+                    .near_rim_local_factor
+                    .map(|f| format!(", × {f:.4} for the near bottom rim (see perspective)"))
+                    .unwrap_or_default()
             ),
         ],
         vec![
