@@ -38,8 +38,8 @@
 //!   shrink below 1e-12 (relative) or stop lowering the squared error while that offset
 //!   is below 1e-6; or when the residual is rounding noise (exact data).
 //! * With [`HaltTime::Sighted`], the halt seen in the footage is a second measurement
-//!   of t0 ([`HaltSighting`]), combined with the fit's by their covariances after the
-//!   search, unless the two disagree.
+//!   of t0 ([`HaltSighting`]), combined with the free fit's on the energies' profile in
+//!   t0 (fits with t0 held), unless the two disagree.
 //! * Standard errors allow for autocorrelated residuals, as measured energies have:
 //!   one sample per turn at the peaks (a turn's calibration and edge errors linger
 //!   into the next), and per frame 5–30 samples per turn, each a local fit over
@@ -140,7 +140,8 @@ pub enum HaltTime {
     /// t0 is fitted together with A_e and n (as in thesis §4.6).
     Free,
     /// t0 is fitted, and the halt seen in the footage is a second measurement of it
-    /// ([`HaltSighting`]): the two are combined by their covariances.
+    /// ([`HaltSighting`]): the two are combined on the energies' profile in t0
+    /// ([`HaltSighting::fit`]).
     Sighted(HaltSighting),
 }
 
@@ -210,11 +211,13 @@ pub const SIGHTING_DISAGREEMENT: f64 = 3.0;
 /// How a [`HaltSighting`] entered the fit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SightingUse {
-    /// t0 as the sighting gives it, t_φ plus the mean of t0 − t_φ [s].
+    /// t0 as the sighting gives it, t_φ plus the mean of t0 − t_φ [s], for the Δ of
+    /// the combined law (of the free fit's when not combined).
     pub t0_seen: f64,
     /// Its standard deviation [s].
     pub se_t0_seen: f64,
-    /// Δ, the time before t0 over which the motion is too small to see [s].
+    /// Δ, the time before t0 over which the motion is too small to see [s], of the
+    /// same law.
     pub unseen_s: f64,
     /// t0 from the energy alone [s].
     pub t0_fitted: f64,
@@ -391,7 +394,10 @@ impl FitError {
 /// method). Every sample must be finite, have E > 0 and, for a fixed t0, lie before t0.
 /// Times need not be sorted.
 pub fn fit_power_law(t: &[f64], energy: &[f64], t0: HaltTime) -> Result<PowerLawFit, FitError> {
-    fit_with_limit(t, energy, t0, MAX_ITERATIONS)
+    match t0 {
+        HaltTime::Sighted(sighting) => sighting.fit(t, energy),
+        _ => fit_with_limit(t, energy, t0, MAX_ITERATIONS),
+    }
 }
 
 /// Fits the power law to the samples within `window_s` seconds before the halt: before
@@ -632,16 +638,7 @@ fn fit_with_limit(
     if free {
         g[(2, 2)] = span;
     }
-    let mut cov = &g * cov_scaled * g.transpose();
-    let (mut a_e, mut n, mut t0) = (a_e, n, t0);
-    let halt_sighting = match halt {
-        HaltTime::Sighted(sighting) => {
-            let (used, estimate) = sighting.combine(&mut cov, [a_e, n, t0], t_last);
-            [a_e, n, t0] = estimate;
-            Some(used)
-        }
-        _ => None,
-    };
+    let cov = &g * cov_scaled * g.transpose();
     let se: Vec<f64> = (0..parameters).map(|j| cov[(j, j)].sqrt()).collect();
     if se.iter().any(|s| !s.is_finite()) {
         return Err(FitError::degenerate(
@@ -655,14 +652,7 @@ fn fit_with_limit(
         .inverse_cdf(0.975)
         + fixed_b_excess(bandwidth / points as f64);
     let ci = |value: f64, se: f64| (value - quantile * se, value + quantile * se);
-    let ssr = if halt_sighting.is_some_and(|s| s.combined) {
-        t.iter()
-            .zip(energy)
-            .map(|(&ti, &ei)| (ei - a_e * (t0 - ti).powf(n)).powi(2))
-            .sum()
-    } else {
-        ssr_scaled * e_scale * e_scale
-    };
+    let ssr = ssr_scaled * e_scale * e_scale;
     Ok(PowerLawFit {
         a_e,
         n,
@@ -676,7 +666,7 @@ fn fit_with_limit(
         se_n_zero: 0.0,
         ci95_n: ci(n, se[1]),
         ci95_t0: free.then(|| ci(t0, se[2])),
-        halt_sighting,
+        halt_sighting: None,
         r_squared: 1.0 - ssr / sst,
         residual_rms: (ssr / points as f64).sqrt(),
         points,
@@ -754,54 +744,192 @@ impl HaltSighting {
         )
     }
 
-    /// Combines the sighting with a free-t0 fit's `estimate` (A_e, n, t0) and its
-    /// covariance `cov` (updated in place), as a second measurement of t0: the linear
-    /// Gaussian update θ ← θ + K (t_seen − t0), Σ ← Σ − K Σ₃ᵀ with K = Σ₃/(Σ₃₃ + σ²),
-    /// Σ₃ the covariance's t0 column, so n and A_e move by their covariance with t0.
-    /// Not combined when the two disagree (by more than [`SIGHTING_DISAGREEMENT`]
-    /// standard deviations) or when the combined t0 would not lie after the last sample
-    /// `t_last`.
-    fn combine(
-        &self,
-        cov: &mut DMatrix<f64>,
-        estimate: [f64; 3],
-        t_last: f64,
-    ) -> (SightingUse, [f64; 3]) {
-        let [a_e, n, t0] = estimate;
-        let unseen_s = if self.visible_energy > 0.0 && self.visible_energy.is_finite() && n > 0.0 {
+    /// Fits the power law with t0 measured twice: by the energies (the free-t0 fit)
+    /// and by this sighting. The two are combined on the energies' profile in t0, not
+    /// on a straight line through the free fit: for each trial t0 the law is fitted
+    /// with t0 held (A_e(t0), n(t0), its squared residual S(t0)), and the combined t0
+    /// minimises
+    ///
+    /// ```text
+    /// Q(t0) = (S(t0) − S_free)/k + (t0 − t_seen(t0))²/σ_seen²(t0),
+    /// ```
+    ///
+    /// k scaling the profile so that its curvature at the free fit gives the free
+    /// fit's own σ_t0 (the autocorrelated residuals' sandwich variance, module docs),
+    /// t_seen = t_φ + the mean of t0 − t_φ and σ_seen² its variance
+    /// ([`HaltSighting::gap`]), both for the Δ = (E_v/A_e)^{1/n} of the law at that t0.
+    /// Where the energies fix t0 well, Q is two parabolas and this is the
+    /// covariance-weighted mean of two Gaussian measurements. Where they barely fix it
+    /// (a free t0 tens of ms after the last sample, as a codec's shrunken final swings
+    /// give), n is the law's at the combined t0, where a straight line through the
+    /// free fit would carry it over the curve's whole span, and Δ is the combined
+    /// law's, so the sighting does not follow the fit it checks.
+    ///
+    /// n and A_e are the held fit's at the minimum, their variances its own plus
+    /// (∂n/∂t0)² var t0 (the law of total variance), var t0 = 1/(1/var_S + 1/σ_seen²)
+    /// with var_S = 2k/S″ there. Not combined, and the free fit returned, when the
+    /// sighting at the free fit's law and the free t0 differ by more than
+    /// [`SIGHTING_DISAGREEMENT`] standard deviations of their difference: one of them
+    /// is wrong (an encoder holding a picture past the halt, or a last motion too
+    /// small to see), and which is not known.
+    fn fit(&self, t: &[f64], energy: &[f64]) -> Result<PowerLawFit, FitError> {
+        let free = fit_with_limit(t, energy, HaltTime::Free, MAX_ITERATIONS)?;
+        let se_t0_free = free.se_t0.unwrap_or(f64::NAN);
+        let t_last = t.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let ssr = |fit: &PowerLawFit| fit.residual_rms.powi(2) * fit.points as f64;
+        let held = |t0: f64| fit_with_limit(t, energy, HaltTime::Fixed(t0), MAX_ITERATIONS).ok();
+        // The sighting at the free fit's law: reported when the two are not combined.
+        let (mean, var) = self.gap(self.unseen(free.a_e, free.n), free.n);
+        let mut used = SightingUse {
+            t0_seen: self.t_phi + mean,
+            se_t0_seen: var.sqrt(),
+            unseen_s: self.unseen(free.a_e, free.n),
+            t0_fitted: free.t0,
+            se_t0_fitted: se_t0_free,
+            combined: false,
+        };
+        let unchanged = |used: SightingUse| {
+            Ok(PowerLawFit {
+                halt_sighting: Some(used),
+                ..free.clone()
+            })
+        };
+        // Two measurements more than SIGHTING_DISAGREEMENT standard deviations of their
+        // difference apart are not combined (the sighting at the free fit's law, as
+        // reported, and the free fit's σ_t0).
+        if (used.t0_seen - free.t0).abs()
+            > SIGHTING_DISAGREEMENT * se_t0_free.hypot(used.se_t0_seen)
+        {
+            return unchanged(used);
+        }
+        // k: the profile's mean rise one σ_t0 either side of the free t0 (the later
+        // side alone where the earlier reaches the last sample), so that the profile's
+        // curvature there gives the free fit's σ_t0.
+        let rise = |t0: f64| held(t0).map(|f| ssr(&f) - ssr(&free));
+        let k = match (
+            rise(free.t0 + se_t0_free),
+            (free.t0 - se_t0_free > t_last)
+                .then(|| rise(free.t0 - se_t0_free))
+                .flatten(),
+        ) {
+            (Some(later), Some(earlier)) => 0.5 * (later + earlier),
+            (Some(later), None) => later,
+            _ => f64::NAN,
+        };
+        if !(k.is_finite() && k > 0.0) {
+            return unchanged(used);
+        }
+        let q = |t0: f64| -> Option<(f64, PowerLawFit, f64, f64)> {
+            let fit = held(t0)?;
+            let (mean, var) = self.gap(self.unseen(fit.a_e, fit.n), fit.n);
+            let seen = self.t_phi + mean;
+            let value = (ssr(&fit) - ssr(&free)) / k + (t0 - seen).powi(2) / var;
+            value.is_finite().then_some((value, fit, seen, var))
+        };
+        // The search spans both measurements and four standard deviations beyond.
+        let reach = 4.0 * se_t0_free.hypot(used.se_t0_seen);
+        let lowest = t_last + LEAST_UNSEEN_FRAMES * self.frame_s;
+        let low = (free.t0.min(used.t0_seen) - reach).max(lowest);
+        let high = free.t0.max(used.t0_seen) + reach;
+        let Some(t0) = minimise(|x| q(x).map_or(f64::INFINITY, |v| v.0), low, high) else {
+            return unchanged(used);
+        };
+        let Some((_, fit, seen, var_seen)) = q(t0) else {
+            return unchanged(used);
+        };
+        let unseen_s = self.unseen(fit.a_e, fit.n);
+        // The profile's curvature and the law's slope in t0 at the minimum, by central
+        // differences a tenth of the free σ_t0 (or of the room left) apart.
+        let h = (0.1 * se_t0_free).min(0.5 * (t0 - t_last));
+        let (Some(before), Some(after)) = (held(t0 - h), held(t0 + h)) else {
+            return unchanged(used);
+        };
+        let curvature = (ssr(&after) - 2.0 * ssr(&fit) + ssr(&before)) / (h * h);
+        let var_profile = if curvature > 0.0 {
+            2.0 * k / curvature
+        } else {
+            f64::INFINITY
+        };
+        let var_t0 = 1.0 / (1.0 / var_profile + 1.0 / var_seen);
+        let slope_n = (after.n - before.n) / (2.0 * h);
+        let slope_a = (after.a_e - before.a_e) / (2.0 * h);
+        let se_n = (fit.se_n.powi(2) + slope_n.powi(2) * var_t0).sqrt();
+        let se_a_e = (fit.se_a_e.powi(2) + slope_a.powi(2) * var_t0).sqrt();
+        let se_t0 = var_t0.sqrt();
+        // The free fit's quantile: its degrees of freedom and bandwidth.
+        let quantile = (free.ci95_n.1 - free.n) / free.se_n;
+        let ci = |value: f64, se: f64| (value - quantile * se, value + quantile * se);
+        used = SightingUse {
+            t0_seen: seen,
+            se_t0_seen: var_seen.sqrt(),
+            unseen_s,
+            combined: true,
+            ..used
+        };
+        Ok(PowerLawFit {
+            a_e: fit.a_e,
+            n: fit.n,
+            t0,
+            se_a_e,
+            se_n,
+            se_t0: Some(se_t0),
+            ci95_a_e: ci(fit.a_e, se_a_e),
+            ci95_n: ci(fit.n, se_n),
+            ci95_t0: Some(ci(t0, se_t0)),
+            halt_sighting: Some(used),
+            r_squared: fit.r_squared,
+            residual_rms: fit.residual_rms,
+            ..free
+        })
+    }
+
+    /// Δ = (E_v/A_e)^{1/n}, the time before t0 over which the law E = A_e (t0 − t)^n
+    /// lies below the visible energy E_v [s]; 0 without one.
+    fn unseen(&self, a_e: f64, n: f64) -> f64 {
+        if self.visible_energy > 0.0 && self.visible_energy.is_finite() && n > 0.0 && a_e > 0.0 {
             (self.visible_energy / a_e).powf(1.0 / n)
         } else {
             0.0
-        };
-        let (mean, var_seen) = self.gap(unseen_s, n);
-        let t0_seen = self.t_phi + mean;
-        let total = cov[(2, 2)] + var_seen;
-        let innovation = t0_seen - t0;
-        let mut used = SightingUse {
-            t0_seen,
-            se_t0_seen: var_seen.sqrt(),
-            unseen_s,
-            t0_fitted: t0,
-            se_t0_fitted: cov[(2, 2)].sqrt(),
-            combined: false,
-        };
-        let gain: DVector<f64> = cov.column(2) / total;
-        let combined_t0 = t0 + gain[2] * innovation;
-        if !(innovation.abs() <= SIGHTING_DISAGREEMENT * total.sqrt() && combined_t0 > t_last) {
-            return (used, estimate);
         }
-        let row = cov.row(2).into_owned();
-        *cov -= &gain * row;
-        used.combined = true;
-        (
-            used,
-            [
-                a_e + gain[0] * innovation,
-                n + gain[1] * innovation,
-                combined_t0,
-            ],
-        )
     }
+}
+
+/// Grid points over which [`minimise`] looks for the lowest before refining.
+const SEARCH_GRID: usize = 24;
+/// Golden-section steps of [`minimise`]'s refinement: the bracket shrinks by
+/// 0.618^30 ≈ 5e-7 of its two grid steps.
+const GOLDEN_STEPS: usize = 30;
+
+/// The x in [low, high] where `f` is lowest: the lowest of [`SEARCH_GRID`] evenly
+/// spaced points, refined by golden-section search between its neighbours. `None`
+/// when `f` is infinite at every grid point.
+fn minimise(f: impl Fn(f64) -> f64, low: f64, high: f64) -> Option<f64> {
+    let step = (high - low) / (SEARCH_GRID - 1) as f64;
+    let grid: Vec<f64> = (0..SEARCH_GRID).map(|i| low + step * i as f64).collect();
+    let values: Vec<f64> = grid.iter().map(|&x| f(x)).collect();
+    let best = (0..SEARCH_GRID)
+        .filter(|&i| values[i].is_finite())
+        .min_by(|&i, &j| values[i].total_cmp(&values[j]))?;
+    let (mut a, mut b) = (
+        grid[best.saturating_sub(1)],
+        grid[(best + 1).min(SEARCH_GRID - 1)],
+    );
+    let ratio = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut c, mut d) = (b - ratio * (b - a), a + ratio * (b - a));
+    let (mut fc, mut fd) = (f(c), f(d));
+    for _ in 0..GOLDEN_STEPS {
+        if fc < fd {
+            (b, d, fd) = (d, c, fc);
+            c = b - ratio * (b - a);
+            fc = f(c);
+        } else {
+            (a, c, fc) = (c, d, fd);
+            d = a + ratio * (b - a);
+            fd = f(d);
+        }
+    }
+    let x = 0.5 * (a + b);
+    Some(if f(x) <= values[best] { x } else { grid[best] })
 }
 
 /// Largest lag-1 autocorrelation used for the bandwidth: ρ → 1 would make it
@@ -1560,6 +1688,54 @@ mod tests {
             assert!(t0_covered >= 180, "n = {n}: t0 covered {t0_covered}/200");
             assert!(n_covered >= 180, "n = {n}: n covered {n_covered}/200");
         }
+    }
+
+    /// A sighting far sharper than the energies' own t0 fixes t0, and the law is then
+    /// the one fitted with t0 held there: the limit σ_seen → 0 of the profile
+    /// combination. The energies end 0.1 s before the halt and carry 3 % noise, so
+    /// their free t0 is uncertain by 16 ms and their n (0.560) differs from the held
+    /// fit's (0.599, the truth 0.6) by four standard errors: the sighting matters.
+    /// The variance of n is the held fit's, plus the little that the sighting's σ
+    /// leaves.
+    #[test]
+    fn a_sharp_sighting_gives_the_law_with_t0_held_at_it() {
+        let (a_e, n, t0) = (0.0063, 0.6, 0.0);
+        let frame_s = 1e-4;
+        let t: Vec<f64> = (0..60).map(|k| -0.5 + 0.4 * k as f64 / 59.0).collect();
+        let mut rng = SplitMix64::new(31);
+        let e: Vec<f64> = t
+            .iter()
+            .map(|&ti| a_e * (t0 - ti).powf(n) * (1.0 + 0.03 * rng.gaussian()))
+            .collect();
+        let free = fit_power_law(&t, &e, HaltTime::Free).expect("free fit");
+        let se_free = free.se_t0.expect("free t0");
+        assert!(se_free > 0.01, "the energies fix t0 to {se_free} s");
+        let sighting = HaltSighting {
+            t_phi: t0 - 0.5 * frame_s,
+            ..visible_to_the_end(frame_s)
+        };
+        let sighted = fit_power_law(&t, &e, HaltTime::Sighted(sighting)).expect("sighted");
+        let used = sighted.halt_sighting.expect("sighting reported");
+        assert!(used.combined);
+        let se_t0 = sighted.se_t0.expect("t0 fitted");
+        assert!((sighted.t0 - t0).abs() < 2.0 * frame_s, "t0 {}", sighted.t0);
+        assert!(se_t0 < 1.1 * used.se_t0_seen, "se t0 {se_t0}");
+        let held = fit_power_law(&t, &e, HaltTime::Fixed(sighted.t0)).expect("held fit");
+        assert!(
+            (sighted.n - held.n).abs() < 1e-6 && sighted.se_n >= held.se_n,
+            "n {} ± {} against the held fit's {} ± {}",
+            sighted.n,
+            sighted.se_n,
+            held.n,
+            held.se_n
+        );
+        assert!(sighted.se_n < 1.05 * held.se_n, "se n {}", sighted.se_n);
+        assert!(
+            (free.n - held.n).abs() > 3.0 * held.se_n,
+            "the free fit's n {} already agrees with the held fit's {}",
+            free.n,
+            held.n
+        );
     }
 
     /// A sighting far from the fitted halt (an encoder holding the picture 40 frames

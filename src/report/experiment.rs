@@ -362,7 +362,8 @@ fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
     );
     if s.combined {
         format!(
-            "{seen}. Combined: t0 = {:+.2} ms, n moved with it.",
+            "{seen}. Combined: t0 = {:+.2} ms, and n and A_e those of the law fitted with t0 \
+             held there.",
             1e3 * t0
         )
     } else {
