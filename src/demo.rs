@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use crate::model::params::Preset;
 use crate::render::{
-    DEFAULT_CRF, Plate, PostFlatSpin, PowerLaw, RenderError, RenderSpec, Renderer, Timing,
+    DEFAULT_ENCODING, Plate, PostFlatSpin, PowerLaw, RenderError, RenderSpec, Renderer, Timing,
     power_law_motion, write_clip,
 };
 use crate::report::html::{page, table, video_figure};
@@ -102,7 +102,7 @@ pub fn render_demo_footage(root: &Path, clips: &[DemoClip]) -> Result<Vec<PathBu
             let motion =
                 power_law_motion(&params, &PowerLaw::thesis(clip.true_n), &timing, post_flat)?;
             let renderer = Renderer::new(&spec, &motion)?;
-            Ok(write_clip(&renderer, &root.join(&clip.relative), DEFAULT_CRF)?.clip)
+            Ok(write_clip(&renderer, &root.join(&clip.relative), DEFAULT_ENCODING)?.clip)
         })
         .collect()
 }

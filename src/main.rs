@@ -18,8 +18,8 @@ use eulerdisk::model::simulate::{
 use eulerdisk::model::tuning::tune_eta;
 use eulerdisk::overlay::{OverlaySpec, write_model_overlay};
 use eulerdisk::render::{
-    CaptureJitter, DEFAULT_CRF, Effects, HdrTransfer, Nutation, Plate, PostFlatSpin, PowerLaw,
-    RenderSpec, Renderer, SampleStorage, Scenery, SlowedSection, Timing, add_nutation,
+    CaptureJitter, ClipEncoding, DEFAULT_CRF, Effects, HdrTransfer, Nutation, Plate, PostFlatSpin,
+    PowerLaw, RenderSpec, Renderer, SampleStorage, Scenery, SlowedSection, Timing, add_nutation,
     power_law_motion, trajectory_motion, write_clip,
 };
 use eulerdisk::report::OutputLock;
@@ -485,6 +485,14 @@ struct RenderArgs {
     /// the same options and crf always give the same bytes.
     #[arg(long, default_value_t = DEFAULT_CRF, value_parser = clap::value_parser!(u8).range(0..=51))]
     crf: u8,
+    /// Most frames from one I picture to the next in an MP4 (libx264's keyint;
+    /// default 250). Phones and the open footage key every 16–240 frames.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    keyint: Option<u32>,
+    /// Most B pictures in a row in an MP4 (libx264's bframes; default 3). 0 codes I
+    /// and P pictures only, as a phone's hardware encoder often does.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=16))]
+    bframes: Option<u32>,
     /// Disk parameters.
     #[arg(long, value_enum, default_value = "euler-disk")]
     preset: Preset,
@@ -1013,7 +1021,12 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         spec.height,
         args.fps
     );
-    let written = write_clip(&renderer, &args.out, args.crf)?;
+    let encoding = ClipEncoding {
+        crf: args.crf,
+        keyint: args.keyint,
+        bframes: args.bframes,
+    };
+    let written = write_clip(&renderer, &args.out, encoding)?;
     let truth = renderer.truth();
     println!(
         "halt at clip time {:.4} s, t_β = {:.4} s after it, δ = {:.4e} m/px{}",

@@ -76,7 +76,7 @@ fn closed_loop_experiment(dir: &Path, setup: &Setup) -> (Experiment, GroundTruth
     };
     let renderer = Renderer::new(&render, &motion).expect("renderer");
     let clip = dir.join("contour.mp4");
-    write_clip(&renderer, &clip, eulerdisk::render::DEFAULT_CRF).expect("write clip");
+    write_clip(&renderer, &clip, eulerdisk::render::DEFAULT_ENCODING).expect("write clip");
     let config = ExperimentConfig {
         material: Some("stainless steel".into()),
         two_view: Some(setup.two_view),

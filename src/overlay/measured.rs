@@ -96,6 +96,8 @@ impl Default for OverlaySpec {
 /// libswscale's only for a frame given as RGB.
 pub const OVERLAY_H264: H264Settings = H264Settings {
     rate: RateControl::Qp(20),
+    keyint: None,
+    bframes: None,
     preset: "ultrafast",
     chroma: ChromaFilter::FastBilinear,
     storage: SampleStorage {
@@ -965,7 +967,7 @@ mod tests {
     /// 8-bit samples (JPEG style): not the overlay video's coding.
     fn full_range_clip(dir: &Path) -> std::path::PathBuf {
         use crate::render::{
-            DEFAULT_CRF, Plate, RenderSpec, Renderer, SampleStorage, test_motion, write_clip,
+            DEFAULT_ENCODING, Plate, RenderSpec, Renderer, SampleStorage, test_motion, write_clip,
         };
         let motion = test_motion(480.0, 0.5, 0.15);
         let mut spec = RenderSpec::thesis(Plate::Dark, false);
@@ -977,6 +979,6 @@ mod tests {
         };
         let renderer = Renderer::new(&spec, &motion).unwrap();
         let path = dir.join("full-range.mp4");
-        write_clip(&renderer, &path, DEFAULT_CRF).unwrap().clip
+        write_clip(&renderer, &path, DEFAULT_ENCODING).unwrap().clip
     }
 }

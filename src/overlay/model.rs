@@ -557,7 +557,9 @@ mod tests {
     }
 
     fn cast_through_a_close_pinhole(elevation_deg: f64) {
-        use crate::render::{DEFAULT_CRF, Plate, RenderSpec, Renderer, test_motion, write_clip};
+        use crate::render::{
+            DEFAULT_ENCODING, Plate, RenderSpec, Renderer, test_motion, write_clip,
+        };
         let dir = tempfile::tempdir().unwrap();
         let motion = test_motion(480.0, 0.5, 0.15);
         let mut spec = RenderSpec::thesis(Plate::Dark, false);
@@ -565,7 +567,8 @@ mod tests {
         spec.camera_distance_m = Some(0.25);
         spec.elevation_deg = elevation_deg;
         let renderer = Renderer::new(&spec, &motion).unwrap();
-        let written = write_clip(&renderer, &dir.path().join("close.mp4"), DEFAULT_CRF).unwrap();
+        let written =
+            write_clip(&renderer, &dir.path().join("close.mp4"), DEFAULT_ENCODING).unwrap();
         let e = analyse_clip(&written.clip, &fps_480(), &|_, _| {}).unwrap();
         let pose = calibrated_pose(&e);
         let distance = pose.distance_m.expect("a close camera is a pinhole");

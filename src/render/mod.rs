@@ -160,8 +160,8 @@ use scene::{
 };
 use std::f64::consts::PI;
 pub use write::{
-    ChromaFilter, ClipFormat, DEFAULT_CRF, H264Settings, H264Writer, HdrTransfer, RateControl,
-    SampleStorage, truth_path, write_clip,
+    ChromaFilter, ClipEncoding, ClipFormat, DEFAULT_CRF, DEFAULT_ENCODING, H264Settings,
+    H264Writer, HdrTransfer, RateControl, SampleStorage, truth_path, write_clip,
 };
 
 /// Errors of the render stage; file errors name the file.
@@ -2051,7 +2051,7 @@ mod tests {
         assert_eq!(m.states.len(), 19);
         let dir = tempfile::tempdir().expect("tempdir");
         let folder = dir.path().join("clip");
-        let written = write_clip(&r, &folder, DEFAULT_CRF).expect("write");
+        let written = write_clip(&r, &folder, DEFAULT_ENCODING).expect("write");
         let files = crate::footage::frame_files(&folder).expect("frames");
         assert_eq!(files.len(), 17);
         // Issue 13.7: the folder gets the umask's permissions, as one made by hand.
@@ -2076,7 +2076,7 @@ mod tests {
         }
         // The same clip as MP4: OpenCV counts the written frames.
         let mp4 = dir.path().join("clip.mp4");
-        write_clip(&r, &mp4, DEFAULT_CRF).expect("mp4");
+        write_clip(&r, &mp4, DEFAULT_ENCODING).expect("mp4");
         assert_eq!(crate::footage::probe(&mp4).expect("probe").frame_count, 17);
     }
 
@@ -2094,7 +2094,7 @@ mod tests {
         let dir = tempfile::tempdir().expect("tempdir");
         let encode = |name: &str, crf: u8| {
             let path = dir.path().join(name);
-            write_clip(&r, &path, crf).expect("mp4");
+            write_clip(&r, &path, ClipEncoding::crf(crf)).expect("mp4");
             path
         };
         let first = std::fs::read(encode("a.mp4", DEFAULT_CRF)).expect("read");
@@ -2123,6 +2123,46 @@ mod tests {
         assert!(
             fine < default && default < coarse,
             "mean |error| at crf 8, 23, 40: {fine:.3}, {default:.3}, {coarse:.3}"
+        );
+    }
+
+    /// The encoding's picture structure is the stream's: I and P pictures only with
+    /// `bframes` 0 and an I picture at least every `keyint` frames, where libx264's
+    /// defaults code most of a moving clip as B pictures and key it once.
+    #[test]
+    fn the_encoding_sets_the_picture_structure() {
+        let m = test_motion(240.0, 0.4, 0.1);
+        let mut spec = small_spec(Plate::Dark, false);
+        (spec.width, spec.height) = (160, 96);
+        spec.effects.noise_sigma = 1.0;
+        let r = Renderer::new(&spec, &m).expect("renderer");
+        let dir = tempfile::tempdir().expect("tempdir");
+        let types = |name: &str, encoding: ClipEncoding| {
+            let path = dir.path().join(name);
+            write_clip(&r, &path, encoding).expect("mp4");
+            let mut source = crate::footage::FrameSource::open(&path).expect("open");
+            let mut types = String::new();
+            while let Some(frame) = source.next_frame().expect("decode") {
+                types.push(frame.picture_type.unwrap_or('?'));
+            }
+            types
+        };
+        let phone = types(
+            "phone.mp4",
+            ClipEncoding {
+                keyint: Some(8),
+                bframes: Some(0),
+                ..DEFAULT_ENCODING
+            },
+        );
+        assert_eq!(phone.len(), r.frame_count());
+        assert!(!phone.contains('B') && !phone.contains('?'), "{phone}");
+        let longest_run = phone.split('I').map(str::len).max().unwrap_or(0);
+        assert!(longest_run < 8, "{phone}");
+        let default = types("default.mp4", DEFAULT_ENCODING);
+        assert!(
+            default.matches('B').count() > default.len() / 2 && default.matches('I').count() == 1,
+            "{default}"
         );
     }
 

@@ -101,11 +101,51 @@ const X264_THREADS: usize = 1;
 /// 0 is lossless in luma, 51 the worst).
 pub const DEFAULT_CRF: u8 = 23;
 
+/// How `render` encodes an MP4 clip: libx264's quality and its pictures' structure.
+///
+/// libx264's defaults (an I picture at most every 250 frames, up to 3 B pictures in
+/// a row, placed adaptively) code three quarters of a slow-motion clip as B
+/// pictures, predicted from both sides, and keep one I picture per half second at
+/// 480 fps. Phones and the independent footage code differently: the open clips
+/// hold an I picture every 16–48 frames and mostly P pictures (o05: 7 I, 77 P and
+/// 15 B in its first 100 frames), and a phone's hardware encoder often none but I
+/// and P. The two lose a moving edge differently (BENCHMARKS.md, "The encoder's
+/// picture structure"), so a render can draw either.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ClipEncoding {
+    /// Constant-rate factor (0 lossless in luma, 23 libx264's default, 51 the worst).
+    pub crf: u8,
+    /// Most frames from one I picture to the next (libx264's `keyint`); `None` its
+    /// default, 250.
+    pub keyint: Option<u32>,
+    /// Most B pictures in a row (libx264's `bframes`); 0 codes I and P pictures only,
+    /// `None` its default, 3.
+    pub bframes: Option<u32>,
+}
+
+impl ClipEncoding {
+    /// libx264's picture structure at constant-rate factor `crf`.
+    pub const fn crf(crf: u8) -> Self {
+        Self {
+            crf,
+            keyint: None,
+            bframes: None,
+        }
+    }
+}
+
+/// `render`'s encoding by default: [`DEFAULT_CRF`] and libx264's picture structure.
+pub const DEFAULT_ENCODING: ClipEncoding = ClipEncoding::crf(DEFAULT_CRF);
+
 /// Renders every frame of `renderer` and writes the clip and its truth to `path`
-/// (MP4 if it ends in `.mp4`, H.264 at constant quality `crf`, else a PNG folder,
-/// where `crf` is unused). An existing clip at `path` is replaced only after the new
-/// one is complete. The same renderer and `crf` always give the same bytes.
-pub fn write_clip(renderer: &Renderer, path: &Path, crf: u8) -> Result<WrittenClip, RenderError> {
+/// (MP4 if it ends in `.mp4`, H.264 as `encoding` says, else a PNG folder, where
+/// `encoding` is unused). An existing clip at `path` is replaced only after the new
+/// one is complete. The same renderer and encoding always give the same bytes.
+pub fn write_clip(
+    renderer: &Renderer,
+    path: &Path,
+    encoding: ClipEncoding,
+) -> Result<WrittenClip, RenderError> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -122,7 +162,7 @@ pub fn write_clip(renderer: &Renderer, path: &Path, crf: u8) -> Result<WrittenCl
     let codec = match ClipFormat::for_path(path) {
         ClipFormat::Mp4 => {
             let tmp = dir.join(format!(".{name}.partial-{}.mp4", std::process::id()));
-            let result = write_mp4(renderer, &tmp, crf);
+            let result = write_mp4(renderer, &tmp, encoding);
             match result {
                 Ok(codec) => {
                     std::fs::rename(&tmp, path).map_err(|e| fail(path, e.to_string()))?;
@@ -202,11 +242,14 @@ fn write_pngs(renderer: &Renderer, dir: &Path) -> Result<(), (PathBuf, String)> 
 }
 
 /// Encodes the frames as H.264 through [`H264Writer`] (preset `medium`, constant
-/// quality `crf`), rendering [`BATCH`] frames at a time in parallel.
-fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String> {
+/// quality and picture structure from `encoding`), rendering [`BATCH`] frames at a
+/// time in parallel.
+fn write_mp4(renderer: &Renderer, path: &Path, encoding: ClipEncoding) -> Result<String, String> {
     let truth = renderer.truth();
     let settings = H264Settings {
-        rate: RateControl::Crf(crf),
+        rate: RateControl::Crf(encoding.crf),
+        keyint: encoding.keyint,
+        bframes: encoding.bframes,
         preset: "medium",
         chroma: ChromaFilter::Bicubic,
         storage: truth.storage,
@@ -243,6 +286,10 @@ fn write_mp4(renderer: &Renderer, path: &Path, crf: u8) -> Result<String, String
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct H264Settings {
     pub rate: RateControl,
+    /// Most frames from one I picture to the next; `None` libx264's default.
+    pub keyint: Option<u32>,
+    /// Most B pictures in a row; `None` libx264's default.
+    pub bframes: Option<u32>,
     /// libx264 preset (`ultrafast` … `veryslow`): speed against size at equal quality.
     pub preset: &'static str,
     /// How colour is subsampled to 4:2:0 (libswscale's filter).
@@ -412,7 +459,14 @@ impl H264Writer {
             RateControl::Qp(qp) => options.set("qp", &qp.to_string()),
         }
         options.set("threads", &X264_THREADS.to_string());
-        options.set("x264-params", "mbtree=0");
+        let mut params = String::from("mbtree=0");
+        if let Some(keyint) = settings.keyint {
+            params += &format!(":keyint={keyint}");
+        }
+        if let Some(bframes) = settings.bframes {
+            params += &format!(":bframes={bframes}");
+        }
+        options.set("x264-params", &params);
         let encoder = encoder.open_with(options).map_err(av("open libx264"))?;
         let mut stream = output
             .add_stream(codec)
