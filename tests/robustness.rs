@@ -225,9 +225,9 @@ fn draw_scenes_of(seed: u64) -> Vec<SceneSpec> {
 const STRUCTURE_STREAM: u64 = 0x4950_5f47_4f50;
 
 /// The encoder's picture structure, half the scenes each way: libx264's defaults
-/// (three quarters of the pictures B, one I picture in the clip), or I and P pictures
-/// only with an I picture every 16–240 frames (log-uniform), as a phone's hardware
-/// encoder writes them (`render::ClipEncoding`).
+/// (three quarters of the pictures B, an I picture at most every 250 frames), or I
+/// and P pictures only with an I picture every 16–240 frames (log-uniform), as a
+/// phone's hardware encoder writes them (`render::ClipEncoding`).
 fn picture_structure(rng: &mut SplitMix64) -> ClipEncoding {
     let phone = rng.uniform() < 0.5;
     let keyint = rng.range(16f64.ln(), 240f64.ln()).exp().round() as u32;
