@@ -2080,17 +2080,23 @@ mod tests {
         assert_eq!(crate::footage::probe(&mp4).expect("probe").frame_count, 17);
     }
 
+    /// A 160 × 96 clip of a dark plate with sensor noise, 0.5 s at 240 fps, halting
+    /// at 0.4 s: small enough to encode several times in a test.
+    fn small_noisy_renderer() -> Renderer {
+        let m = test_motion(240.0, 0.4, 0.1);
+        let mut spec = small_spec(Plate::Dark, false);
+        (spec.width, spec.height) = (160, 96);
+        spec.effects.noise_sigma = 1.0;
+        Renderer::new(&spec, &m).expect("renderer")
+    }
+
     /// The same renderer and crf give the same MP4 bytes, also for the later of
     /// several encodes in one process (x264's macroblock tree, on by default, read
     /// uninitialised heap memory and changed them; see `write::write_mp4`), and a
     /// lower crf decodes closer to the rendered frames.
     #[test]
     fn mp4_bytes_repeat_and_crf_sets_the_quality() {
-        let m = test_motion(240.0, 0.4, 0.1);
-        let mut spec = small_spec(Plate::Dark, false);
-        (spec.width, spec.height) = (160, 96);
-        spec.effects.noise_sigma = 1.0;
-        let r = Renderer::new(&spec, &m).expect("renderer");
+        let r = small_noisy_renderer();
         let dir = tempfile::tempdir().expect("tempdir");
         let encode = |name: &str, crf: u8| {
             let path = dir.path().join(name);
@@ -2131,11 +2137,7 @@ mod tests {
     /// defaults code most of a moving clip as B pictures and key it once.
     #[test]
     fn the_encoding_sets_the_picture_structure() {
-        let m = test_motion(240.0, 0.4, 0.1);
-        let mut spec = small_spec(Plate::Dark, false);
-        (spec.width, spec.height) = (160, 96);
-        spec.effects.noise_sigma = 1.0;
-        let r = Renderer::new(&spec, &m).expect("renderer");
+        let r = small_noisy_renderer();
         let dir = tempfile::tempdir().expect("tempdir");
         let types = |name: &str, encoding: ClipEncoding| {
             let path = dir.path().join(name);
