@@ -857,7 +857,12 @@ impl HaltSighting {
         let se_a_e = (fit.se_a_e.powi(2) + slope_a.powi(2) * var_t0).sqrt();
         let se_t0 = var_t0.sqrt();
         // The free fit's quantile: its degrees of freedom and bandwidth.
-        let quantile = (free.ci95_n.1 - free.n) / free.se_n;
+        let quantile = StudentsT::new(0.0, 1.0, free.dof as f64)
+            .map_err(|_| {
+                FitError::degenerate("no Student t distribution for these degrees of freedom")
+            })?
+            .inverse_cdf(0.975)
+            + fixed_b_excess(free.bandwidth / free.points as f64);
         let ci = |value: f64, se: f64| (value - quantile * se, value + quantile * se);
         used = SightingUse {
             t0_seen: seen,
