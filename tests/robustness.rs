@@ -6,10 +6,10 @@
 //! stationary rolling, any phase of the precession at the halt, read and shot noise,
 //! blur, exposure smear, H.264 at crf 18–28 with libx264's picture structure or a
 //! phone's (I and P pictures only, keyed every 16–240 frames), side views and
-//! two-view layouts — each
-//! rendered with its ground truth, encoded, and analysed **with no config beyond the
-//! frame rate**. Every scene must be measured, and at accuracies that follow from its
-//! resolution and the targets of issue 12 §5 (see [`Tolerances`]).
+//! two-view layouts — each rendered with its ground truth, encoded, and analysed
+//! **with no config beyond the frame rate**. Every scene must be measured, and at
+//! accuracies that follow from its resolution and the targets of issue 12 §5 (see
+//! [`Tolerances`]).
 //!
 //! The test prints one row per scene (`cargo test --release --test robustness --
 //! --ignored --nocapture`) and fails listing every scene that misses a target, with the
