@@ -492,6 +492,17 @@ const PINNED_OFFSET: f64 = 1e-9;
 /// Grid of log10((t0 − t_last)/T) tried for the starting value of a free t0: 1e-7 … 10.
 const LOG10_OFFSET_GRID: (f64, f64, usize) = (-7.0, 1.0, 33);
 
+/// The 95 % intervals' quantile: Student's t at `dof` degrees of freedom plus the
+/// fixed-b correction for a Bartlett `bandwidth` over `points` samples (module docs).
+fn interval_quantile(dof: usize, bandwidth: f64, points: usize) -> Result<f64, FitError> {
+    Ok(StudentsT::new(0.0, 1.0, dof as f64)
+        .map_err(|_| {
+            FitError::degenerate("no Student t distribution for these degrees of freedom")
+        })?
+        .inverse_cdf(0.975)
+        + fixed_b_excess(bandwidth / points as f64))
+}
+
 fn fit_with_limit(
     t: &[f64],
     energy: &[f64],
@@ -645,12 +656,7 @@ fn fit_with_limit(
             "the parameter covariance is not finite (the parameters are not separately determined)",
         ));
     }
-    let quantile = StudentsT::new(0.0, 1.0, dof as f64)
-        .map_err(|_| {
-            FitError::degenerate("no Student t distribution for these degrees of freedom")
-        })?
-        .inverse_cdf(0.975)
-        + fixed_b_excess(bandwidth / points as f64);
+    let quantile = interval_quantile(dof, bandwidth, points)?;
     let ci = |value: f64, se: f64| (value - quantile * se, value + quantile * se);
     let ssr = ssr_scaled * e_scale * e_scale;
     Ok(PowerLawFit {
@@ -779,11 +785,11 @@ impl HaltSighting {
         let ssr = |fit: &PowerLawFit| fit.residual_rms.powi(2) * fit.points as f64;
         let held = |t0: f64| fit_with_limit(t, energy, HaltTime::Fixed(t0), MAX_ITERATIONS).ok();
         // The sighting at the free fit's law: reported when the two are not combined.
-        let (mean, var) = self.gap(self.unseen(free.a_e, free.n), free.n);
+        let (t0_seen, var, unseen_s) = self.seen_at(free.a_e, free.n);
         let mut used = SightingUse {
-            t0_seen: self.t_phi + mean,
+            t0_seen,
             se_t0_seen: var.sqrt(),
-            unseen_s: self.unseen(free.a_e, free.n),
+            unseen_s,
             t0_fitted: free.t0,
             se_t0_fitted: se_t0_free,
             combined: false,
@@ -819,12 +825,11 @@ impl HaltSighting {
         if !(k.is_finite() && k > 0.0) {
             return unchanged(used);
         }
-        let q = |t0: f64| -> Option<(f64, PowerLawFit, f64, f64)> {
+        let q = |t0: f64| -> Option<(f64, PowerLawFit, (f64, f64, f64))> {
             let fit = held(t0)?;
-            let (mean, var) = self.gap(self.unseen(fit.a_e, fit.n), fit.n);
-            let seen = self.t_phi + mean;
-            let value = (ssr(&fit) - ssr(&free)) / k + (t0 - seen).powi(2) / var;
-            value.is_finite().then_some((value, fit, seen, var))
+            let seen = self.seen_at(fit.a_e, fit.n);
+            let value = (ssr(&fit) - ssr(&free)) / k + (t0 - seen.0).powi(2) / seen.1;
+            value.is_finite().then_some((value, fit, seen))
         };
         // The search spans both measurements and four standard deviations beyond.
         let reach = 4.0 * se_t0_free.hypot(used.se_t0_seen);
@@ -834,10 +839,9 @@ impl HaltSighting {
         let Some(t0) = minimise(|x| q(x).map_or(f64::INFINITY, |v| v.0), low, high) else {
             return unchanged(used);
         };
-        let Some((_, fit, seen, var_seen)) = q(t0) else {
+        let Some((_, fit, (seen, var_seen, unseen_s))) = q(t0) else {
             return unchanged(used);
         };
-        let unseen_s = self.unseen(fit.a_e, fit.n);
         // The profile's curvature and the law's slope in t0 at the minimum, by central
         // differences a tenth of the free σ_t0 (or of the room left) apart.
         let h = (0.1 * se_t0_free).min(0.5 * (t0 - t_last));
@@ -857,12 +861,7 @@ impl HaltSighting {
         let se_a_e = (fit.se_a_e.powi(2) + slope_a.powi(2) * var_t0).sqrt();
         let se_t0 = var_t0.sqrt();
         // The free fit's quantile: its degrees of freedom and bandwidth.
-        let quantile = StudentsT::new(0.0, 1.0, free.dof as f64)
-            .map_err(|_| {
-                FitError::degenerate("no Student t distribution for these degrees of freedom")
-            })?
-            .inverse_cdf(0.975)
-            + fixed_b_excess(free.bandwidth / free.points as f64);
+        let quantile = interval_quantile(free.dof, free.bandwidth, free.points)?;
         let ci = |value: f64, se: f64| (value - quantile * se, value + quantile * se);
         used = SightingUse {
             t0_seen: seen,
@@ -886,6 +885,14 @@ impl HaltSighting {
             residual_rms: fit.residual_rms,
             ..free
         })
+    }
+
+    /// The sighting for the law E = A_e (t0 − t)^n: t0 as seen (t_φ plus the mean of
+    /// t0 − t_φ), its variance, and Δ ([`Self::gap`], [`Self::unseen`]).
+    fn seen_at(&self, a_e: f64, n: f64) -> (f64, f64, f64) {
+        let unseen_s = self.unseen(a_e, n);
+        let (mean, var) = self.gap(unseen_s, n);
+        (self.t_phi + mean, var, unseen_s)
     }
 
     /// Δ = (E_v/A_e)^{1/n}, the time before t0 over which the law E = A_e (t0 − t)^n
