@@ -16,6 +16,16 @@
 //! that follows them (by more than the noise σ, not necessarily the threshold) are
 //! motion too.
 //!
+//! A still picture is not motion at any height: the rim comes down to the plate once
+//! a turn, so a run of more than [`STILL_READINGS`] readings (more than the final
+//! turns at 480 fps) that stays level is not the rim moving. An encoder may redraw a
+//! still disk in steps and hold each picture for many frames (seed 7's s17 of
+//! `tests/robustness.rs`, I and P pictures, the disk drifting: 31 frames held
+//! 0.33 px above the later rest, at a 0.21 px threshold, from 4 frames after the
+//! halt, the last 10 of them in the rest tail); a reading that begins or ends such a
+//! run ([`in_still_picture`]) is no rise. Shorter holds need more evidence
+//! ([`held`]).
+//!
 //! Motion is one-sided: the rim of a rolling disk is never below its rest on the plate
 //! (z_rim = R sin φ (1 + cos χ) ≥ 0, see the module docs of `signal`), so a reading
 //! below the rest level is measurement noise, however large. On H.264 footage of a
@@ -90,6 +100,10 @@ const COPY_FRACTION: f64 = 1e-3;
 /// beyond the noise, so that motion too small to resolve, read near the threshold,
 /// stays motion.
 pub(crate) const RESOLVED_SIGMAS: f64 = 4.0;
+/// Readings beyond its own that a level run needs to be a still picture
+/// ([`in_still_picture`]): more than the final turns at 480 fps (5–7 frames on the
+/// open footage), and as many as make a rest tail.
+const STILL_READINGS: usize = MIN_REST_FRAMES;
 /// Re-measurements of the rest segment before t_φ is taken as settled.
 const MAX_HALT_ITERATIONS: usize = 8;
 /// Fewest rim heights a rest tail needs to measure its noise.
@@ -103,7 +117,8 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    from 1.4826 × MAD (floored at `noise_floor`); the motion threshold is
 ///    `motion_sigmas` × σ, and at least [`BAND_WIDENING`] × the band of the still
 ///    disk.
-/// 2. The tail must be at rest: no rise in it above the threshold but one short run
+/// 2. The tail must be at rest: no rise in it above the threshold (a reading that
+///    begins or ends a still picture, [`in_still_picture`], is none) but one short run
 ///    (at most [`REFRESH_FRAMES`] new readings, a codec refresh), and no
 ///    oscillation (autocorrelation below −0.45 at some lag and above 0.6 at a
 ///    later one, up to 24 frames, at which the readings do not repeat as the
@@ -116,7 +131,8 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    exactly (a reference picture shown again, [`repeated`]) within
 ///    [`RESOLVED_SIGMAS`] σ of the threshold, or lies inside a picture held level
 ///    for [`HELD_TURN_FRACTION`] of the final turn ([`held`]), is no rise; the
-///    noise is then re-measured over every frame after t_φ, the threshold raised to
+///    noise is then re-measured over every frame after t_φ but those of still
+///    pictures above the threshold, the threshold raised to
 ///    [`BAND_WIDENING`] × the deepest reading below the rest level there (noise: the
 ///    rim is never below its rest) and × the highest reading more than that span
 ///    after t_φ (noise: a flat disk does not rise again), and t_φ found again, until
@@ -159,7 +175,16 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             .map(|&i| (z_rim[i] - level).abs())
             .fold(0.0, f64::max);
     let threshold = (config.motion_sigmas * noise).max(band);
-    let moving = |i: usize, level: f64, threshold: f64| z_rim[i] - level > threshold;
+    // The position of each frame's reading in `samples`.
+    let mut position = vec![usize::MAX; t.len()];
+    for (n, &i) in samples.iter().enumerate() {
+        position[i] = n;
+    }
+    let still =
+        |i: usize, threshold: f64| in_still_picture(&samples, z_rim, position[i], 0.5 * threshold);
+    let risen = |i: usize, level: f64, threshold: f64| z_rim[i] - level > threshold;
+    let moving =
+        |i: usize, level: f64, threshold: f64| risen(i, level, threshold) && !still(i, threshold);
     // After `motion_until` the energy law has the disk flat: no rise there is motion.
     let until = config.motion_until.unwrap_or(f64::INFINITY);
     let motion =
@@ -288,7 +313,16 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     let (mut index, mut span, mut period) = (first_guess, first_span, first_period);
     let (mut level, mut noise, mut threshold) = (level, noise, threshold);
     for _ in 0..MAX_HALT_ITERATIONS {
-        let rest: Vec<usize> = samples.iter().copied().filter(|&i| i > index).collect();
+        // The rest segment's readings, but for still pictures held above the rest
+        // (module docs): they are the codec's, not the noise about the rest, and as a
+        // third of the segment (seed 7's s17) they would raise the noise and the level,
+        // then the threshold, move t_φ earlier and take the final turns into the
+        // segment in turn.
+        let rest: Vec<usize> = samples
+            .iter()
+            .copied()
+            .filter(|&i| i > index && !(risen(i, level, threshold) && still(i, threshold)))
+            .collect();
         (level, noise) = rest_statistics(z_rim, &rest, config.noise_floor);
         let below = BAND_WIDENING * rest.iter().map(|&i| level - z_rim[i]).fold(0.0, f64::max);
         // A frame more than the span that ends the motion after t_φ is rest by the
@@ -297,7 +331,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         let lone = BAND_WIDENING
             * rest
                 .iter()
-                .filter(|&&i| t[i] - t[index] >= span)
+                .filter(|&&i| t[i] - t[index] >= span && !still(i, threshold))
                 .map(|&i| z_rim[i] - level)
                 .fold(0.0, f64::max);
         threshold = (config.motion_sigmas * noise)
@@ -408,14 +442,7 @@ fn held(
 ) -> bool {
     let span = HELD_TURN_FRACTION * period;
     let time = |m: usize| t[samples[m]];
-    let level_over = |a: usize, b: usize| {
-        let (lo, hi) = samples[a..=b]
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &i| {
-                (lo.min(z[i]), hi.max(z[i]))
-            });
-        hi - lo < 0.5 * threshold
-    };
+    let level_over = |a: usize, b: usize| spread(&samples[a..=b], z) < 0.5 * threshold;
     // Some reading of the window repeats an earlier one, in it or among the
     // encoder's references before it.
     let copied = |a: usize, b: usize| (a..=b).any(|m| repeated(samples, z, m, noise, quantum));
@@ -476,6 +503,27 @@ fn turn_period(peaks: &[f64]) -> Option<f64> {
 fn final_turn(peaks: &[f64]) -> Option<f64> {
     let recent = peaks.get(peaks.len().checked_sub(PERIOD_TURNS + 1)?..)?;
     recent.windows(2).map(|w| w[1] - w[0]).reduce(f64::min)
+}
+
+/// Whether the reading at position `n` of `samples` begins or ends a run of
+/// [`STILL_READINGS`] + 1 readings whose spread is below `tolerance`: a still
+/// picture (module docs). Half the motion threshold, as for [`held`]: a run that
+/// long spans more than three quarters of a final turn, over which a moving rim
+/// swings by 0.85 of its rise at least.
+fn in_still_picture(samples: &[usize], z: &[f64], n: usize, tolerance: f64) -> bool {
+    let level = |run: &[usize]| spread(run, z) < tolerance;
+    (n >= STILL_READINGS && level(&samples[n - STILL_READINGS..=n]))
+        || (n + STILL_READINGS < samples.len() && level(&samples[n..=n + STILL_READINGS]))
+}
+
+/// The largest minus the smallest of `z` over the frames `run`.
+fn spread(run: &[usize], z: &[f64]) -> f64 {
+    let (lo, hi) = run
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &i| {
+            (lo.min(z[i]), hi.max(z[i]))
+        });
+    hi - lo
 }
 
 /// The runs of consecutive `indices` (consecutive within the slice) for which

@@ -367,6 +367,32 @@ fn an_excursion_turns_after_the_halt_is_not_motion() {
     assert_eq!(halt.index, last);
 }
 
+/// A still disk whose picture the encoder redraws in steps (seed 7's robustness
+/// scene s17, I and P pictures, the disk drifting: 31 frames held 0.33 px above the
+/// later rest from 4 frames after the halt, at a 0.21 px threshold, and the later
+/// still picture stepping again in the rest tail) is at rest: each picture is held
+/// far longer than a turn and never comes back down within it, as a rolling rim
+/// does. Here two such pictures, 31 frames each, three thresholds high, each reading
+/// distinct (the light's flicker coded over them, as in s17): one from 4 frames
+/// after the halt, one over the rest tail's start. Its last 10 frames in the tail
+/// would refuse the clip for "no rest tail" if readings were measured from the
+/// tail's median alone.
+#[test]
+fn still_pictures_redrawn_in_steps_are_rest() {
+    let (t, z, truth, config, before) = clip_and_halt();
+    let (last, level, threshold) = (before.index, before.rest_level, before.threshold);
+    let tail = t.partition_point(|&x| x < t[t.len() - 1] - config.rest_tail_s);
+    let mut stepped = z.clone();
+    for range in [last + 4..last + 35, tail - 21..tail + 10] {
+        for (k, reading) in stepped[range].iter_mut().enumerate() {
+            *reading = level + threshold * (3.0 + 0.01 * (k % 5) as f64);
+        }
+    }
+    assert!(last + 35 < tail - 21, "two separate pictures");
+    let halt = halt_time(&t, &stepped, &config).expect("halt");
+    assert_halt_within_a_frame(&halt, &truth);
+}
+
 /// The encoder's frame-type cadence after the halt (robustness scene s14: 0.07,
 /// 0.12, 0.07, 0 px, a turn of 4 frames like the last true turns, for 12 frames) is
 /// read as motion on its own; with `motion_until` at the energy law's halt it is not,
