@@ -2090,6 +2090,18 @@ mod tests {
         Renderer::new(&spec, &m).expect("renderer")
     }
 
+    /// The path of `r`'s clip written with `encoding` as `name` in `dir`.
+    fn encoded(
+        r: &Renderer,
+        dir: &std::path::Path,
+        name: &str,
+        encoding: ClipEncoding,
+    ) -> std::path::PathBuf {
+        let path = dir.join(name);
+        write_clip(r, &path, encoding).expect("mp4");
+        path
+    }
+
     /// The same renderer and crf give the same MP4 bytes, also for the later of
     /// several encodes in one process (x264's macroblock tree, on by default, read
     /// uninitialised heap memory and changed them; see `write::write_mp4`), and a
@@ -2098,11 +2110,7 @@ mod tests {
     fn mp4_bytes_repeat_and_crf_sets_the_quality() {
         let r = small_noisy_renderer();
         let dir = tempfile::tempdir().expect("tempdir");
-        let encode = |name: &str, crf: u8| {
-            let path = dir.path().join(name);
-            write_clip(&r, &path, ClipEncoding::crf(crf)).expect("mp4");
-            path
-        };
+        let encode = |name: &str, crf: u8| encoded(&r, dir.path(), name, ClipEncoding::crf(crf));
         let first = std::fs::read(encode("a.mp4", DEFAULT_CRF)).expect("read");
         for k in 0..3 {
             let again = std::fs::read(encode(&format!("b{k}.mp4"), DEFAULT_CRF)).expect("read");
@@ -2140,8 +2148,7 @@ mod tests {
         let r = small_noisy_renderer();
         let dir = tempfile::tempdir().expect("tempdir");
         let types = |name: &str, encoding: ClipEncoding| {
-            let path = dir.path().join(name);
-            write_clip(&r, &path, encoding).expect("mp4");
+            let path = encoded(&r, dir.path(), name, encoding);
             let mut source = crate::footage::FrameSource::open(&path).expect("open");
             let mut types = String::new();
             while let Some(frame) = source.next_frame().expect("decode") {
