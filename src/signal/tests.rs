@@ -322,6 +322,50 @@ fn the_last_rise_at_the_halt_is_the_last_peak() {
     assert!(series.peaks.iter().all(|p| p.index < last));
 }
 
+/// A turn whose peak the codec reads low, between two peaks found at their full
+/// height, is found when it clears the motion threshold but not the prominence test
+/// (robustness scene s17: a turn read at 0.50 px over a 0.04 px trough, 5.2σ, truth
+/// 0.78 px); lower than the threshold, it is lost, and no other peak appears.
+#[test]
+fn a_turn_below_the_prominence_test_between_two_peaks_is_found() {
+    let (t, z, truth, config, halt) = clip_and_halt();
+    let found = |z: &[f64]| {
+        let halt = halt_time(&t, z, &config).expect("halt");
+        find_peaks(&t, z, &halt, &thesis_model(), &config)
+            .expect("peaks")
+            .peaks
+            .iter()
+            .map(|p| p.index)
+            .collect::<Vec<_>>()
+    };
+    let all = found(&z);
+    // The fourth true peak before the halt, its turn from trough to trough.
+    let peaks = truth.peaks_after(halt.t_phi - 0.05);
+    let tp = peaks[peaks.len() - 4];
+    let k = t.partition_point(|&x| x < tp - 0.5 * FRAME);
+    assert!(all.contains(&k), "the turn at frame {k} is a peak: {all:?}");
+    let half = PI / truth.psi_dot(tp);
+    let turn: Vec<usize> = (0..t.len()).filter(|&i| (t[i] - tp).abs() < half).collect();
+    let lowered = |height: f64| {
+        let mut low = z.clone();
+        let scale = height / (z[k] - halt.rest_level);
+        for &i in &turn {
+            low[i] = halt.rest_level + scale * (z[i] - halt.rest_level);
+        }
+        low
+    };
+    let between = 0.5 * (halt.threshold + config.prominence_sigmas * halt.noise);
+    assert!(between > halt.threshold && between < config.prominence_sigmas * halt.noise);
+    assert_eq!(found(&lowered(between)), all, "a turn read low is found");
+    let below = found(&lowered(0.8 * halt.threshold));
+    let mut without = all.clone();
+    without.retain(|&i| i != k);
+    assert_eq!(
+        below, without,
+        "a turn below the threshold is lost, none added"
+    );
+}
+
 /// A lone excursion more than a rest span after the halt (an H.264 refresh frame on
 /// o08 of the open footage, 0.19 px at frame 639) is noise, and so is a lower one two
 /// frames after the last peak (0.13 px at frame 589, which set t_φ 2.8 frames late).
