@@ -1864,24 +1864,28 @@ struct Fits {
 }
 
 /// The latest time at which the energy laws leave the rim any motion, on the fits'
-/// clock (t_φ = 0), when the halt seen lies after the law's: the peaks fit's
-/// sighting of the halt disagrees with its t0, late, by more than
+/// clock (t_φ = 0), when the halt seen lies after the law's: a fit's sighting of the
+/// halt (at the peaks or per frame) disagrees with its t0, late, by more than
 /// [`energy::SIGHTING_DISAGREEMENT`] standard deviations of their difference
-/// ([`HaltSighting`]). A disk whose energy E = A_e (t0 − t)^n (eq. 3.2) has gone to zero lies
-/// flat and does not rise again, so a rise seen after t0 is a coded picture: an
-/// encoder that shows earlier pictures again for a few frames after the halt, or
-/// a refresh, read as motion (o05 of the open footage re-encoded at CRF 20: t_φ
-/// 9.5 frames late, a spurious peak). The bound is the earliest over the fits that
-/// disagree alike (at the peaks, per frame) of t0 + 3 σ_t0 + one frame `frame_s`
-/// (the last frame of motion falls up to a frame after t0, [`HaltSighting`]);
-/// `None` when the halt seen agrees, or the bound does not lie before t_φ. A halt
-/// seen *before* the law's is the motion's last part too small to see or hidden by
-/// its phase, which the sighting models: left alone.
+/// ([`HaltSighting`]). A disk whose energy E = A_e (t0 − t)^n (eq. 3.2) has gone to
+/// zero lies flat and does not rise again, so a rise seen after t0 is a coded picture:
+/// an encoder that shows earlier pictures again for a few frames after the halt, or
+/// settles on the still disk over many, read as motion (o05 of the open footage
+/// re-encoded at CRF 20: t_φ 9.5 frames late, a spurious peak). Either fit may see it
+/// alone: the spurious low peaks pull the peaks fit's free t0 onto the last of them
+/// (the same clip re-encoded by libx264 0.164.3095: peaks of 0.21 and 0.20 px at
+/// frames 623 and 625, the disk flat from 615.5; the peaks fit's t0 5.6 ms before the
+/// halt seen, within 3σ of 7.4 ms, while the per-frame fit's lay 21 ± 0.5 ms before
+/// it, 0.3 frames from the truth). The bound is the earliest over the fits that
+/// disagree of t0 + 3 σ_t0 + one frame `frame_s` (the last frame of motion falls up
+/// to a frame after t0, [`HaltSighting`]); `None` when the halt seen agrees, or the
+/// bound does not lie before t_φ. A halt seen *before* the law's is the motion's last
+/// part too small to see or hidden by its phase, which the sighting models: left
+/// alone.
 fn law_bound(fits: &Fits, frame_s: f64) -> Option<f64> {
     let late = |s: &energy::SightingUse| {
         s.t0_seen - s.t0_fitted > energy::SIGHTING_DISAGREEMENT * s.se_t0_seen.hypot(s.se_t0_fitted)
     };
-    fits.peaks.fit.halt_sighting.filter(late)?;
     [Some(&fits.peaks), fits.frames.as_ref()]
         .into_iter()
         .flatten()
@@ -2305,6 +2309,16 @@ mod tests {
             };
             assert_eq!(law_bound(&fits, frame_s), None, "t0 {t0}");
         }
+        // The peaks fit agreeing with the halt seen (spurious low peaks after the halt
+        // pull its free t0 onto them) does not hide the per-frame fit's disagreement.
+        let frames = sighted_peaks_fit(-0.020, -0.023);
+        let frames_t0 = frames.fit.t0 + 3.0 * frames.fit.se_t0.expect("t0 free") + frame_s;
+        let fits = Fits {
+            peaks: sighted_peaks_fit(0.001, -0.002),
+            frames: Some(frames),
+            full_state: None,
+        };
+        assert_eq!(law_bound(&fits, frame_s), Some(frames_t0));
     }
 
     #[test]
