@@ -97,7 +97,7 @@ pub struct PeakSeries {
 /// is the last turn's peak whatever its prominence over the single noisy reading after
 /// it (o02 of the open footage: 0.78 px above the rest level at the halt frame, a true
 /// peak of 0.71 px, with a rest noise of 0.15 px and a 6σ prominence test of 0.92 px).
-/// Where two peaks lie more than one turn apart, the turns between them are the
+/// Where two peaks lie two turns apart or more, the turns between them are the
 /// highest maxima above the motion threshold where the turns around place them
 /// ([`with_missed_turns`]). Each is refined by the local fit of `model` over one
 /// oscillation (module docs), falling back to the parabola through three samples.
