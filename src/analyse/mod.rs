@@ -1503,16 +1503,18 @@ pub fn analyse_clip_keeping(
         let halt = halt_for(series, bounded);
         let peak_samples = peak_energies(&params, series);
         let peaks =
-            fit_series("eq. 3.8 at peaks", peak_samples, window_s, halt).map_err(|error| {
+            fit_series("eq. 3.8 at peaks", peak_samples, window_s, halt, &[]).map_err(|error| {
                 AnalyseError::Fit {
                     path: clip.to_path_buf(),
                     error,
                 }
             })?;
-        // Each state is a local fit over frames shared with its neighbours: the fit's
-        // interval allows for the autocorrelation this leaves in its residuals.
+        // Each state is a local fit over frames shared with its neighbours, and a
+        // turn's frames share its errors: the fits' intervals are estimated over the
+        // turns, which the peaks separate.
+        let turns: Vec<f64> = series.peaks.peaks.iter().map(|p| p.t).collect();
         let frame_samples = frame_energies(&params, series, None);
-        let frames = fit_series("eq. 3.8 per frame", frame_samples, window_s, halt).ok();
+        let frames = fit_series("eq. 3.8 per frame", frame_samples, window_s, halt, &turns).ok();
         let full_state = series.strip.as_ref().and_then(|strip| {
             let samples = frame_energies(&params, series, Some(strip));
             fit_series(
@@ -1520,6 +1522,7 @@ pub fn analyse_clip_keeping(
                 samples,
                 window_s,
                 halt,
+                &turns,
             )
             .ok()
         });
@@ -2099,16 +2102,20 @@ fn with_zero_error(
     }
 }
 
+/// The power law fitted to `samples` over the final `window_s`, and its window
+/// sensitivity, with the covariances estimated over `turns` (the peaks' times; empty
+/// for one sample a turn).
 fn fit_series(
     method: &str,
     samples: Vec<EnergySample>,
     window_s: f64,
     halt: HaltTime,
+    turns: &[f64],
 ) -> Result<EnergyFit, FitError> {
     let t: Vec<f64> = samples.iter().map(|s| s.t).collect();
     let e: Vec<f64> = samples.iter().map(|s| s.energy).collect();
-    let fit = energy::fit_window(&t, &e, window_s, halt)?;
-    let windows = energy::window_sensitivity(&t, &e, &SENSITIVITY_WINDOWS_S, halt)
+    let fit = energy::fit_window_in_turns(&t, &e, window_s, halt, turns)?;
+    let windows = energy::window_sensitivity(&t, &e, &SENSITIVITY_WINDOWS_S, halt, turns)
         .into_iter()
         .map(|(w, r)| (w, r.map_err(|e| e.to_string())))
         .collect();
@@ -2278,7 +2285,7 @@ mod tests {
             noise_m: 2e-6,
             visible_precession: 1400.0,
         });
-        fit_series("eq. 3.8 at peaks", samples, 0.5, halt).expect("fit")
+        fit_series("eq. 3.8 at peaks", samples, 0.5, halt, &[]).expect("fit")
     }
 
     /// The halt seen 20 ms (nearly 10 frames) after the law's, as an encoder showing
