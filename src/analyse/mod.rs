@@ -1511,7 +1511,7 @@ pub fn analyse_clip_keeping(
             })?;
         // Each state is a local fit over frames shared with its neighbours, and a
         // turn's frames share its errors: the fits' intervals are estimated over the
-        // turns, which the peaks separate.
+        // frames and over the turns the peaks separate, the wider kept.
         let turns: Vec<f64> = series.peaks.peaks.iter().map(|p| p.t).collect();
         let frame_samples = frame_energies(&params, series, None);
         let frames = fit_series("eq. 3.8 per frame", frame_samples, window_s, halt, &turns).ok();
@@ -2103,8 +2103,8 @@ fn with_zero_error(
 }
 
 /// The power law fitted to `samples` over the final `window_s`, and its window
-/// sensitivity, with the covariances estimated over `turns` (the peaks' times; empty
-/// for one sample a turn).
+/// sensitivity, with the covariances estimated over the samples and also over `turns`
+/// (the peaks' times; empty for one sample a turn), as `energy::fit_window_in_turns`.
 fn fit_series(
     method: &str,
     samples: Vec<EnergySample>,
