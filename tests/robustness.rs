@@ -676,12 +676,11 @@ fn a_face_thinner_than_its_blur_is_read_where_the_disk_leans() {
 
 #[test]
 #[ignore = "2 of 24 scenes miss a target (BENCHMARKS.md, \"Robustness scenes\", \
-            \"The encoder's picture structure\"): two light plates coded as a phone codes, I \
-            and P pictures only, whose final turns the codec holds still: s05 (crf 23, keyed \
-            every 24 frames): n per frame +0.035, t_φ 4 frames early; s17 (crf 28, every 140): \
-            n peaks +0.060, a final peak missed, t_φ 7 frames early. With libx264's B pictures \
-            instead, the same two miss φ (-4.3 %, -7.6 %) from the codec's shrunken swing; \
-            run with --ignored"]
+            \"Per-frame intervals over the turns\"), both light plates coded at crf 23-28: \
+            s17 (crf 28, I and P pictures keyed every 140, the final turns held still by the \
+            codec): n peaks +0.042; s21 (crf 23, libx264's B pictures, the halt seen 5 frames \
+            early): n per frame -0.033 against 0.032. Seed 7 misses s03 (B pictures after \
+            the halt read as motion: n peaks +0.054) and its own s17; run with --ignored"]
 fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
     let scenes = draw_scenes();
     assert!(scenes.len() >= 24);
