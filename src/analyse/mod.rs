@@ -1978,12 +1978,11 @@ fn frame_energies(
     strip: Option<&signal::StripAnalysis>,
 ) -> Vec<EnergySample> {
     // A state whose local fit is poorly determined (its window cut short at the
-    // start of the series, or too few rim heights) is left out: keep states whose
-    // φ and ψ̇ carry standard errors below 10 %.
+    // start of the series, or too few rim heights) is left out.
     series
         .states
         .iter()
-        .filter(|s| s.sigma_phi < 0.1 * s.phi.abs() && s.sigma_psi_dot < 0.1 * s.psi_dot.abs())
+        .filter(|s| s.is_determined())
         .filter_map(|s| {
             // The side view gives |ψ̇| only. Near stationary rolling β̇ = ψ̇ + θ̇ =
             // ψ̇ (1 − cos φ + h sin φ) (eqs. 3.7, 3.22) has the sign of ψ̇, so the

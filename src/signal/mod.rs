@@ -395,6 +395,16 @@ pub struct FrameState {
     pub points: usize,
 }
 
+impl FrameState {
+    /// Whether the local fit determined the state: φ and ψ̇ with standard errors
+    /// below 10 %. A fit whose window was cut short (at the series' start, or across
+    /// the halt where the last turn is a coded picture's) can converge on a ψ̇ a
+    /// quarter of its neighbours' with an error larger than itself.
+    pub fn is_determined(&self) -> bool {
+        self.sigma_phi < 0.1 * self.phi.abs() && self.sigma_psi_dot < 0.1 * self.psi_dot.abs()
+    }
+}
+
 /// φ, ψ and ψ̇ with standard errors at every frame of the peak window that has a rim
 /// height, by fitting `model` over about `state_window_periods` oscillations centred
 /// on the frame (module docs). Frames whose fit fails, or whose window spans a
