@@ -473,7 +473,8 @@ fn local_period(raw: &[(usize, f64)], t: &[f64], n: usize) -> Option<f64> {
     }
 }
 
-/// Local fit over one period centred on sample k (motion samples `t`, `v`); returns the
+/// Chirped local fit over 1.5 periods (at least MIN_CHIRP_SAMPLES frames) centred on
+/// sample k (motion samples `t`, `v`); returns the
 /// time nearest the parabolic vertex where the phase is `target` (0 peak, π trough), φ
 /// there and the fit, if the fit converged and lands within a frame of the parabola.
 #[allow(clippy::too_many_arguments)]
@@ -498,16 +499,18 @@ fn refine(
             t.partition_point(|&x| x <= t_c + half),
         )
     };
-    // ψ̇ grows within a turn near the halt: with a chirp over 1.5 turns where there are
-    // samples enough, else constant ψ̇ over one turn.
-    let (lo, hi) = window(CHIRP_WINDOW_PERIODS);
-    let (chirp, lo, hi) = if hi - lo >= MIN_CHIRP_SAMPLES {
-        (true, lo, hi)
-    } else {
-        let (lo, hi) = window(1.0);
-        (false, lo, hi)
-    };
-    if hi - lo < 6 {
+    // ψ̇ grows within a turn near the halt: a chirp over 1.5 turns, the window grown
+    // to MIN_CHIRP_SAMPLES frames where the turns are shorter than six (the final
+    // turns of a fast precession, 4–5 frames each: a parabola through three of them
+    // reads the peak 3–15 % low), as the per-frame states grow theirs.
+    let (mut lo, mut hi) = window(CHIRP_WINDOW_PERIODS);
+    while hi - lo < MIN_CHIRP_SAMPLES && (lo > 0 || hi < t.len()) {
+        lo = lo.saturating_sub(1);
+        if hi - lo < MIN_CHIRP_SAMPLES && hi < t.len() {
+            hi += 1;
+        }
+    }
+    if hi - lo < MIN_CHIRP_SAMPLES {
         return None;
     }
     let omega = 2.0 * PI / period;
@@ -527,18 +530,7 @@ fn refine(
         chi: target + omega * (t_c - parabolic.0),
         omega,
     };
-    let fit = fit_local(
-        model,
-        &t[lo..hi],
-        &v[lo..hi],
-        t_c,
-        init,
-        Terms {
-            chirp,
-            offset: false,
-        },
-        None,
-    )?;
+    let fit = fit_local(model, &t[lo..hi], &v[lo..hi], t_c, init, Terms::CHIRP, None)?;
     let (t_x, phi_x) = fit.time_of_phase(t_c, target);
     let plausible = (t_x - parabolic.0).abs() <= frame
         && phi_x > 0.0
