@@ -87,9 +87,10 @@
 //!   oscillations have 5–7 frames, so the highest sample misses the true peak (the
 //!   thesis notes the truncation, §3.2.4). Each peak is refined by fitting the rim model
 //!   over 1.5 oscillations with φ = φ₀ + φ₁τ, χ = χ₀ + ωτ + ½ω̇τ² (ψ̇ ∝ τ^{−1/4}
-//!   grows within a turn; without the chirp the peaks came out up to 0.4 frame early);
-//!   with fewer than nine samples, over one oscillation without the chirp. The peak is
-//!   where χ = 0; the parabola through three samples is the fallback. φ at the peak
+//!   grows within a turn; without the chirp the peaks came out up to 0.4 frame early),
+//!   and over at least nine frames where turns are shorter (a parabola through three
+//!   samples of a 4–5-frame turn reads the peak 3–15 % low). The peak is where χ = 0;
+//!   the parabola is the fallback where the fit fails or lands over a frame from it. φ at the peak
 //!   follows from the model (eq. 3.9 for [`ThesisRim`]). ψ grows by 2π per peak, or by
 //!   π per peak and trough, zero at the last; ψ̇ by eq. (3.11) and by central
 //!   differences.
@@ -397,9 +398,9 @@ pub struct FrameState {
 
 impl FrameState {
     /// Whether the local fit determined the state: φ and ψ̇ with standard errors
-    /// below 10 %. A fit whose window was cut short (at the series' start, or across
-    /// the halt where the last turn is a coded picture's) can converge on a ψ̇ a
-    /// quarter of its neighbours' with an error larger than itself.
+    /// below 10 %. A fit whose window was cut short (at the series' start, or at a
+    /// halt the codec moved) can converge on a ψ̇ far from its neighbours' with an
+    /// error larger than itself.
     pub fn is_determined(&self) -> bool {
         self.sigma_phi < 0.1 * self.phi.abs() && self.sigma_psi_dot < 0.1 * self.psi_dot.abs()
     }

@@ -10,11 +10,12 @@ use std::f64::consts::PI;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ExtremumMethod {
-    /// The rim model fitted over about one oscillation (trough to trough): the peak is
-    /// where its phase χ is 0 (π for a trough). Not limited by truncated samples.
+    /// The rim model fitted over 1.5 oscillations and at least nine frames: the peak
+    /// is where its phase χ is 0 (π for a trough). Not limited by truncated samples.
     LocalFit,
-    /// A parabola through the extreme sample and its two neighbours (too few samples
-    /// for the local fit, or it disagreed with the parabola by more than a frame).
+    /// A parabola through the extreme sample and its two neighbours (fewer than nine
+    /// samples in the whole series, the local fit failed, or it disagreed with the
+    /// parabola by more than a frame).
     Parabolic,
 }
 
@@ -99,8 +100,8 @@ pub struct PeakSeries {
 /// peak of 0.71 px, with a rest noise of 0.15 px and a 6σ prominence test of 0.92 px).
 /// Where two peaks lie two turns apart or more, the turns between them are the
 /// highest maxima above the motion threshold where the turns around place them
-/// ([`with_missed_turns`]). Each is refined by the local fit of `model` over one
-/// oscillation (module docs), falling back to the parabola through three samples.
+/// ([`with_missed_turns`]). Each is refined by the local fit of `model` over 1.5
+/// oscillations (module docs), falling back to the parabola through three samples.
 ///
 /// Errors with [`SignalError::TooFewPeaks`] when fewer than three peaks lie in the
 /// window.
@@ -473,10 +474,10 @@ fn local_period(raw: &[(usize, f64)], t: &[f64], n: usize) -> Option<f64> {
     }
 }
 
-/// Chirped local fit over 1.5 periods (at least MIN_CHIRP_SAMPLES frames) centred on
-/// sample k (motion samples `t`, `v`); returns the
-/// time nearest the parabolic vertex where the phase is `target` (0 peak, π trough), φ
-/// there and the fit, if the fit converged and lands within a frame of the parabola.
+/// Chirped local fit over 1.5 periods (at least [`MIN_CHIRP_SAMPLES`] frames) centred
+/// on sample k (motion samples `t`, `v`); returns the time nearest the parabolic
+/// vertex where the phase is `target` (0 peak, π trough), φ there and the fit, if the
+/// fit converged and lands within a frame of the parabola.
 #[allow(clippy::too_many_arguments)]
 fn refine(
     model: &dyn RimModel,
