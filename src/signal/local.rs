@@ -217,6 +217,19 @@ impl LocalFit {
     }
 }
 
+/// The sample range `lo..hi` of a local fit's window, grown by a sample on each side
+/// in turn (the earlier first) until it holds `least` samples or spans all `len`.
+pub(crate) fn widened(lo: usize, hi: usize, len: usize, least: usize) -> (usize, usize) {
+    let (mut lo, mut hi) = (lo, hi);
+    while hi - lo < least && (lo > 0 || hi < len) {
+        lo = lo.saturating_sub(1);
+        if hi - lo < least && hi < len {
+            hi += 1;
+        }
+    }
+    (lo, hi)
+}
+
 /// x wrapped into (−π, π].
 pub(crate) fn wrap_pi(x: f64) -> f64 {
     let y = x.rem_euclid(2.0 * PI);

@@ -90,10 +90,10 @@
 //!   grows within a turn; without the chirp the peaks came out up to 0.4 frame early),
 //!   and over at least nine frames where turns are shorter (a parabola through three
 //!   samples of a 4–5-frame turn reads the peak 3–15 % low). The peak is where χ = 0;
-//!   the parabola is the fallback where the fit fails or lands over a frame from it. φ at the peak
-//!   follows from the model (eq. 3.9 for [`ThesisRim`]). ψ grows by 2π per peak, or by
-//!   π per peak and trough, zero at the last; ψ̇ by eq. (3.11) and by central
-//!   differences.
+//!   the parabola is the fallback where the fit fails or lands over a frame from it.
+//!   φ at the peak follows from the model (eq. 3.9 for [`ThesisRim`]). ψ grows by 2π
+//!   per peak, or by π per peak and trough, zero at the last; ψ̇ by eq. (3.11) and by
+//!   central differences.
 //! * **Per-frame states** ([`frame_states`]): the same chirped local model fitted over
 //!   `state_window_periods` (1.5) turns centred on every frame, started from the
 //!   peak/trough phase track; standard errors from s² (JᵀJ)⁻¹ with s² = SSR/dof. On
@@ -444,17 +444,13 @@ pub fn frame_states(
             if t_c - half < st[0] - 0.5 * frame {
                 return None;
             }
-            let (mut lo, mut hi) = (
+            // At least eight samples (four parameters, four degrees of freedom).
+            let (lo, hi) = local::widened(
                 st.partition_point(|&x| x < t_c - half),
                 st.partition_point(|&x| x <= t_c + half),
+                st.len(),
+                8,
             );
-            // At least eight samples (four parameters, four degrees of freedom).
-            while hi - lo < 8 && (lo > 0 || hi < st.len()) {
-                lo = lo.saturating_sub(1);
-                if hi - lo < 8 && hi < st.len() {
-                    hi += 1;
-                }
-            }
             // Across a timestamp gap the phase track miscounts the turns (the peaks
             // inside it are missing): no state there.
             if skips::spans_gap(&t[idx[lo]..=idx[hi - 1]], frame, config.gap_factor) {

@@ -1,7 +1,7 @@
 //! Peaks and troughs of z_rim with sub-frame interpolation, φ at peaks (eq. 3.9), ψ by
 //! counting turns and ψ̇ (eq. 3.11) (thesis §3.2.5).
 
-use super::local::{LocalInit, PhaseTrack, Terms, fit_local};
+use super::local::{LocalInit, PhaseTrack, Terms, fit_local, widened};
 use super::{Halt, RimModel, SignalConfig, SignalError, finite_samples};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -504,13 +504,8 @@ fn refine(
     // to MIN_CHIRP_SAMPLES frames where the turns are shorter than six (the final
     // turns of a fast precession, 4–5 frames each: a parabola through three of them
     // reads the peak 3–15 % low), as the per-frame states grow theirs.
-    let (mut lo, mut hi) = window(CHIRP_WINDOW_PERIODS);
-    while hi - lo < MIN_CHIRP_SAMPLES && (lo > 0 || hi < t.len()) {
-        lo = lo.saturating_sub(1);
-        if hi - lo < MIN_CHIRP_SAMPLES && hi < t.len() {
-            hi += 1;
-        }
-    }
+    let (lo, hi) = window(CHIRP_WINDOW_PERIODS);
+    let (lo, hi) = widened(lo, hi, t.len(), MIN_CHIRP_SAMPLES);
     if hi - lo < MIN_CHIRP_SAMPLES {
         return None;
     }
