@@ -168,7 +168,13 @@ pub enum HaltTime {
 ///
 /// * its peak h = z_v (τ/Δ)^n (τ = t0 − t) falling with the energy, since
 ///   h ∝ φ ∝ E = A_e τ^n there (eq. 4.96): Δ = (E_v/A_e)^{1/n} is where the peak
-///   falls to the detector's threshold z_v, whose stationary-rolling energy is E_v;
+///   falls to the least rise the detector sees, z_v, whose stationary-rolling energy
+///   is E_v. The detector's threshold is a rise above the still disk's rest level,
+///   and the energies' heights are measured from the zero the moving rim places
+///   (`signal::motion_zero`), which an encoder can code below the rest (0.045 px on
+///   the robustness gate's s11): z_v is the threshold plus the rest's height above
+///   that zero ([`HaltSighting::visible_rise`]), and each drawn reading is the rim's
+///   rise less that height;
 /// * χ turning ever faster, ψ̇ = ψ̇_v (τ/Δ)^{−n/2}, as stationary rolling has
 ///   ψ̇² ∝ 1/φ at small φ (eq. 4.40; ψ̇_v at the threshold's tilt).
 ///
@@ -190,8 +196,8 @@ pub struct HaltSighting {
     pub t_phi: f64,
     /// The frame interval δt [s].
     pub frame_s: f64,
-    /// Energy of stationary rolling at the smallest rim rise the footage shows (the
-    /// halt detector's threshold) [J].
+    /// Energy of stationary rolling at the smallest rim rise the footage shows
+    /// ([`HaltSighting::visible_rise`]) [J].
     pub visible_energy: f64,
     /// The halt detector's threshold z_v: the smallest rise of the rim above its rest
     /// that it takes for motion [m].
@@ -201,9 +207,16 @@ pub struct HaltSighting {
     /// rise is motion while it stays more than σ above rest.
     #[serde(default)]
     pub noise_m: f64,
-    /// ψ̇ of stationary rolling at the tilt whose peak rise is z_v [rad/s] (eq. 4.40).
+    /// ψ̇ of stationary rolling at the tilt whose peak rise is the visible rise
+    /// [rad/s] (eq. 4.40).
     #[serde(default)]
     pub visible_precession: f64,
+    /// How far the still disk's rest level lies above the zero the energies' heights
+    /// are measured from [m]: −c of the zero the motion places (`signal::MotionZero`),
+    /// 0 when the rest level is the zero. The detector counts rises above the rest,
+    /// so a peak is seen when it reaches [`HaltSighting::visible_rise`] above the zero.
+    #[serde(default)]
+    pub rest_above_zero_m: f64,
 }
 
 /// Draws of the phase and frame offset at t0 over which a [`HaltSighting`] runs the
@@ -806,6 +819,13 @@ impl LongRun {
 }
 
 impl HaltSighting {
+    /// The least peak rise above the energies' zero the detector sees [m]: its
+    /// threshold z_v above the rest level plus the rest level's height above the
+    /// zero, at least the rest noise σ (a rise smaller than the noise is no rise).
+    pub fn visible_rise(&self) -> f64 {
+        (self.threshold_m + self.rest_above_zero_m).max(self.noise_m)
+    }
+
     /// Mean and variance of t0 − t_φ [s, s²] (the model of the type's docs) for the
     /// time `unseen_s` (Δ) over which the peak rise is below the threshold and the
     /// fitted exponent `n`. Draws are seeded, so the same inputs give the same numbers.
@@ -831,8 +851,10 @@ impl HaltSighting {
                 } else {
                     std::f64::consts::TAU * rng.uniform()
                 };
-                let peak = self.threshold_m * (tau / unseen).powf(n);
-                let z = 0.5 * peak * (1.0 + chi.cos()) + self.noise_m * rng.gaussian();
+                // The reading above the rest level, as the detector takes it.
+                let peak = self.visible_rise() * (tau / unseen).powf(n);
+                let z = 0.5 * peak * (1.0 + chi.cos()) - self.rest_above_zero_m
+                    + self.noise_m * rng.gaussian();
                 readings.push(z);
                 z > self.threshold_m
             });
@@ -1962,6 +1984,7 @@ mod tests {
             threshold_m: 1e-5,
             noise_m: 0.0,
             visible_precession: 1400.0,
+            rest_above_zero_m: 0.0,
         }
     }
 

@@ -1472,13 +1472,19 @@ pub fn analyse_clip_keeping(
     let profile = motion_profile(config.rim_zero(), &scale, &params);
     // `bounded`: t_φ was bounded by the energy law ([`law_bound`]), which leaves the
     // halt seen no measurement of t0.
+    // The rest level's height above the zero the motion placed (−c): the detector's
+    // rises are above the rest, the energies' heights above the zero.
+    let rest_above_zero_m = zero.map_or(0.0, |z| -z.zero.offset);
     let halt_for = |series: &StateSeries, bounded: bool| match halt_choice {
         HaltChoice::Measured => HaltTime::Fixed(0.0),
         HaltChoice::Free => HaltTime::Free,
         HaltChoice::Combined if bounded => HaltTime::Free,
-        HaltChoice::Combined => {
-            HaltTime::Sighted(halt_sighting(&params, &series.halt, 1.0 / fps.fps))
-        }
+        HaltChoice::Combined => HaltTime::Sighted(halt_sighting(
+            &params,
+            &series.halt,
+            rest_above_zero_m,
+            1.0 / fps.fps,
+        )),
     };
     // The fit window and the rest tail must each lie in one section of constant
     // frame interval (footage::timing): a slowed section's boundary inside them
@@ -1905,22 +1911,33 @@ fn png(image: &image::RgbImage) -> Vec<u8> {
 }
 
 /// The halt as the footage shows it: motion last seen at t_φ (t = 0 on the fit's
-/// clock), one frame `frame_s` apart, down to the halt detector's threshold, a rim
-/// rise a peak of stationary rolling reaches at sin φ = z/(2R), over its rest noise.
-fn halt_sighting(params: &DiskParams, halt: &signal::Halt, frame_s: f64) -> HaltSighting {
-    let phi = (halt.threshold / (2.0 * params.radius))
-        .clamp(0.0, 1.0)
-        .asin();
-    let visible_energy = energy::stationary_energy_at(params, phi).unwrap_or(0.0);
-    let visible_precession =
-        closed_form::stationary_rolling(params, phi).map_or(0.0, |(psi_dot, _)| psi_dot.abs());
-    HaltSighting {
+/// clock), one frame `frame_s` apart, down to the least rise the halt detector sees
+/// above the heights' zero (its threshold above the rest level, which lies
+/// `rest_above_zero_m` above the zero the motion placed), a rim rise a peak of
+/// stationary rolling reaches at sin φ = z/(2R), over its rest noise.
+fn halt_sighting(
+    params: &DiskParams,
+    halt: &signal::Halt,
+    rest_above_zero_m: f64,
+    frame_s: f64,
+) -> HaltSighting {
+    let seen = HaltSighting {
         t_phi: 0.0,
         frame_s,
-        visible_energy,
+        visible_energy: 0.0,
         threshold_m: halt.threshold,
         noise_m: halt.noise,
-        visible_precession,
+        visible_precession: 0.0,
+        rest_above_zero_m,
+    };
+    let phi = (seen.visible_rise() / (2.0 * params.radius))
+        .clamp(0.0, 1.0)
+        .asin();
+    HaltSighting {
+        visible_energy: energy::stationary_energy_at(params, phi).unwrap_or(0.0),
+        visible_precession: closed_form::stationary_rolling(params, phi)
+            .map_or(0.0, |(psi_dot, _)| psi_dot.abs()),
+        ..seen
     }
 }
 
@@ -2283,6 +2300,7 @@ mod tests {
             threshold_m: 2e-5,
             noise_m: 2e-6,
             visible_precession: 1400.0,
+            rest_above_zero_m: 0.0,
         });
         fit_series("eq. 3.8 at peaks", samples, 0.5, halt, &[]).expect("fit")
     }

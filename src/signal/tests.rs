@@ -1528,6 +1528,74 @@ fn a_moved_zero_lifts_every_peak_and_state() {
 /// modelled; the rule before it, t0 − t_φ uniform over δt + Δ, said 0.74.)
 #[test]
 fn the_halt_seen_models_the_detector_on_the_final_turns() {
+    let seen = halt_seen_on_synthetic_clips(0.0, 0.0);
+    seen.assert_matches();
+}
+
+/// The still disk read above the zero its moving rim places, by 50 μm (half the
+/// threshold, as an encoder coding the still picture 0.045 px above the contacts,
+/// at a 0.1 px threshold, makes it on the robustness gate's s11): the detector counts
+/// rises above the rest, so the final peaks sink from sight earlier. With the rest's
+/// height above the zero ([`crate::energy::HaltSighting::visible_rise`]) the model
+/// follows the detector as closely as with none (2.60 ± 1.29 frames measured,
+/// 2.55 ± 1.29 modelled); told nothing of it, it says 1.42, more than a frame
+/// short. (At a whole threshold above the zero it says 4.63 ± 1.59 against the
+/// detector's 4.38 ± 1.77.)
+#[test]
+fn the_halt_seen_counts_rises_from_the_rest_above_the_zero() {
+    let rest_above_zero = 5e-5;
+    halt_seen_on_synthetic_clips(rest_above_zero, rest_above_zero).assert_matches();
+    let told_nothing = halt_seen_on_synthetic_clips(rest_above_zero, 0.0);
+    eprintln!(
+        "told nothing of the rest's height: model {:.3} frames",
+        told_nothing.model / FRAME
+    );
+    assert!(
+        told_nothing.gap - told_nothing.model > FRAME,
+        "detector {:.2} frames, model told nothing {:.2}",
+        told_nothing.gap / FRAME,
+        told_nothing.model / FRAME
+    );
+}
+
+/// t0 − t_φ over 300 synthetic clips, as the detector finds it and as the model of
+/// the halt seen says it [s]: means and spreads over the clips.
+struct HaltSeen {
+    gap: f64,
+    spread: f64,
+    model: f64,
+    model_spread: f64,
+}
+
+impl HaltSeen {
+    /// The model's mean within 0.15 frame of the detector's, its spread within 20 %.
+    fn assert_matches(&self) {
+        eprintln!(
+            "t0 − t_φ: detector {:.3} ± {:.3} frames, model {:.3} ± {:.3}",
+            self.gap / FRAME,
+            self.spread / FRAME,
+            self.model / FRAME,
+            self.model_spread / FRAME
+        );
+        assert!(
+            (self.gap - self.model).abs() < 0.15 * FRAME,
+            "t0 − t_φ: detector {:.2} frames, model {:.2}",
+            self.gap / FRAME,
+            self.model / FRAME
+        );
+        assert!(
+            (self.spread / self.model_spread - 1.0).abs() < 0.2,
+            "spread: detector {:.2} frames, model {:.2}",
+            self.spread / FRAME,
+            self.model_spread / FRAME
+        );
+    }
+}
+
+/// The synthetic disk's final turns read with 20 μm noise, the still disk after t0
+/// read `rest_above_zero` [m] above the zero of the moving rim, and the model told
+/// `told` [m] of it.
+fn halt_seen_on_synthetic_clips(rest_above_zero: f64, told: f64) -> HaltSeen {
     let noise = 2e-5;
     let mut rng = SplitMix64::new(77);
     let (mut gap, mut gap_sq, mut model, mut model_var) = (0.0, 0.0, 0.0, 0.0);
@@ -1546,23 +1614,31 @@ fn the_halt_seen_models_the_detector_on_the_final_turns() {
         let mut readings = SplitMix64::new(1000 + seed);
         let z: Vec<f64> = t
             .iter()
-            .map(|&x| truth.z_rim(x) + noise * readings.gaussian())
+            .map(|&x| {
+                let rest = if x > t0 { rest_above_zero } else { 0.0 };
+                truth.z_rim(x) + rest + noise * readings.gaussian()
+            })
             .collect();
         let halt = halt_time(&t, &z, &SignalConfig::default()).expect("halt");
         let g = t0 - halt.t_phi;
         gap += g;
         gap_sq += g * g;
         // The model's inputs as `analyse` gives them: the peak 2R sin φ reaches the
-        // threshold at φ_v, which φ = φ_a (τ/τ_a)^{1/2} reaches Δ before t0.
-        let phi_v = (halt.threshold / (2.0 * R)).asin();
-        let unseen = TAU_A * (phi_v / PHI_A).powi(2);
+        // visible rise at φ_v, which φ = φ_a (τ/τ_a)^{1/2} reaches Δ before t0.
         let sighting = crate::energy::HaltSighting {
             t_phi: 0.0,
             frame_s: FRAME,
             visible_energy: 0.0,
             threshold_m: halt.threshold,
             noise_m: halt.noise,
+            visible_precession: 0.0,
+            rest_above_zero_m: told,
+        };
+        let phi_v = (sighting.visible_rise() / (2.0 * R)).asin();
+        let unseen = TAU_A * (phi_v / PHI_A).powi(2);
+        let sighting = crate::energy::HaltSighting {
             visible_precession: OMEGA_A * (unseen / TAU_A).powf(-0.25),
+            ..sighting
         };
         let (mean, var) = sighting.gap(unseen, 0.5);
         model += mean;
@@ -1570,27 +1646,12 @@ fn the_halt_seen_models_the_detector_on_the_final_turns() {
     }
     let n = clips as f64;
     let (gap, model) = (gap / n, model / n);
-    let spread = (gap_sq / n - gap * gap).sqrt();
-    let model_spread = (model_var / n).sqrt();
-    eprintln!(
-        "t0 − t_φ: detector {:.3} ± {:.3} frames, model {:.3} ± {:.3}",
-        gap / FRAME,
-        spread / FRAME,
-        model / FRAME,
-        model_spread / FRAME
-    );
-    assert!(
-        (gap - model).abs() < 0.15 * FRAME,
-        "t0 − t_φ: detector {:.2} frames, model {:.2}",
-        gap / FRAME,
-        model / FRAME
-    );
-    assert!(
-        (spread / model_spread - 1.0).abs() < 0.2,
-        "spread: detector {:.2} frames, model {:.2}",
-        spread / FRAME,
-        model_spread / FRAME
-    );
+    HaltSeen {
+        gap,
+        spread: (gap_sq / n - gap * gap).sqrt(),
+        model,
+        model_spread: (model_var / n).sqrt(),
+    }
 }
 
 /// The camera's profile at ε = 3°.
