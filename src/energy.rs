@@ -176,7 +176,7 @@ pub enum HaltTime {
 ///   that zero ([`HaltSighting::visible_rise`]), and each drawn reading is the rim's
 ///   rise less that height;
 /// * χ turning ever faster, ψ̇ = ψ̇_v (τ/Δ)^{−n/2}, as stationary rolling has
-///   ψ̇² ∝ 1/φ at small φ (eq. 4.40; ψ̇_v at the threshold's tilt).
+///   ψ̇² ∝ 1/φ at small φ (eq. 4.40; ψ̇_v at the tilt whose peak rise is z_v).
 ///
 /// Where the frames fall within a frame interval of t0, and the phase at t0, are
 /// unknown: over both, drawn uniformly, with the rest noise σ on every reading, the
@@ -199,8 +199,8 @@ pub struct HaltSighting {
     /// Energy of stationary rolling at the smallest rim rise the footage shows
     /// ([`HaltSighting::visible_rise`]) [J].
     pub visible_energy: f64,
-    /// The halt detector's threshold z_v: the smallest rise of the rim above its rest
-    /// that it takes for motion [m].
+    /// The halt detector's threshold: the smallest rise of the rim above its rest
+    /// that it takes for motion [m] (z_v when the rest level is the zero).
     #[serde(default)]
     pub threshold_m: f64,
     /// Noise σ of the rim at rest [m]: a frame continuing the rim's descent after a
@@ -827,8 +827,8 @@ impl HaltSighting {
     }
 
     /// Mean and variance of t0 − t_φ [s, s²] (the model of the type's docs) for the
-    /// time `unseen_s` (Δ) over which the peak rise is below the threshold and the
-    /// fitted exponent `n`. Draws are seeded, so the same inputs give the same numbers.
+    /// time `unseen_s` (Δ) over which the peak rise is below the visible rise
+    /// ([`Self::visible_rise`]) and the fitted exponent `n`. Draws are seeded, so the same inputs give the same numbers.
     pub fn gap(&self, unseen_s: f64, n: f64) -> (f64, f64) {
         let dt = self.frame_s;
         let unseen = unseen_s.max(LEAST_UNSEEN_FRAMES * dt);
