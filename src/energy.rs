@@ -253,6 +253,14 @@ pub struct SightingUse {
     /// Whether it was combined: false when the two differ by more than
     /// 3 standard deviations of their difference.
     pub combined: bool,
+    /// The least rise above the heights' zero the detector sees
+    /// ([`HaltSighting::visible_rise`]) [m].
+    #[serde(default)]
+    pub visible_rise_m: f64,
+    /// The still disk's rest level above the heights' zero
+    /// ([`HaltSighting::rest_above_zero_m`]) [m].
+    #[serde(default)]
+    pub rest_above_zero_m: f64,
 }
 
 /// Result of fitting E = A_e (t0 − t)^n, eq. (3.2)/(4.93), by least squares on E.
@@ -940,6 +948,8 @@ impl HaltSighting {
             t0_fitted: free.t0,
             se_t0_fitted: se_t0_free,
             combined: false,
+            visible_rise_m: self.visible_rise(),
+            rest_above_zero_m: self.rest_above_zero_m,
         };
         let unchanged = |used: SightingUse| {
             Ok(PowerLawFit {

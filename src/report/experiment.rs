@@ -353,10 +353,14 @@ fn zero_source(plan: &ExperimentPlan) -> String {
 fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
     let seen = format!(
         "The halt seen in the footage puts t0 at {:+.2} ± {:.2} ms after t_φ (one frame, and {:.2} ms \
-         of motion below the threshold); the energy alone at {:+.2} ± {:.2} ms",
+         of motion below the least rise the halt detector sees, {:.1} μm above the heights' zero: \
+         its threshold above the still disk's rest level, which lies {:+.1} μm above that zero); \
+         the energy alone at {:+.2} ± {:.2} ms",
         1e3 * s.t0_seen,
         1e3 * s.se_t0_seen,
         1e3 * s.unseen_s,
+        1e6 * s.visible_rise_m,
+        1e6 * s.rest_above_zero_m,
         1e3 * s.t0_fitted,
         1e3 * s.se_t0_fitted
     );
