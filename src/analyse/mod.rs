@@ -1470,11 +1470,11 @@ pub fn analyse_clip_keeping(
     let decoded = plan_span.decoded(first, attempts, frames.len());
     let halt_choice = config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default();
     let profile = motion_profile(config.rim_zero(), &scale, &params);
-    // `bounded`: t_φ was bounded by the energy law ([`law_bound`]), which leaves the
-    // halt seen no measurement of t0.
     // The rest level's height above the zero the motion placed (−c): the detector's
     // rises are above the rest, the energies' heights above the zero.
     let rest_above_zero_m = zero.map_or(0.0, |z| -z.zero.offset);
+    // `bounded`: t_φ was bounded by the energy law ([`law_bound`]), which leaves the
+    // halt seen no measurement of t0.
     let halt_for = |series: &StateSeries, bounded: bool| match halt_choice {
         HaltChoice::Measured => HaltTime::Fixed(0.0),
         HaltChoice::Free => HaltTime::Free,
