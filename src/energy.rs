@@ -827,16 +827,17 @@ impl LongRun {
 }
 
 impl HaltSighting {
-    /// The least peak rise above the energies' zero the detector sees [m]: its
-    /// threshold z_v above the rest level plus the rest level's height above the
-    /// zero, at least the rest noise σ (a rise smaller than the noise is no rise).
+    /// The least peak rise above the energies' zero the detector sees, z_v [m]: its
+    /// threshold above the rest level plus the rest level's height above the zero, at
+    /// least the rest noise σ (a rise smaller than the noise is no rise).
     pub fn visible_rise(&self) -> f64 {
         (self.threshold_m + self.rest_above_zero_m).max(self.noise_m)
     }
 
     /// Mean and variance of t0 − t_φ [s, s²] (the model of the type's docs) for the
     /// time `unseen_s` (Δ) over which the peak rise is below the visible rise
-    /// ([`Self::visible_rise`]) and the fitted exponent `n`. Draws are seeded, so the same inputs give the same numbers.
+    /// ([`Self::visible_rise`]) and the fitted exponent `n`. Draws are seeded, so the
+    /// same inputs give the same numbers.
     pub fn gap(&self, unseen_s: f64, n: f64) -> (f64, f64) {
         let dt = self.frame_s;
         let unseen = unseen_s.max(LEAST_UNSEEN_FRAMES * dt);
@@ -844,6 +845,7 @@ impl HaltSighting {
         // turns before t0 are unbounded and each frame's phase is its own draw.
         let power = 1.0 - 0.5 * n;
         let turning = self.visible_precession * unseen.powf(0.5 * n) / power;
+        let visible_rise = self.visible_rise();
         let mut rng = crate::rng::SplitMix64::new(0x5157_4854);
         let mut readings = Vec::with_capacity(SIGHTING_FRAMES);
         let (mut sum, mut sum_sq, mut draws) = (0.0, 0.0, 0usize);
@@ -860,7 +862,7 @@ impl HaltSighting {
                     std::f64::consts::TAU * rng.uniform()
                 };
                 // The reading above the rest level, as the detector takes it.
-                let peak = self.visible_rise() * (tau / unseen).powf(n);
+                let peak = visible_rise * (tau / unseen).powf(n);
                 let z = 0.5 * peak * (1.0 + chi.cos()) - self.rest_above_zero_m
                     + self.noise_m * rng.gaussian();
                 readings.push(z);
