@@ -522,7 +522,8 @@ fn jackknife_se_t0(t: &[f64], energy: &[f64], turns: &[f64]) -> Option<f64> {
                 .filter(|&i| block[i] != left_out)
                 .map(|i| (t[i], energy[i]))
                 .unzip();
-            fit_with_limit(&ts, &es, HaltTime::Free, MAX_ITERATIONS, turns)
+            // t0 alone is wanted, which does not depend on the covariance's blocks.
+            fit_with_limit(&ts, &es, HaltTime::Free, MAX_ITERATIONS, &[])
                 .ok()
                 .map(|fit| fit.t0)
         })
