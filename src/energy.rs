@@ -1902,6 +1902,18 @@ mod tests {
         }
     }
 
+    /// Times [s] of `turns` peaks a turn apart over the final 0.5 s before `t0`,
+    /// crowding towards the halt as ψ ∝ τ^{1 − n/2} steps by a turn (stationary
+    /// rolling's ψ̇ ∝ τ^{−n/2}, eq. 4.40).
+    fn crowding_peaks(n: f64, t0: f64, turns: usize) -> Vec<f64> {
+        (0..turns)
+            .map(|k| {
+                let phase_left = 1.0 - (k as f64 + 0.5) / turns as f64;
+                t0 - 0.5 * phase_left.powf(1.0 / (1.0 - 0.5 * n))
+            })
+            .collect()
+    }
+
     /// A peaks series: 26 energies a turn apart over the final 0.5 s, crowding towards
     /// the halt as ψ ∝ τ^{1 − n/2} steps by a turn (stationary rolling's
     /// ψ̇ ∝ τ^{−n/2}, eq. 4.40), with Gaussian noise of σ = E_min/6 on every energy.
@@ -1916,12 +1928,7 @@ mod tests {
     fn the_jackknife_keeps_the_interval_of_t0_honest_where_the_last_peaks_fix_it() {
         let (a_e, t0, turns) = (0.0063, 0.0, 26);
         for (n, seed) in [(0.45, 31), (2.0 / 3.0, 32)] {
-            let t: Vec<f64> = (0..turns)
-                .map(|k| {
-                    let phase_left = 1.0 - (k as f64 + 0.5) / turns as f64;
-                    t0 - 0.5 * phase_left.powf(1.0 / (1.0 - 0.5 * n))
-                })
-                .collect();
+            let t = crowding_peaks(n, t0, turns);
             let sigma = a_e * (t0 - t[turns - 1]).powf(n) / 6.0;
             let mut rng = SplitMix64::new(seed);
             let (mut covered, mut sandwich_covered) = (0, 0);
@@ -1957,12 +1964,7 @@ mod tests {
         let (a_e, t0, turns) = (0.0063, 0.0, 26);
         let frame_s = 1.0 / 480.0;
         for (n, seed) in [(0.45, 31), (2.0 / 3.0, 32)] {
-            let t: Vec<f64> = (0..turns)
-                .map(|k| {
-                    let phase_left = 1.0 - (k as f64 + 0.5) / turns as f64;
-                    t0 - 0.5 * phase_left.powf(1.0 / (1.0 - 0.5 * n))
-                })
-                .collect();
+            let t = crowding_peaks(n, t0, turns);
             let sigma = a_e * (t0 - t[turns - 1]).powf(n) / 6.0;
             let mut rng = SplitMix64::new(seed);
             let (mut z_n, mut z_t0, mut n_covered, mut t0_covered) = (0.0, 0.0, 0, 0);
@@ -2009,12 +2011,7 @@ mod tests {
         let (a_e, t0, turns) = (0.0063, 0.0, 26);
         for halt in [HaltTime::Fixed(t0), HaltTime::Free] {
             for n in [0.45, 2.0 / 3.0] {
-                let peaks: Vec<f64> = (0..turns)
-                    .map(|k| {
-                        let phase_left = 1.0 - (k as f64 + 0.5) / turns as f64;
-                        t0 - 0.5 * phase_left.powf(1.0 / (1.0 - 0.5 * n))
-                    })
-                    .collect();
+                let peaks = crowding_peaks(n, t0, turns);
                 let t: Vec<f64> = (1..=240).rev().map(|k| t0 - k as f64 / 480.0).collect();
                 let sigma = a_e * (t0 - t[239]).powf(n) / 6.0;
                 let mut rng = SplitMix64::new(9);
