@@ -1801,11 +1801,22 @@ mod tests {
         let (a_e, t0) = (0.0063, 0.5);
         let t: Vec<f64> = (0..=180).map(|i| -0.5 + 0.005 * i as f64).collect();
         let sigma = a_e * 0.1f64.powf(n) / 8.0;
-        let e = t
-            .iter()
-            .map(|ti| a_e * (t0 - ti).powf(n) + sigma * rng.gaussian())
-            .collect();
+        let e = law_with_noise(&t, a_e, t0, n, sigma, rng);
         (t, e)
+    }
+
+    /// E = A_e (t0 − t)^n at the times `t`, each with Gaussian noise of σ = `sigma`.
+    fn law_with_noise(
+        t: &[f64],
+        a_e: f64,
+        t0: f64,
+        n: f64,
+        sigma: f64,
+        rng: &mut SplitMix64,
+    ) -> Vec<f64> {
+        t.iter()
+            .map(|ti| a_e * (t0 - ti).powf(n) + sigma * rng.gaussian())
+            .collect()
     }
 
     /// The 95 % interval for n must cover the true n in about 95 % of repeated
@@ -1933,10 +1944,7 @@ mod tests {
             let mut rng = SplitMix64::new(seed);
             let (mut covered, mut sandwich_covered) = (0, 0);
             for _ in 0..200 {
-                let e: Vec<f64> = t
-                    .iter()
-                    .map(|&ti| a_e * (t0 - ti).powf(n) + sigma * rng.gaussian())
-                    .collect();
+                let e = law_with_noise(&t, a_e, t0, n, sigma, &mut rng);
                 let fit = fit_power_law(&t, &e, HaltTime::Free).expect("fit");
                 let sandwich =
                     fit_with_limit(&t, &e, HaltTime::Free, MAX_ITERATIONS, &[]).expect("fit");
@@ -1969,10 +1977,7 @@ mod tests {
             let mut rng = SplitMix64::new(seed);
             let (mut z_n, mut z_t0, mut n_covered, mut t0_covered) = (0.0, 0.0, 0, 0);
             for _ in 0..200 {
-                let e: Vec<f64> = t
-                    .iter()
-                    .map(|&ti| a_e * (t0 - ti).powf(n) + sigma * rng.gaussian())
-                    .collect();
+                let e = law_with_noise(&t, a_e, t0, n, sigma, &mut rng);
                 let sighting = HaltSighting {
                     t_phi: t0 - frame_s * rng.uniform(),
                     ..visible_to_the_end(frame_s)
