@@ -141,11 +141,16 @@ fn near_rim_elevation(v: &Value) -> Option<f64> {
 /// segments' slopes). This is what undoes dropped frames: the file clock assumes every
 /// frame is 1/fps after the last, `t_true` knows the gaps.
 fn capture_time(index: &[f64], t_true: &[f64], fps: f64, t_file: f64) -> f64 {
-    let x = t_file * fps;
-    let n = index.len();
-    assert!(n >= 2 && n == t_true.len());
-    let k = index.partition_point(|&i| i <= x).clamp(1, n - 1);
-    let (x0, x1, y0, y1) = (index[k - 1], index[k], t_true[k - 1], t_true[k]);
+    interpolate(index, t_true, t_file * fps)
+}
+
+/// `ys` at `x`, linear between the sorted `xs` and extrapolated with the end segments'
+/// slopes.
+fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    let n = xs.len();
+    assert!(n >= 2 && n == ys.len());
+    let k = xs.partition_point(|&i| i <= x).clamp(1, n - 1);
+    let (x0, x1, y0, y1) = (xs[k - 1], xs[k], ys[k - 1], ys[k]);
     y0 + (x - x0) * (y1 - y0) / (x1 - x0)
 }
 
@@ -383,8 +388,10 @@ fn fit(v: &Value) -> Option<Fit> {
 #[derive(Debug, Clone, Default)]
 struct Measured {
     fps: f64,
-    /// t_φ on the file clock [s].
+    /// t_φ on eulerdisk's clock [s].
     t_phi: f64,
+    /// eulerdisk's clock: (`t_capture_s`, file `index`) of every frames.csv row.
+    clock: Vec<(f64, f64)>,
     peaks_fit: Option<Fit>,
     frames_fit: Option<Fit>,
     /// Two-view t_β on the file clock [s].
@@ -438,6 +445,11 @@ impl Measured {
         Ok(Measured {
             fps: num(&result["plan"]["fps"]["fps"], "result.json plan.fps.fps")?,
             t_phi: field(first, "t_capture_s") - field(first, "t_s"),
+            clock: frames
+                .iter()
+                .map(|r| (field(r, "t_capture_s"), field(r, "index")))
+                .filter(|(t, i)| t.is_finite() && i.is_finite())
+                .collect(),
             peaks_fit: fit(&result["peaks_fit"]["fit"]),
             frames_fit: fit(&result["frames_fit"]["fit"]),
             t_beta: result["series"]["strip"]["stop"]["t_beta"].as_f64(),
@@ -556,7 +568,16 @@ fn score(clip: &str, truth: &Truth, m: Option<&Measured>, error: Option<String>)
         s.failed.push("measured");
         return s;
     };
-    let cap = |t_file: f64| capture_time(&truth.index, &truth.t_true, m.fps, t_file);
+    // eulerdisk's clock to its fractional file index (frames.csv: `t_capture_s` by
+    // `index`; the file clock unless the motion showed frames missing), then to the
+    // truth's capture clock.
+    let cap = |t: f64| match m.clock.as_slice() {
+        [_, _, ..] => {
+            let (times, index): (Vec<f64>, Vec<f64>) = m.clock.iter().copied().unzip();
+            interpolate(&truth.index, &truth.t_true, interpolate(&times, &index, t))
+        }
+        _ => capture_time(&truth.index, &truth.t_true, m.fps, t),
+    };
     let t_phi = cap(m.t_phi);
 
     // n: both fits within tolerance, intervals covering the truth.

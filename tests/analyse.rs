@@ -748,3 +748,39 @@ fn render_clip(args: &[&str]) -> (tempfile::TempDir, Value) {
             .unwrap();
     (dir, truth)
 }
+
+/// The light fixture's two lost captures (40 and 171) leave no gap in its timestamps
+/// (`fps = 480` times the frames by their index): the rim's phase steps show them, and
+/// every frame from each step on is counted one frame later. The capture clock is
+/// then the truth's on every frame but the one between a step's two candidate frames
+/// (F = 21 on 170 and 171 alike, see above); on the file clock every frame after the
+/// first loss read one frame early, after the second two.
+#[test]
+fn frames_the_rim_shows_missing_are_counted_on_the_capture_clock() {
+    let truth = truth("side-light-n067-artefacts.truth.json");
+    let e = analyse(
+        "side-light-n067-artefacts.mp4",
+        "fps = 480\nplate = \"light\"\n",
+    );
+    let true_t: Vec<f64> = truth["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| f(&t["t"]))
+        .collect();
+    assert_eq!(true_t.len(), e.frames.len());
+    let off: Vec<usize> = (0..e.frames.len())
+        .filter(|&i| {
+            let measured = e.frames[i].t_capture - e.frames[0].t_capture;
+            (measured - (true_t[i] - true_t[0])).abs() > 1e-9
+        })
+        .collect();
+    assert!(off.len() <= 1 && off.iter().all(|&i| i == 170), "{off:?}");
+    assert!(
+        e.warnings
+            .iter()
+            .any(|w| w.contains("counted one frame later")),
+        "{:?}",
+        e.warnings
+    );
+}

@@ -341,8 +341,8 @@ struct MeasuredSpan {
     rest_tail_s: f64,
     /// The overlay's pictures of the frames near the last motion.
     kept: Option<KeptFrames>,
-    /// The duplicated and interpolated frames, flagged by the signal stage.
-    repeated: Vec<footage::RepeatedFrame>,
+    /// Flags found before the signal stage ([`known_flags`]), positions in `frames`.
+    known_flags: Vec<signal::FrameFlag>,
     /// The near top rim from the frames leaning towards the camera, when read.
     top_rim_leaning: Option<TopRimLeaning>,
 }
@@ -523,7 +523,9 @@ pub struct FrameRecord {
     pub index: usize,
     /// Capture time from the first frame [s]: the container's timestamp mapped to
     /// the capture clock, or index / fps without timestamps (see
-    /// [`ExperimentPlan::frame_times`]).
+    /// [`ExperimentPlan::frame_times`]), one frame later for each frame the rim's
+    /// phase shows missing before it where the timestamps show no gap
+    /// ([`signal::missing_frames`]).
     pub t_capture: f64,
     /// Time with the halt at 0 [s].
     pub t: f64,
@@ -1385,9 +1387,35 @@ pub fn analyse_clip_keeping(
                     .into(),
             );
         }
-        let (series, zero) = signal_series(
+        let hidden = hidden_drops(
             &mut frames,
             &repeated,
+            two_view,
+            &signal_config,
+            rim_model(&scale, &params).as_ref(),
+            1.0 / fps.fps,
+        );
+        if !hidden.is_empty() {
+            let at: Vec<String> = hidden
+                .iter()
+                .map(|f| {
+                    format!(
+                        "{} (t = {:.4} s)",
+                        frames[f.index].index, frames[f.index].t_capture
+                    )
+                })
+                .collect();
+            warnings.push(format!(
+                "the rim's phase steps by a frame's turn at frame(s) {} where the timestamps \
+                 show no gap: a frame missing from the clip before each, so the capture times \
+                 from there on are counted one frame later (signal::missing_frames)",
+                at.join(", ")
+            ));
+        }
+        let known_flags = known_flags(&repeated, hidden);
+        let (series, zero) = signal_series(
+            &mut frames,
+            &known_flags,
             two_view,
             &signal_config,
             rim_model(&scale, &params).as_ref(),
@@ -1425,7 +1453,7 @@ pub fn analyse_clip_keeping(
             local_fit_periods: signal_config.state_window_periods,
             rest_tail_s: signal_config.rest_tail_s,
             kept: keeper.and_then(FrameKeeper::finish),
-            repeated,
+            known_flags,
             top_rim_leaning,
         })
     };
@@ -1463,7 +1491,7 @@ pub fn analyse_clip_keeping(
         metres_per_px,
         rest_tail_s,
         kept,
-        repeated,
+        known_flags,
         top_rim_leaning,
         ..
     } = measured;
@@ -1550,7 +1578,7 @@ pub fn analyse_clip_keeping(
         let mut frames_again = frames.clone();
         let again = signal_series(
             &mut frames_again,
-            &repeated,
+            &known_flags,
             two_view,
             &config,
             rim_model(&scale, &params).as_ref(),
@@ -1761,7 +1789,7 @@ pub fn analyse_clip_keeping(
 /// ([`FrameRecord::t`]).
 fn signal_series(
     frames: &mut [FrameRecord],
-    repeated: &[footage::RepeatedFrame],
+    known_flags: &[signal::FrameFlag],
     two_view: bool,
     config: &SignalConfig,
     model: &dyn RimModel,
@@ -1794,23 +1822,25 @@ fn signal_series(
         series.halt.rest_level = 0.0;
         series = signal::with_zero_moved(&t, &z, &series, 0.0, model, config)?;
     }
-    for r in repeated {
-        let (statistic, neighbours) = (r.statistic, r.neighbours);
-        series.flags.push(signal::FrameFlag {
-            index: r.index,
-            t: series.halt.shifted_t[r.index],
-            reason: match r.kind {
-                footage::RepeatKind::Duplicated => signal::SkipReason::DuplicatedFrame {
-                    step: statistic,
-                    neighbours,
-                },
-                footage::RepeatKind::Interpolated => signal::SkipReason::InterpolatedFrame {
-                    residual: statistic,
-                    neighbours,
-                },
-            },
-        });
-    }
+    // The flags found before the stage ([`known_flags`]), on its time axis. A frame
+    // missing where the timestamps show none is flagged by the rim's phase step that
+    // showed it, not by the gap its count left in the capture times.
+    let missing =
+        |f: &signal::FrameFlag| matches!(f.reason, signal::SkipReason::RimPhaseStep { .. });
+    let counted = |f: &signal::FrameFlag| {
+        known_flags.iter().any(|k| missing(k) && k.index == f.index)
+            && matches!(
+                f.reason,
+                signal::SkipReason::TimestampGap { .. } | signal::SkipReason::RimPhaseStep { .. }
+            )
+    };
+    series.flags.retain(|f| !counted(f));
+    series
+        .flags
+        .extend(known_flags.iter().map(|k| signal::FrameFlag {
+            t: series.halt.shifted_t[k.index],
+            ..k.clone()
+        }));
     series.flags.sort_by_key(|f| f.index);
     // Flags carry the clip's frame numbers (a span's positions are not).
     for flag in &mut series.flags {
@@ -1820,6 +1850,68 @@ fn signal_series(
         record.t = *shifted;
     }
     Ok((series, zero))
+}
+
+/// The flags known before the signal stage, at their positions in the frames (their
+/// times are set on the stage's axis, [`signal_series`]): the duplicated and
+/// interpolated frames (`repeated`, left out of the fits) and the frames missing
+/// where the timestamps show no gap (`hidden`, [`hidden_drops`]).
+fn known_flags(
+    repeated: &[footage::RepeatedFrame],
+    hidden: Vec<signal::FrameFlag>,
+) -> Vec<signal::FrameFlag> {
+    repeated
+        .iter()
+        .map(|r| signal::FrameFlag {
+            index: r.index,
+            t: f64::NAN,
+            reason: match r.kind {
+                footage::RepeatKind::Duplicated => signal::SkipReason::DuplicatedFrame {
+                    step: r.statistic,
+                    neighbours: r.neighbours,
+                },
+                footage::RepeatKind::Interpolated => signal::SkipReason::InterpolatedFrame {
+                    residual: r.statistic,
+                    neighbours: r.neighbours,
+                },
+            },
+        })
+        .chain(hidden)
+        .collect()
+}
+
+/// Frames missing from the clip where its timestamps show no gap
+/// ([`signal::missing_frames`], from a first pass of the signal stage over the heights
+/// as measured): each such frame and every one after it moves one nominal period
+/// later on the capture clock (`t_capture`), so that no local fit, precession rate or
+/// energy time spans a frame that is not there. Returns the rim phase steps that
+/// showed them (positions in `frames`; `period` is the nominal frame interval [s]);
+/// none when the first pass fails (the signal stage then reports why).
+fn hidden_drops(
+    frames: &mut [FrameRecord],
+    repeated: &[footage::RepeatedFrame],
+    two_view: bool,
+    config: &SignalConfig,
+    model: &dyn RimModel,
+    period: f64,
+) -> Vec<signal::FrameFlag> {
+    let (t, z) = rim_series(frames);
+    let beta: Option<Vec<f64>> = two_view.then(|| {
+        frames
+            .iter()
+            .map(|f| f.beta_raw.unwrap_or(f64::NAN))
+            .collect()
+    });
+    let Ok(series) = signal::analyse(&t, &z, beta.as_deref(), model, config) else {
+        return Vec::new();
+    };
+    let repeated: Vec<usize> = repeated.iter().map(|r| r.index).collect();
+    let steps = signal::missing_frames(&series.flags, period, &repeated);
+    for (i, record) in frames.iter_mut().enumerate() {
+        let missing = steps.iter().filter(|f| f.index <= i).count();
+        record.t_capture += missing as f64 * period;
+    }
+    steps
 }
 
 /// The rim's profile the peaks and the states are read with: the camera's

@@ -129,7 +129,9 @@ pub use peaks::{
     ExtremumMethod, Peak, PeakSeries, PrecessionSample, Trough, find_peaks, precession,
 };
 pub use rim::{RimModel, SideViewRim, ThesisRim};
-pub use skips::{FrameFlag, SkipReason, flags_within, strip_angle_steps, timestamp_gaps};
+pub use skips::{
+    FrameFlag, SkipReason, flags_within, missing_frames, strip_angle_steps, timestamp_gaps,
+};
 pub use strip::{
     StripSeries, StripStop, derivative, moving_average, strip_series, strip_stop_time,
     unwrap_half_turns,

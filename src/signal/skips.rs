@@ -448,6 +448,44 @@ pub(crate) fn spans_gap(t: &[f64], frame: f64, gap_factor: f64) -> bool {
 /// stepped model fits them worse).
 const WINDOW_PERIODS: f64 = 1.5;
 
+/// The frames missing from a clip whose timestamps show no gap (a camera or an
+/// encoder that drops a capture and stamps the next frame a period on): the rim
+/// phase steps among `flags` (halt-shifted times) at no timestamp gap and at no
+/// duplicated or interpolated frame or beside one (`repeated`: file positions of
+/// frames kept without a capture of their own), whose test window of
+/// [`WINDOW_PERIODS`] oscillations on each side ends at least one more window before
+/// the halt. Each is one frame missing just before it, so the capture clock runs one
+/// nominal period ahead of the timestamps from it on.
+///
+/// The margin is the halt's: the test's window after a step reaches the frames it
+/// holds up to the halt, and a halt seen late by an encoder's still pictures (12–15
+/// ms on the open footage's codec draws and the full-size renders, which the energy
+/// law's bound moves back later in `analyse`) puts those pictures inside a step
+/// test near it: o05 of the open footage at CRF 20 flagged its last moving frame (F
+/// = 17.5) against a halt 6 frames late. A flag is enough to warn; counting a frame
+/// that is not missing would move every time after it, so the clock is corrected
+/// only where the window is clear of the halt.
+pub fn missing_frames(flags: &[FrameFlag], frame_s: f64, repeated: &[usize]) -> Vec<FrameFlag> {
+    flags
+        .iter()
+        .filter(|f| {
+            let SkipReason::RimPhaseStep { phase_step, .. } = f.reason else {
+                return false;
+            };
+            let gap = flags
+                .iter()
+                .any(|g| g.index == f.index && matches!(g.reason, SkipReason::TimestampGap { .. }));
+            let beside_repeated = repeated
+                .iter()
+                .any(|&r| r + 1 >= f.index && r <= f.index + 1);
+            // The test's window: WINDOW_PERIODS periods of 2π/phase_step frames.
+            let window_s = WINDOW_PERIODS * 2.0 * PI / phase_step * frame_s;
+            !gap && !beside_repeated && f.t <= -2.0 * window_s
+        })
+        .cloned()
+        .collect()
+}
+
 /// Below this many frames per oscillation the local fits of the phase-step test are
 /// too short to be trusted (the last few oscillations before the halt).
 const MIN_FRAMES_PER_PERIOD: usize = 6;

@@ -1729,3 +1729,48 @@ fn undetermined_states_do_not_place_the_zero() {
     let error = series.halt.rest_level + zero.offset - lift;
     assert!(error.abs() < 0.5e-6, "{zero:?}: error {error:e} m");
 }
+
+/// Which rim phase steps count as frames missing from the clock: a step with a clear
+/// window before the halt does; one whose window of 1.5 oscillations on each side
+/// reaches within another window of the halt does not (the halt may be seen late by
+/// still pictures, which the window would then hold); nor does a step at a timestamp
+/// gap (the clock has it already) or beside a duplicated frame (a capture missing,
+/// the frame kept).
+#[test]
+fn a_frame_missing_from_the_clock_is_a_phase_step_clear_of_the_halt() {
+    let frame = 1.0 / 480.0;
+    // 8 frames an oscillation: the phase step ψ̇ Δt is a quarter turn, and the test's
+    // window 12 frames on each side.
+    let step = |index: usize, frames_before_halt: f64| FrameFlag {
+        index,
+        t: -frames_before_halt * frame,
+        reason: SkipReason::RimPhaseStep {
+            phase_step: 2.0 * PI / 8.0,
+            statistic: 600.0,
+        },
+    };
+    let gap = FrameFlag {
+        index: 300,
+        t: -80.0 * frame,
+        reason: SkipReason::TimestampGap {
+            gap_s: 2.0 * frame,
+            nominal_s: frame,
+            missing_frames: 1,
+        },
+    };
+    let flags = [
+        step(100, 280.0),
+        step(300, 80.0),
+        gap,
+        step(330, 50.0),
+        step(357, 23.0),
+        step(356, 25.0),
+    ];
+    let counted: Vec<usize> = missing_frames(&flags, frame, &[329])
+        .iter()
+        .map(|f| f.index)
+        .collect();
+    // 100 counts; 300 has its gap, 330 a duplicated frame beside it; 357 lies less
+    // than two windows (24 frames) before the halt, 356 a frame more.
+    assert_eq!(counted, vec![100, 356]);
+}
