@@ -10,20 +10,23 @@
 //!
 //! # Time bases
 //!
-//! * **File clock**: what eulerdisk sees, `index / fps` from the clip's first frame, fps
-//!   from `result.json` `plan.fps.fps`. `frames.csv` has `index`, `t_s` (halt at 0) and
-//!   `t_capture_s` (file clock), so the measured halt t_φ on the file clock is
+//! * **File clock**: `index / fps` from the clip's first frame, fps from `result.json`
+//!   `plan.fps.fps`. eulerdisk's own clock, `frames.csv` `t_capture_s`, is the file
+//!   clock but one frame later after each frame the rim's phase shows missing
+//!   (`signal::missing_frames`). `frames.csv` has `index`, `t_s` (halt at 0) and
+//!   `t_capture_s`, so the measured halt t_φ on eulerdisk's clock is
 //!   `t_capture_s − t_s` (one value for every row). `peaks_fit.fit.t0` and
 //!   `frames_fit.fit.t0` are relative to t_φ (fitted halt = t_φ + fit.t0); `peaks.csv`
 //!   `t_s` is relative to t_φ; two-view t_β is `series.strip.stop.t_beta` in
-//!   `result.json`, on the file clock; `flags.csv` is scored by its file frame `index`.
+//!   `result.json`, on eulerdisk's clock; `flags.csv` is scored by its file frame `index`.
 //! * **Capture clock**: the truth's (`t0`, `t_phi`, `true_peaks.t`, `frames.t_true`).
 //!   After a dropped frame the file clock lags the capture clock by a frame per drop.
 //!
-//! Every measured instant is taken to the capture clock through the frame index
-//! ([`capture_time`]): file time → fractional file index (t·fps) → `frames.t_true`
-//! interpolated over `frames.index`. Differences of capture times are then compared
-//! with the truth.
+//! Every measured instant is taken to the capture clock through the frame index:
+//! eulerdisk's time → fractional file index (`t_capture_s` interpolated over `index`;
+//! t·fps, [`capture_time`], when frames.csv has fewer than two rows) →
+//! `frames.t_true` interpolated over `frames.index`. Differences of capture times are
+//! then compared with the truth.
 
 use std::collections::BTreeMap;
 use std::fs;
@@ -394,7 +397,7 @@ struct Measured {
     clock: Vec<(f64, f64)>,
     peaks_fit: Option<Fit>,
     frames_fit: Option<Fit>,
-    /// Two-view t_β on the file clock [s].
+    /// Two-view t_β on eulerdisk's clock [s].
     t_beta: Option<f64>,
     /// File index → z_rim [px] (NaN: no value).
     z_rim_px: BTreeMap<i64, f64>,
@@ -571,12 +574,13 @@ fn score(clip: &str, truth: &Truth, m: Option<&Measured>, error: Option<String>)
     // eulerdisk's clock to its fractional file index (frames.csv: `t_capture_s` by
     // `index`; the file clock unless the motion showed frames missing), then to the
     // truth's capture clock.
-    let cap = |t: f64| match m.clock.as_slice() {
-        [_, _, ..] => {
-            let (times, index): (Vec<f64>, Vec<f64>) = m.clock.iter().copied().unzip();
+    let (times, index): (Vec<f64>, Vec<f64>) = m.clock.iter().copied().unzip();
+    let cap = |t: f64| {
+        if times.len() >= 2 {
             interpolate(&truth.index, &truth.t_true, interpolate(&times, &index, t))
+        } else {
+            capture_time(&truth.index, &truth.t_true, m.fps, t)
         }
-        _ => capture_time(&truth.index, &truth.t_true, m.fps, t),
     };
     let t_phi = cap(m.t_phi);
 
@@ -1157,6 +1161,21 @@ mod tests {
         assert!((s.height_offset_px.unwrap() - 0.1).abs() < 1e-9);
         assert!(s.height_gain.unwrap().abs() < 1e-9);
         assert!((s.phi_median_err.unwrap() - 0.01).abs() < 1e-9);
+        // The same measurement on eulerdisk's clock with the lost capture counted
+        // (frames.csv `t_capture_s` a frame later from file frame 100 on, t_φ at
+        // capture 480): the same scores.
+        let counted = Measured {
+            clock: (0..n_frames as usize)
+                .map(|i| (truth.capture_index[i] as f64 / 480.0, i as f64))
+                .collect(),
+            t_phi: 1.0,
+            ..m.clone()
+        };
+        let on_capture_clock = score("c", &truth, Some(&counted), None);
+        assert_eq!(on_capture_clock.failed, s.failed);
+        assert!((on_capture_clock.t_phi_err_frames.unwrap()).abs() < 1e-9);
+        assert!((on_capture_clock.t0_err_ms.unwrap() - 1.0).abs() < 1e-9);
+        assert_eq!(on_capture_clock.peaks, s.peaks);
         let unmeasured = score("c", &truth, None, Some("error: x".into()));
         assert_eq!(unmeasured.failed, vec!["measured"]);
     }
