@@ -1784,8 +1784,8 @@ pub fn analyse_clip_keeping(
 }
 
 /// The signal stage (thesis §3.2.4–§3.3.3) on the measured frames: t_φ, the peaks,
-/// the states, β and the skip flags, with the `repeated` frames flagged too (by
-/// the clip's frame numbers); sets each frame's time from the halt
+/// the states, β and the skip flags, with the `known_flags` ([`known_flags`]) among
+/// them (by the clip's frame numbers); sets each frame's time from the halt
 /// ([`FrameRecord::t`]).
 fn signal_series(
     frames: &mut [FrameRecord],
@@ -1797,12 +1797,7 @@ fn signal_series(
     metres_per_px: f64,
 ) -> Result<(StateSeries, Option<ZeroFromMotion>), SignalError> {
     let (t, z) = rim_series(frames);
-    let beta: Option<Vec<f64>> = two_view.then(|| {
-        frames
-            .iter()
-            .map(|f| f.beta_raw.unwrap_or(f64::NAN))
-            .collect()
-    });
+    let beta = strip_angles(frames, two_view);
     let mut series = signal::analyse(&t, &z, beta.as_deref(), model, config)?;
     // The heights from the zero the motion places (signal::motion_zero), with the
     // camera's own profile: every height moves by the rest level and the motion's
@@ -1896,12 +1891,7 @@ fn hidden_drops(
     period: f64,
 ) -> Vec<signal::FrameFlag> {
     let (t, z) = rim_series(frames);
-    let beta: Option<Vec<f64>> = two_view.then(|| {
-        frames
-            .iter()
-            .map(|f| f.beta_raw.unwrap_or(f64::NAN))
-            .collect()
-    });
+    let beta = strip_angles(frames, two_view);
     let Ok(series) = signal::analyse(&t, &z, beta.as_deref(), model, config) else {
         return Vec::new();
     };
@@ -1943,6 +1933,17 @@ fn motion_profile(
         RimZeroChoice::Motion => scale.side_view_rim(disk),
         RimZeroChoice::Rest => None,
     }
+}
+
+/// The strip angles β [rad] of a two-view clip's frames (NaN: no strip), as the
+/// signal stage reads them; `None` for a side view.
+fn strip_angles(frames: &[FrameRecord], two_view: bool) -> Option<Vec<f64>> {
+    two_view.then(|| {
+        frames
+            .iter()
+            .map(|f| f.beta_raw.unwrap_or(f64::NAN))
+            .collect()
+    })
 }
 
 /// The frames' capture times [s] and rim heights z_rim [m] (NaN: no edge), as the
