@@ -413,6 +413,9 @@ struct Measured {
     /// `precession`: the heights' φ over the precession's at the window's mean, k + c/x̄
     /// (eulerdisk::precession).
     precession_agreement: Option<f64>,
+    /// `turn_timing.Ok`: n from the turns' timing alone and its 95 % interval
+    /// (eulerdisk::turn_timing).
+    turn_timing: Option<(f64, (f64, f64))>,
 }
 
 fn read_csv(path: &Path) -> Result<Vec<BTreeMap<String, String>>, String> {
@@ -482,6 +485,17 @@ impl Measured {
                 f
             },
             near_rim_elevation_rad: result["plan"]["scale"]["near_rim_elevation_rad"].as_f64(),
+            turn_timing: {
+                let t = &result["turn_timing"]["Ok"];
+                match (
+                    t["n"].as_f64(),
+                    t["ci95_n"][0].as_f64(),
+                    t["ci95_n"][1].as_f64(),
+                ) {
+                    (Some(n), Some(lo), Some(hi)) => Some((n, (lo, hi))),
+                    _ => None,
+                }
+            },
             precession_agreement: {
                 let p = &result["precession"];
                 match (
@@ -554,6 +568,8 @@ struct Score {
     phi_signed_median_err: Option<f64>,
     /// The precession check's heights' φ over the precession's, − 1 (information).
     precession_err: Option<f64>,
+    /// n from the turns' timing alone against the truth (information).
+    n_turn_timing: Option<NScore>,
     /// Targets missed, by short name (see the legend).
     failed: Vec<&'static str>,
 }
@@ -623,6 +639,14 @@ fn score(clip: &str, truth: &Truth, m: Option<&Measured>, error: Option<String>)
         (!e.is_empty()).then(|| e[e.len() / 2])
     };
     s.precession_err = m.precession_agreement.map(|a| a - 1.0);
+    s.n_turn_timing = score_n(
+        m.turn_timing.map(|(n, ci95_n)| Fit {
+            n,
+            ci95_n,
+            t0: f64::NAN,
+        }),
+        truth,
+    );
     s.peaks = Some(pm);
     // Two-view: t_β − t_φ within 2 frames.
     if let Some(truth_gap) = truth.t_beta_minus_t_phi {
@@ -759,14 +783,22 @@ fn row(s: &Score) -> String {
 const HEADER: &str = "| clip | measured | n peaks fit (Δ, CI) | n per-frame fit (Δ, CI) | t0 err ms | tφ err frames | z_rim RMS px | peaks found/true, spurious | φ med err % | tβ−tφ err frames | drops flagged/true, false | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 /// The information table: what the targets rest on, not scored.
-const INFO_HEADER: &str = "| clip | heights' offset a px | heights' gain b % | ε at the near rim, err ° | φ at the peaks, signed median err % | precession check: φ heights/precession − 1, % | codec smoothing α P / B, frame² |\n|---|---|---|---|---|---|---|";
+const INFO_HEADER: &str = "| clip | heights' offset a px | heights' gain b % | ε at the near rim, err ° | φ at the peaks, signed median err % | precession check: φ heights/precession − 1, % | codec smoothing α P / B, frame² | n from the turns' timing (Δ, CI) |\n|---|---|---|---|---|---|---|---|";
 
 fn info_row(s: &Score) -> String {
     let show = |x: Option<f64>, scale: f64, digits: usize| {
         x.map_or("–".into(), |x| format!("{:+.*}", digits, scale * x))
     };
+    let timing = s.n_turn_timing.as_ref().map_or("–".into(), |x| {
+        format!(
+            "{:.3} ({:+.3}, {})",
+            x.n,
+            x.delta,
+            if x.covers { "covers" } else { "misses" }
+        )
+    });
     format!(
-        "| {} | {} | {} | {} | {} | {} | {} / {} |",
+        "| {} | {} | {} | {} | {} | {} | {} / {} | {timing} |",
         s.clip,
         show(s.height_offset_px, 1.0, 3),
         show(s.height_gain, 100.0, 2),
@@ -802,7 +834,9 @@ gives the precession rate, at the window's mean), which needs no truth. This foo
 follows eq. 2.29 as printed, whose φ(ψ̇) is 0.3–1.3 % smaller at φ = 0.005–0.02 rad. Last, the
 codec's smoothing over time: each frame's error against the true heights' second difference per
 frame, e = a + α z″, one α for the P and one for the B pictures (frames.csv picture_type): a
-temporal low-pass of variance 2α frame² that reads the peaks low and the troughs high.";
+temporal low-pass of variance 2α frame² that reads the peaks low and the troughs high. And n from
+the turns' timing alone (result.json turn_timing: the peaks' times at their counted ψ, no height,
+scale or zero), with its 95 % interval; the truth's eq. 2.29 as printed reads it 0.004–0.007 high.";
 
 const LEGEND: &str = "\
 Targets (issue 12 §5), per clip, no config: measured; n within ±0.02 of the truth (±0.03 when the
@@ -952,10 +986,20 @@ fn run() -> Result<bool, String> {
         println!("{}", info_row(s));
     }
     println!(
-        "| over the clips | offset {} px | | ε err {} ° | | {} % | |\n\n{INFO_LEGEND}",
+        "| over the clips | offset {} px | | ε err {} ° | | {} % | | Δ {}, {} of {} cover |\n\n{INFO_LEGEND}",
         rms_and_largest(scores.iter().map(|s| s.height_offset_px)),
         rms_and_largest(scores.iter().map(|s| s.elevation_err_deg)),
-        rms_and_largest(scores.iter().map(|s| s.precession_err.map(|x| 100.0 * x)))
+        rms_and_largest(scores.iter().map(|s| s.precession_err.map(|x| 100.0 * x))),
+        rms_and_largest(
+            scores
+                .iter()
+                .map(|s| s.n_turn_timing.as_ref().map(|x| x.delta))
+        ),
+        scores
+            .iter()
+            .filter(|s| s.n_turn_timing.as_ref().is_some_and(|x| x.covers))
+            .count(),
+        scores.iter().filter(|s| s.n_turn_timing.is_some()).count()
     );
     let measured = scores.iter().filter(|s| s.measured).count();
     let passed = scores.iter().filter(|s| s.failed.is_empty()).count();

@@ -16,4 +16,5 @@ pub mod rng;
 pub mod signal;
 pub mod stats;
 pub mod study;
+pub mod turn_timing;
 pub mod vision;

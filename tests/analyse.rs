@@ -210,16 +210,7 @@ fn the_precession_rate_checks_the_scale() {
             .any(|w| w.contains("precession's disagree"))
     };
     assert!(!warned(&e), "{:?}", e.warnings);
-    let c = &e.plan.calibration.calibration;
-    let side = c.z_base - c.z_t;
-    let text = format!(
-        "fps = 480\n[calibration]\nx_l = {}\nx_r = {}\nz_t = {}\nz_base = {}\n",
-        c.x_l,
-        c.x_r,
-        c.z_t - 0.06 * side,
-        c.z_base
-    );
-    let moved = analyse("side-dark-n050.mp4", &text);
+    let moved = analyse("side-dark-n050.mp4", &top_rim_misread(&e, 0.06));
     assert!(moved.plan.scale.at_near_rim(), "{}", moved.plan.scale.used);
     let scale = moved.plan.metres_per_px / e.plan.metres_per_px;
     assert!((scale * 1.06 - 1.0).abs() < 0.005, "scale ×{scale}");
@@ -231,6 +222,60 @@ fn the_precession_rate_checks_the_scale() {
         misread.describe()
     );
     assert!(warned(&moved), "{:?}", moved.warnings);
+}
+
+/// A config (480 fps) with `e`'s calibration but the near top rim z_t moved up by
+/// `share` of the side's height, which makes the scale that much too small.
+fn top_rim_misread(e: &Experiment, share: f64) -> String {
+    let c = &e.plan.calibration.calibration;
+    format!(
+        "fps = 480\n[calibration]\nx_l = {}\nx_r = {}\nz_t = {}\nz_base = {}\n",
+        c.x_l,
+        c.x_r,
+        c.z_t - share * (c.z_base - c.z_t),
+        c.z_base
+    )
+}
+
+/// n from the turns' timing alone (eulerdisk::turn_timing) recovers the fixture's n
+/// within its interval, and neither the zero of z_rim nor the scale moves it: the
+/// zero taken from the still disk's edge instead of the motion (about 0.09 px apart
+/// here) moves the peaks fit's n by 0.007 and the timing's by 0.0003; the scale
+/// misread by 6 % (z_t moved) moves the timing's by 0.0002.
+#[test]
+fn the_turns_timing_gives_n_without_the_heights() {
+    let true_n = f(&truth("side-dark-n050.truth.json")["true_n"]);
+    let timing = |e: &Experiment| {
+        e.turn_timing
+            .clone()
+            .expect("recorded")
+            .expect("a timing fit")
+    };
+    let e = analyse("side-dark-n050.mp4", "fps = 480\n");
+    let fit = timing(&e);
+    assert!((fit.n - true_n).abs() < 0.01, "n = {}", fit.n);
+    assert!(
+        (fit.ci95_n.0..=fit.ci95_n.1).contains(&true_n),
+        "{:?}",
+        fit.ci95_n
+    );
+    assert!(fit.peaks >= 20, "{} peaks", fit.peaks);
+
+    let rest = analyse(
+        "side-dark-n050.mp4",
+        "fps = 480\n[fit]\nrim_zero = \"rest\"\n",
+    );
+    assert!(rest.plan.rim_zero_from_motion.is_none());
+    let heights_moved = (rest.peaks_fit.fit.n - e.peaks_fit.fit.n).abs();
+    let timing_moved = (timing(&rest).n - fit.n).abs();
+    assert!(
+        heights_moved > 0.004 && timing_moved < 0.1 * heights_moved,
+        "the zero moved the heights' n by {heights_moved}, the timing's by {timing_moved}"
+    );
+
+    let misread = analyse("side-dark-n050.mp4", &top_rim_misread(&e, 0.06));
+    assert!((misread.plan.metres_per_px / e.plan.metres_per_px * 1.06 - 1.0).abs() < 0.005);
+    assert!((timing(&misread).n - fit.n).abs() < 0.001);
 }
 
 #[test]

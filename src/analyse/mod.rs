@@ -42,6 +42,7 @@ use crate::report::diagnostics;
 use crate::signal::{
     self, RimModel, SideViewRim, SignalConfig, SignalError, StateSeries, ThesisRim,
 };
+use crate::turn_timing::{self, TurnTimingFit};
 use crate::vision::{
     self, BandWindow, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge, RimGauge,
     RimHeight, RimReading, SideViewConfig, StripFinder, ThresholdSource, VisionError,
@@ -590,6 +591,10 @@ pub struct Experiment {
     /// written before it was recorded.
     #[serde(default)]
     pub precession: Option<PrecessionCheck>,
+    /// n from the peaks' times alone in the fit window ([`turn_timing::fit_turn_timing`]),
+    /// or why it could not be fitted; `None` in results written before it was recorded.
+    #[serde(default)]
+    pub turn_timing: Option<Result<TurnTimingFit, String>>,
     pub warnings: Vec<String>,
     /// Diagnostic images (PNG): the calibration frame with its points, and the
     /// frame of the highest rim thresholded with the band and the edge found.
@@ -1714,6 +1719,26 @@ pub fn analyse_clip_keeping(
         ));
     }
 
+    // n from the peaks' times alone (crate::turn_timing): no height, scale or zero
+    // enters it; reported beside the fits, never combined with them.
+    let turn_timing = turn_timing_fit(&series, window_s);
+    if let Ok(timing) = &turn_timing
+        && let Some(gap) = disjoint_intervals(timing.ci95_n, peaks_fit.fit.ci95_n)
+    {
+        warnings.push(format!(
+            "n from the turns' timing alone, {:.3} ({:.3} … {:.3}), and from the energies at \
+             the peaks, {:.3} ({:.3} … {:.3}), have disjoint 95 % intervals ({gap:.3} apart): the \
+             heights' zero, a codec's smoothing of the swing, or rolling away from the \
+             stationary state (nutation, slip) moves one and not the other",
+            timing.n,
+            timing.ci95_n.0,
+            timing.ci95_n.1,
+            peaks_fit.fit.n,
+            peaks_fit.fit.ci95_n.0,
+            peaks_fit.fit.ci95_n.1,
+        ));
+    }
+
     let threshold_png = highest.map_or_else(Vec::new, |(_, edge_row, frame)| {
         png(&diagnostics::threshold_image(
             &frame.view(),
@@ -1774,6 +1799,7 @@ pub fn analyse_clip_keeping(
         full_state_fit,
         skips_in_window,
         precession,
+        turn_timing: Some(turn_timing),
         warnings,
         diagnostics: Diagnostics {
             calibration_png,
@@ -2044,6 +2070,26 @@ fn halt_sighting(
 /// A difference across a timestamp gap counts one turn where the gap hid more (its
 /// peaks are missing): there the forward difference is used if it does not cross
 /// the gap, else the peak is left out.
+/// The timing law of the turns fitted to the peaks in the last `window_s` before the
+/// halt, at their counted ψ ([`turn_timing::fit_turn_timing`]).
+fn turn_timing_fit(series: &StateSeries, window_s: f64) -> Result<TurnTimingFit, String> {
+    let (t, psi): (Vec<f64>, Vec<f64>) = series
+        .peaks
+        .peaks
+        .iter()
+        .zip(&series.peaks.precession)
+        .filter(|(peak, _)| peak.t >= -window_s)
+        .map(|(peak, p)| (peak.t, p.psi))
+        .unzip();
+    turn_timing::fit_turn_timing(&t, &psi).map_err(|e| e.to_string())
+}
+
+/// How far apart two intervals lie, `None` when they overlap.
+fn disjoint_intervals(a: (f64, f64), b: (f64, f64)) -> Option<f64> {
+    let gap = (a.0 - b.1).max(b.0 - a.1);
+    (gap > 0.0).then_some(gap)
+}
+
 fn peak_energies(params: &DiskParams, series: &StateSeries) -> Vec<EnergySample> {
     let precession = &series.peaks.precession;
     let peaks = &series.peaks.peaks;

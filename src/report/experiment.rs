@@ -27,6 +27,7 @@ use crate::analyse::{EnergyFit, Experiment, ExperimentPlan};
 use crate::energy::{self, SightingUse};
 use crate::overlay::{OverlayIndex, OverlaySpec, write_measurement_overlays};
 use crate::precession;
+use crate::turn_timing::TurnTimingFit;
 
 #[derive(Serialize)]
 struct FrameRow {
@@ -349,6 +350,31 @@ fn zero_source(plan: &ExperimentPlan) -> String {
     }
 }
 
+/// n from the turns' timing alone beside the peaks fit's (crate::turn_timing).
+fn turn_timing_sentence(
+    timing: &Result<TurnTimingFit, String>,
+    peaks: &energy::PowerLawFit,
+) -> String {
+    match timing {
+        Ok(t) => format!(
+            "From the turns' timing alone (the peaks' times at their counted ψ, t_k = T − c \
+             (ψ_end − ψ_k)^q with q = 1/(1 − n/2), which stationary rolling near the halt gives; \
+             no height, scale or zero of z_rim enters it): n = {:.3} (95 % CI {:.3} … {:.3}) \
+             from {} peaks, {:+.3} from the energies at the peaks; the turns end {:+.2} ms \
+             from t_φ, the peaks' times lie {:.2} ms RMS about the law. A check of the \
+             heights, not combined with them.",
+            t.n,
+            t.ci95_n.0,
+            t.ci95_n.1,
+            t.peaks,
+            t.n - peaks.n,
+            1e3 * t.t_end,
+            1e3 * t.residual_rms_s
+        ),
+        Err(reason) => format!("n from the turns' timing alone: not fitted ({reason})."),
+    }
+}
+
 /// How the halt seen in the footage entered the peaks fit's t0 (times from t_φ).
 fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
     let seen = format!(
@@ -637,6 +663,9 @@ fn experiment_page(
         }
         h2 { "Power law E = A_e (t0 − t)^n" }
         (table(&["energy", "n", "95 % CI of n", "of it ± from z_rim's zero", "A_e [J s^-n]", "t0 [s]", "R²", "points"], &fit_rows, |_, _| false))
+        @if let Some(timing) = &e.turn_timing {
+            p { (turn_timing_sentence(timing, &e.peaks_fit.fit)) }
+        }
         @if let Some(spin) = e.full_state_fit.as_ref().and(carried_spin_energy(e)) {
             p { (format!("Eq. 3.6 keeps the spin the disk carries into the flat: with β̇ = {:.2} rad/s at t_φ, \
                 C/2 β̇² + m/2 (R β̇)² = {:.2e} J remain at the halt, which a power law to zero does not describe. \
