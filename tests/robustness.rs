@@ -19,7 +19,9 @@
 //! check (`eulerdisk::precession`: φ from the heights over φ from the precession rate,
 //! − 1, which our renders' stationary rolling makes the heights' φ error), and the
 //! codec's smoothing over time, α of the P and of the B pictures
-//! (`eulerdisk::footage::smoothing_by_picture_type`). `EULERDISK_ROBUSTNESS_KEEP=DIR` keeps the clips (`sNN.mp4`) and
+//! (`eulerdisk::footage::smoothing_by_picture_type`); and, after the n column's
+//! tolerance, n from the turns' timing alone (`eulerdisk::turn_timing`, no height in
+//! it) against the truth. `EULERDISK_ROBUSTNESS_KEEP=DIR` keeps the clips (`sNN.mp4`) and
 //! their ground truths (`sNN.truth.json`) in DIR; `EULERDISK_ROBUSTNESS_SEED=N` draws
 //! another 24 scenes (the gate's verdicts are for the default seed).
 
@@ -532,7 +534,7 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
     let halt_frames = (t_phi - truth.halt_time) * FPS;
     let t0_ms = 1e3 * (t_phi + e.peaks_fit.fit.t0 - truth.halt_time);
     let row = format!(
-        "| {} | {} | {} {:+.2} | {:+.2} / {:.2} | {:.3} | {:+.3} / {} / {} / {} | {found}/{}, {spurious} | {:.1} ({:+.1}) / {:.1} | {:+.3}{} / {} / {:.3} | {:+.1} | {:+.1} | {} |",
+        "| {} | {} | {} {:+.2} | {:+.2} / {:.2} | {:.3} | {:+.3} / {} / {} / {} | {found}/{}, {spurious} | {:.1} ({:+.1}) / {:.1} | {:+.3}{} / {} / {:.3} · {} | {:+.1} | {:+.1} | {} |",
         scene.name,
         scene.conditions(),
         worst_cal.0,
@@ -561,6 +563,18 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
         },
         n_frames.map_or("–".into(), |d| format!("{d:+.3}")),
         tol.n,
+        match &e.turn_timing {
+            Some(Ok(t)) => format!(
+                "{:+.3}{}",
+                t.n - scene.n,
+                if (t.ci95_n.0..=t.ci95_n.1).contains(&scene.n) {
+                    " (CI ✓)"
+                } else {
+                    " (CI ✗)"
+                }
+            ),
+            _ => "–".into(),
+        },
         halt_frames,
         t0_ms,
         if failures.is_empty() {
@@ -572,7 +586,7 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
     Score { row, failures }
 }
 
-const HEADER: &str = "| scene | conditions | worst cal. point, err px | scale err % / tol | z_rim RMS px | heights' offset px / ε err ° / precession % / codec α P, B frame² | peaks found/true ≥0.5 px, spurious | φ med abs (signed) err % / tol | Δn peaks (95 % CI covers?) / per frame / tol | t_φ err frames | fitted t0 err ms | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|";
+const HEADER: &str = "| scene | conditions | worst cal. point, err px | scale err % / tol | z_rim RMS px | heights' offset px / ε err ° / precession % / codec α P, B frame² | peaks found/true ≥0.5 px, spurious | φ med abs (signed) err % / tol | Δn peaks (95 % CI covers?) / per frame / tol · turns' timing (information) | t_φ err frames | fitted t0 err ms | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 /// Two-view clips on light plates, one brighter than the disk's side and one darker
 /// and textured, measured with no config to the same targets: the views split where
