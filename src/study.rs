@@ -418,6 +418,11 @@ pub struct ExperimentSummary {
     /// `None` when not made, and in summaries written before it was recorded.
     #[serde(default)]
     pub phi_vs_precession: Option<f64>,
+    /// n from the turns' timing alone and its 95 % interval
+    /// ([`crate::turn_timing::fit_turn_timing`]); `None` when not fitted, and in
+    /// summaries written before it was recorded.
+    #[serde(default)]
+    pub n_turn_timing: Option<(f64, [f64; 2])>,
     /// Warnings and frame flags a reader should see beside the number.
     pub warnings: Vec<String>,
 }
@@ -950,6 +955,7 @@ mod tests {
                 fps: 480.0,
                 fps_source: "config".into(),
                 phi_vs_precession: None,
+                n_turn_timing: None,
                 warnings: vec![],
             })
         }

@@ -2408,6 +2408,10 @@ pub fn summary(
         fps: experiment.plan.fps.fps,
         fps_source: format!("{:?}", experiment.plan.fps.source),
         phi_vs_precession: experiment.precession.map(|c| c.agreement() - 1.0),
+        n_turn_timing: match &experiment.turn_timing {
+            Some(Ok(t)) => Some((t.n, [t.ci95_n.0, t.ci95_n.1])),
+            _ => None,
+        },
         warnings: experiment.warnings.clone(),
     }
 }

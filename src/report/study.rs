@@ -164,17 +164,20 @@ pub fn write_study_report(
                 format!("{} ({})", fmt(e.fps, 0), e.fps_source),
                 e.phi_vs_precession
                     .map_or("–".into(), |d| format!("{:+.1}", 100.0 * d)),
+                e.n_turn_timing.map_or("–".into(), |(n, ci)| {
+                    format!("{} ({} … {})", fmt(n, 3), fmt(ci[0], 3), fmt(ci[1], 3))
+                }),
                 e.warnings.len().to_string(),
             ]
         })
         .collect();
     let mut csv = String::from(
-        "clip,disk,material,orientation,run,n,n_ci_low,n_ci_high,t0_s,r_squared,points,fps,fps_source,phi_vs_precession\n",
+        "clip,disk,material,orientation,run,n,n_ci_low,n_ci_high,t0_s,r_squared,points,fps,fps_source,phi_vs_precession,n_turn_timing,n_turn_timing_ci_low,n_turn_timing_ci_high\n",
     );
     for e in &results.experiments {
         let m = &e.meta;
         csv += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             e.clip,
             m.disk.as_deref().unwrap_or(""),
             m.material.as_deref().unwrap_or(""),
@@ -188,7 +191,9 @@ pub fn write_study_report(
             e.points,
             e.fps,
             e.fps_source,
-            e.phi_vs_precession.map_or(String::new(), |d| d.to_string())
+            e.phi_vs_precession.map_or(String::new(), |d| d.to_string()),
+            e.n_turn_timing
+                .map_or(",,".into(), |(n, ci)| format!("{n},{},{}", ci[0], ci[1]))
         );
     }
     write_atomic(&tables.join("exponents.csv"), csv.as_bytes())?;
@@ -350,14 +355,17 @@ pub fn write_study_report(
         }
         h2 { "Exponents" }
         (table(
-            &["clip", "disk", "material", "n", "95 % CI", "R²", "points", "fps (source)", "φ vs precession %", "warnings"],
+            &["clip", "disk", "material", "n", "95 % CI", "R²", "points", "fps (source)", "φ vs precession %", "n from the turns' timing (95 % CI)", "warnings"],
             &experiment_rows,
             |_, _| false,
         ))
         p class="note" {
             "φ vs precession: φ from the rim heights over the φ that stationary rolling (eq. 2.29) \
              gives the measured precession rate, at the fit window's mean, − 1: a check of the \
-             scale and the zero that shares neither (a warning beyond ±3 %; see each clip's page)."
+             scale and the zero that shares neither (a warning beyond ±3 %; see each clip's page). \
+             n from the turns' timing: the exponent from the peaks' times alone, with no height, \
+             scale or zero in it (a check of n, never combined with it; a warning where the two \
+             intervals are disjoint)."
         }
         p class="note" { "Each clip's own page: " code { "experiments/<clip>/index.html" } "." }
         h2 { "Per material" }
@@ -469,6 +477,7 @@ mod tests {
             fps: 480.0,
             fps_source: "config".into(),
             phi_vs_precession: Some(-0.01),
+            n_turn_timing: Some((n + 0.003, [n - 0.007, n + 0.013])),
             warnings: vec![],
         }
     }
@@ -510,5 +519,20 @@ mod tests {
         let csv =
             std::fs::read_to_string(out.path().join("tables/p_values_bonferroni.csv")).unwrap();
         assert!(csv.contains("0.0015"), "{csv}");
+        // Each clip's n from the turns' timing sits beside its fitted n, in the table
+        // and in the CSV's last three columns.
+        assert!(html.contains("0.503 (0.493 … 0.513)"), "timing column");
+        let exponents = std::fs::read_to_string(out.path().join("tables/exponents.csv")).unwrap();
+        let first = exponents.lines().nth(1).unwrap();
+        let timing: Vec<f64> = first
+            .rsplitn(4, ',')
+            .take(3)
+            .map(|v| v.parse().unwrap())
+            .collect();
+        assert_eq!(timing.len(), 3, "{first}");
+        assert!(
+            (timing[2] - 0.503).abs() < 1e-9 && (timing[0] - 0.513).abs() < 1e-9,
+            "{first}"
+        );
     }
 }
