@@ -31,7 +31,7 @@
 //! optimum, and a delete-one jackknife over the peaks (each left out in turn and the
 //! law fitted again: a late peak coded late, or a turn's error that lingers, shows in
 //! it), with Student's t at N − 4 degrees of freedom (N − 3 where the turns end at
-//! the last peak: a last peak read late puts the optimum on that boundary).
+//! the last peak: a last peak that comes early puts the optimum on that boundary).
 
 use std::f64::consts::PI;
 
@@ -109,8 +109,9 @@ struct Law {
 }
 
 /// Below this ψ_end − ψ_last \[rad\] the turns are taken to end at the last peak: the
-/// law's sum of squares has its minimum on that boundary (a last peak read late),
-/// where ln(ψ_end − ψ_last) runs off and its covariance with it.
+/// law's sum of squares can have its minimum on that boundary (a last peak that comes
+/// early against the turns before it), where ln(ψ_end − ψ_last) runs off and its
+/// covariance with it.
 const REMAINING_FLOOR: f64 = 1e-3;
 
 /// Fits t_k = T − c (ψ_end − ψ_k)^q to the peaks' times `t` \[s\] (halt at 0, any

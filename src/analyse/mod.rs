@@ -2060,16 +2060,6 @@ fn halt_sighting(
     }
 }
 
-/// Eq. 3.8 at each peak of the window, with ψ̇ by central differences over the
-/// neighbouring peaks, and by eq. 3.11 (the forward difference to the next peak) at
-/// the first. Eq. 3.11 is the mean rate over the following turn: as ψ̇ grows
-/// towards the halt it reads high at the peak, by 1 % 0.4 s before the halt and by
-/// 5–10 % in the last 0.05 s on exact rim heights of an n = 0.67 motion, which
-/// raised the fitted n by 0.01; the central difference is centred on the peak.
-///
-/// A difference across a timestamp gap counts one turn where the gap hid more (its
-/// peaks are missing): there the forward difference is used if it does not cross
-/// the gap, else the peak is left out.
 /// The timing law of the turns fitted to the peaks in the last `window_s` before the
 /// halt, at their counted ψ ([`turn_timing::fit_turn_timing`]), up to the last peak
 /// the local fit located. The parabolic peaks after it are the last rise at the halt
@@ -2098,6 +2088,16 @@ fn disjoint_intervals(a: (f64, f64), b: (f64, f64)) -> Option<f64> {
     (gap > 0.0).then_some(gap)
 }
 
+/// Eq. 3.8 at each peak of the window, with ψ̇ by central differences over the
+/// neighbouring peaks, and by eq. 3.11 (the forward difference to the next peak) at
+/// the first. Eq. 3.11 is the mean rate over the following turn: as ψ̇ grows
+/// towards the halt it reads high at the peak, by 1 % 0.4 s before the halt and by
+/// 5–10 % in the last 0.05 s on exact rim heights of an n = 0.67 motion, which
+/// raised the fitted n by 0.01; the central difference is centred on the peak.
+///
+/// A difference across a timestamp gap counts one turn where the gap hid more (its
+/// peaks are missing): there the forward difference is used if it does not cross
+/// the gap, else the peak is left out.
 fn peak_energies(params: &DiskParams, series: &StateSeries) -> Vec<EnergySample> {
     let precession = &series.peaks.precession;
     let peaks = &series.peaks.peaks;
