@@ -58,7 +58,7 @@ const Q_RANGE: (f64, f64) = (1.05, 2.25);
 const Q_STEP: f64 = 0.01;
 
 /// The exponent from the peaks' times.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TurnTimingFit {
     /// n = 2 (1 − 1/q).
     pub n: f64,
@@ -74,6 +74,11 @@ pub struct TurnTimingFit {
     pub t_end: f64,
     /// ψ_end − ψ at the last peak \[rad\]: how far the fitted turns run past it.
     pub remaining_psi: f64,
+    /// c of the law \[s rad^−q\].
+    pub c: f64,
+    /// The peaks fitted: their times, halt at t = 0 \[s\], and counted ψ \[rad\].
+    pub peak_times: Vec<f64>,
+    pub peak_psi: Vec<f64>,
     /// Peaks fitted.
     pub peaks: usize,
     /// RMS of the peaks' times about the law \[s\].
@@ -181,9 +186,33 @@ pub fn fit_turn_timing(t: &[f64], psi: &[f64]) -> Result<TurnTimingFit, TurnTimi
         se_n_jackknife,
         t_end: t_last + law.end * 1e-3,
         remaining_psi: law.remaining,
+        c: law.ln_c.exp() * 1e-3,
+        peak_times: t.to_vec(),
+        peak_psi: psi.to_vec(),
         peaks: count,
         residual_rms_s: (law.ssr / count as f64).sqrt() * 1e-3,
     })
+}
+
+impl TurnTimingFit {
+    /// q = 1/(1 − n/2).
+    pub fn q(&self) -> f64 {
+        1.0 / (1.0 - self.n / 2.0)
+    }
+
+    /// ψ_end − ψ \[rad\] at each fitted peak: the turns still to go.
+    pub fn psi_to_go(&self) -> Vec<f64> {
+        let last = self.peak_psi.last().copied().unwrap_or(0.0);
+        self.peak_psi
+            .iter()
+            .map(|&p| last + self.remaining_psi - p)
+            .collect()
+    }
+
+    /// T − t \[s\] the law gives with `psi_to_go` \[rad\] of turns left.
+    pub fn time_to_go(&self, psi_to_go: f64) -> f64 {
+        self.c * psi_to_go.powf(self.q())
+    }
 }
 
 /// n = 2 (1 − 1/q).
@@ -330,6 +359,9 @@ mod tests {
             assert!((fit.n - n).abs() < 1e-6, "n = {} for {n}", fit.n);
             assert!((fit.t_end - 0.003).abs() < 1e-8, "T = {}", fit.t_end);
             assert!((fit.remaining_psi - 0.9).abs() < 1e-5);
+            for (&tk, go) in t.iter().zip(fit.psi_to_go()) {
+                assert!((fit.t_end - fit.time_to_go(go) - tk).abs() < 1e-8);
+            }
         }
     }
 

@@ -101,10 +101,24 @@ fn study_survives_bad_clips_resumes_and_merges_shards() {
     assert_eq!(experiments[0]["meta"]["material"], "oak");
     let page = std::fs::read_to_string(dir.path().join("full/index.html")).unwrap();
     assert!(page.contains("no disk in view"));
+    let clip_page = dir.path().join("full/experiments/euler/oak/run1.mp4");
+    assert!(clip_page.join("index.html").is_file());
+    // The turns' timing: its plot beside the energy's, and its n within its interval in
+    // the exponents table (the last three columns: rsplitn gives the high end, the low
+    // end, then n).
+    assert!(clip_page.join("timing.svg").is_file());
+    let exponents = std::fs::read_to_string(dir.path().join("full/tables/exponents.csv")).unwrap();
+    let timing: Vec<f64> = exponents
+        .lines()
+        .nth(1)
+        .unwrap()
+        .rsplitn(4, ',')
+        .take(3)
+        .map(|v| v.parse().unwrap())
+        .collect();
     assert!(
-        dir.path()
-            .join("full/experiments/euler/oak/run1.mp4/index.html")
-            .is_file()
+        timing[1] <= timing[2] && timing[2] <= timing[0],
+        "{exponents}"
     );
 
     // Resume: every good clip is reused, the failed ones are tried again.

@@ -9,7 +9,7 @@
 //! | `peaks.csv` | per peak: t, z, φ (eq. 3.9), ψ, ψ̇ (eq. 3.11 and central), E (eq. 3.8) |
 //! | `states.csv` | per frame in the window: φ, ψ, ψ̇ with standard errors, E |
 //! | `flags.csv` | flagged frames (skips, jumps) with reasons |
-//! | `series.svg/.png`, `states.svg/.png`, `energy.svg` | plots |
+//! | `series.svg/.png`, `states.svg/.png`, `energy.svg`, `timing.svg` | plots |
 //! | `calibration.png`, `threshold.png` | diagnostic images (figs. 3.3, 3.7) |
 //! | `overlay.mp4`, `overlay.json` | the measurements drawn on the frames around the halt ([`crate::overlay`]) |
 //! | `last-turns.png` | the frames at the last peaks, in a grid |
@@ -294,13 +294,21 @@ pub fn write_experiment(
     }
     let energy_svg = energy_plot_svg(&e.peaks_fit, e.plan.window_s).map_err(plot_error)?;
     write_atomic(&dir.join("energy.svg"), energy_svg.as_bytes())?;
+    let timing_svg = match &e.turn_timing {
+        Some(Ok(t)) => {
+            let svg = turn_timing_plot_svg(t).map_err(plot_error)?;
+            write_atomic(&dir.join("timing.svg"), svg.as_bytes())?;
+            Some(svg)
+        }
+        _ => None,
+    };
     let overlay = overlay
         .map(|spec| write_measurement_overlays(dir, e, spec))
         .transpose()?;
 
     write_atomic(
         &dir.join("index.html"),
-        experiment_page(e, &energy_svg, dir, overlay.as_ref())?.as_bytes(),
+        experiment_page(e, &energy_svg, timing_svg.as_deref(), dir, overlay.as_ref())?.as_bytes(),
     )
 }
 
@@ -417,6 +425,7 @@ fn carried_spin_energy(e: &Experiment) -> Option<(f64, f64)> {
 fn experiment_page(
     e: &Experiment,
     energy_svg: &str,
+    timing_svg: Option<&str>,
     dir: &Path,
     overlay: Option<&OverlayIndex>,
 ) -> Result<String, ReportError> {
@@ -666,6 +675,9 @@ fn experiment_page(
         @if let Some(timing) = &e.turn_timing {
             p { (turn_timing_sentence(timing, &e.peaks_fit.fit)) }
         }
+        @if let Some(svg) = timing_svg {
+            (svg_figure(svg, "The peaks' times against the turns still to go (log–log), with the turns' timing law: its slope is q = 1/(1 − n/2)."))
+        }
         @if let Some(spin) = e.full_state_fit.as_ref().and(carried_spin_energy(e)) {
             p { (format!("Eq. 3.6 keeps the spin the disk carries into the flat: with β̇ = {:.2} rad/s at t_φ, \
                 C/2 β̇² + m/2 (R β̇)² = {:.2e} J remain at the halt, which a power law to zero does not describe. \
@@ -833,6 +845,79 @@ fn footage_section(e: &Experiment, overlay: &OverlayIndex, dir: &Path) -> maud::
 
 /// Energy samples with the fitted power law and a band of the curves whose n
 /// spans its 95 % interval (A_e re-projected for each), on linear axes.
+/// The peaks' times against the turns still to go, log–log, with the timing law
+/// T − t = c (ψ_end − ψ)^q: a straight line of slope q = 1/(1 − n/2) (crate::turn_timing).
+fn turn_timing_plot_svg(t: &TurnTimingFit) -> Result<String, String> {
+    super::plot::ensure_font()?;
+    let turns = std::f64::consts::TAU;
+    let go = t.psi_to_go();
+    let points: Vec<(f64, f64)> = go
+        .iter()
+        .zip(&t.peak_times)
+        .map(|(&g, &tk)| (g / turns, (t.t_end - tk) * 1e3))
+        .filter(|&(x, y)| x > 0.0 && y > 0.0)
+        .collect();
+    let (x_lo, x_hi) = points.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), p| {
+        (a.min(p.0), b.max(p.0))
+    });
+    let (x_lo, x_hi) = (x_lo * 0.8, x_hi * 1.2);
+    let law: Vec<(f64, f64)> = (0..=200)
+        .map(|i| {
+            let x = x_lo * (x_hi / x_lo).powf(f64::from(i) / 200.0);
+            (x, t.time_to_go(x * turns) * 1e3)
+        })
+        .collect();
+    let y_of =
+        |f: fn(f64, f64) -> f64, start: f64| points.iter().chain(&law).map(|p| p.1).fold(start, f);
+    let (y_lo, y_hi) = (
+        y_of(f64::min, f64::INFINITY) * 0.8,
+        y_of(f64::max, 0.0) * 1.2,
+    );
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 520)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!(
+                    "T − t = c (ψ_end − ψ)^q: q = {:.3}, n = 2 (1 − 1/q) = {:.3} ({:.3} … {:.3})",
+                    t.q(),
+                    t.n,
+                    t.ci95_n.0,
+                    t.ci95_n.1
+                ),
+                ("sans-serif", 22),
+            )
+            .margin(12)
+            .x_label_area_size(48)
+            .y_label_area_size(72)
+            .build_cartesian_2d((x_lo..x_hi).log_scale(), (y_lo..y_hi).log_scale())
+            .map_err(|e| e.to_string())?;
+        let sig = |v: &f64| super::plot::fmt_sig(*v, 2);
+        chart
+            .configure_mesh()
+            .x_labels(8)
+            .y_labels(6)
+            .x_label_formatter(&sig)
+            .y_label_formatter(&sig)
+            .bold_line_style(RGBColor(215, 215, 215))
+            .light_line_style(RGBColor(245, 245, 245))
+            .x_desc("turns still to go, (ψ_end − ψ)/2π")
+            .y_desc("T − t [ms]")
+            .label_style(("sans-serif", 15))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(LineSeries::new(law, RGBColor(220, 60, 0).stroke_width(2)))
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(points.iter().map(|&p| Circle::new(p, 3, BLUE.filled())))
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}
+
 fn energy_plot_svg(f: &EnergyFit, window_s: f64) -> Result<String, String> {
     super::plot::ensure_font()?;
     let fit = &f.fit;

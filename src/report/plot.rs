@@ -743,7 +743,7 @@ fn trim_zeros(s: String) -> String {
 
 /// `v` in scientific notation with `digits` significant digits, trailing zeros of
 /// the mantissa removed (`1e-3`, `2.5e4`); plain for magnitudes in `[1e-3, 1e5)`.
-fn fmt_sig(v: f64, digits: usize) -> String {
+pub(crate) fn fmt_sig(v: f64, digits: usize) -> String {
     let a = v.abs();
     if v == 0.0 || !v.is_finite() {
         return format!("{v}");
