@@ -835,9 +835,9 @@ follows eq. 2.29 as printed, whose φ(ψ̇) is 0.3–1.3 % smaller at φ = 0.005
 codec's smoothing over time: each frame's error against the true heights' second difference per
 frame, e = a + α z″, one α for the P and one for the B pictures (frames.csv picture_type): a
 temporal low-pass of variance 2α frame² that reads the peaks low and the troughs high. And n from
-the turns' timing alone (result.json turn_timing: the peaks' times at their counted ψ, no height,
-scale or zero), with its 95 % interval; the truth's eq. 2.29 as printed reads it about 0.005 high
-(0.0047–0.0056 fitted to the true peaks' times).";
+the turns' timing alone (result.json turn_timing: the times of the peaks and troughs at their
+counted ψ, no height, scale or zero), with its 95 % interval; the truth's eq. 2.29 as printed
+reads it about 0.005 high (0.0047–0.0056 fitted to the true peaks' times).";
 
 const LEGEND: &str = "\
 Targets (issue 12 §5), per clip, no config: measured; n within ±0.02 of the truth (±0.03 when the

@@ -259,7 +259,7 @@ fn the_turns_timing_gives_n_without_the_heights() {
         "{:?}",
         fit.ci95_n
     );
-    assert!(fit.peaks >= 20, "{} peaks", fit.peaks);
+    assert!(fit.points >= 40, "{} turning points", fit.points);
 
     let rest = analyse(
         "side-dark-n050.mp4",

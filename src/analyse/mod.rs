@@ -591,7 +591,7 @@ pub struct Experiment {
     /// written before it was recorded.
     #[serde(default)]
     pub precession: Option<PrecessionCheck>,
-    /// n from the peaks' times alone in the fit window ([`turn_timing::fit_turn_timing`]),
+    /// n from the times of z_rim's peaks and troughs alone in the fit window ([`turn_timing::fit_turn_timing`]),
     /// or why it could not be fitted; `None` in results written before it was recorded.
     #[serde(default)]
     pub turn_timing: Option<Result<TurnTimingFit, String>>,
@@ -1719,7 +1719,7 @@ pub fn analyse_clip_keeping(
         ));
     }
 
-    // n from the peaks' times alone (crate::turn_timing): no height, scale or zero
+    // n from the turning points' times alone (crate::turn_timing): no height, scale or zero
     // enters it; reported beside the fits, never combined with them.
     let turn_timing = turn_timing_fit(&series.peaks, window_s);
     if let Ok(timing) = &turn_timing
@@ -2060,24 +2060,27 @@ fn halt_sighting(
     }
 }
 
-/// The timing law of the turns fitted to the peaks in the last `window_s` before the
-/// halt, at their counted ψ ([`turn_timing::fit_turn_timing`]), up to the last peak
-/// the local fit located. The parabolic peaks after it are the last rise at the halt
-/// or turns the halt cuts short (the local fit spans 1.5 turns): their time marks
-/// where the motion stopped, not a crest of the turn (on the open footage re-encoded
-/// at CRF 26 they made the timing's n +0.046 and +0.058 on two clips; BENCHMARKS.md,
-/// *n from the turns' timing*).
+/// The timing law of the turns fitted to the turning points of z_rim (peaks and the
+/// troughs between them, half a turn apart) in the last `window_s` before the halt, at
+/// their counted ψ ([`turn_timing::fit_turn_timing`]), up to the last peak the local
+/// fit located. A parabolic peak after it is the last rise at the halt or a turn the
+/// halt cuts short (the local fit spans 1.5 turns): its time marks where the motion
+/// stopped, not a crest of the turn (on the open footage re-encoded at CRF 26 such
+/// peaks made the timing's n +0.046 and +0.058 on two clips; BENCHMARKS.md, *n from
+/// the turns' timing*). The troughs halve the timing's scatter over the peaks alone
+/// (the same BENCHMARKS section).
 fn turn_timing_fit(series: &PeakSeries, window_s: f64) -> Result<TurnTimingFit, String> {
-    let peaks = &series.peaks;
-    let crests = peaks
+    let last_crest = series
+        .peaks
         .iter()
-        .rposition(|p| p.method == signal::ExtremumMethod::LocalFit)
-        .map_or(0, |last| last + 1);
-    let (t, psi): (Vec<f64>, Vec<f64>) = peaks[..crests]
+        .rev()
+        .find(|p| p.method == signal::ExtremumMethod::LocalFit)
+        .map_or(f64::NEG_INFINITY, |p| p.t);
+    let (t, psi): (Vec<f64>, Vec<f64>) = series
+        .precession_half_turns
         .iter()
-        .zip(&series.precession)
-        .filter(|(peak, _)| peak.t >= -window_s)
-        .map(|(peak, p)| (peak.t, p.psi))
+        .filter(|s| s.t >= -window_s && s.t <= last_crest)
+        .map(|s| (s.t, s.psi))
         .unzip();
     turn_timing::fit_turn_timing(&t, &psi).map_err(|e| e.to_string())
 }
@@ -2456,20 +2459,18 @@ mod tests {
         fit_series("eq. 3.8 at peaks", samples, 0.5, halt, &[]).expect("fit")
     }
 
-    /// The turns' timing law takes the peaks up to the last one the local fit located:
-    /// 25 crests of an exact law (n = 0.55) give n back, and a parabolic last rise at
-    /// the halt half a period early is left out; read as a crest, it would move n
-    /// (by 0.002 here).
+    /// The turns' timing law takes the turning points up to the last peak the local fit
+    /// located: 25 crests of an exact law (n = 0.55) and the troughs between them give
+    /// n back, and a parabolic last rise at the halt a quarter period early is left out
+    /// (with the trough before it); read as a crest, it would move n.
     #[test]
     fn the_turns_timing_ends_at_the_last_crest() {
+        use std::f64::consts::{PI, TAU};
         let (n, turns) = (0.55, 25);
         let q = 1.0 / (1.0 - n / 2.0);
-        let c = 0.5 / (std::f64::consts::TAU * turns as f64).powf(q);
-        let crest_at = |k: usize| {
-            let psi = -std::f64::consts::TAU * (turns - k) as f64;
-            (0.004 - c * (0.5 - psi).powf(q), psi)
-        };
-        let peak = |t: f64, method| signal::Peak {
+        let c = 0.5 / (TAU * turns as f64).powf(q);
+        let at = |psi: f64| 0.004 - c * (0.5 - psi).powf(q);
+        let extremum = |t: f64, method| signal::Peak {
             index: 0,
             t,
             z: 1e-4,
@@ -2481,39 +2482,42 @@ mod tests {
             prominence: 1e-4,
             method,
         };
-        let mut crests: Vec<(f64, f64)> = (0..turns).map(crest_at).collect();
-        // The last rise at the halt, half its period before the crest it never reached.
-        let last = crest_at(turns);
-        let early = last.0 - 0.5 * (last.0 - crests[turns - 1].0);
-        crests.push((early, last.1));
-        let series = |methods: &dyn Fn(usize) -> signal::ExtremumMethod| {
+        // Crests at ψ = −2π·25 … −2π, troughs half a turn after each, and the last
+        // rise at the halt a quarter period before the crest at ψ = 0 it never reached.
+        let crest_psi: Vec<f64> = (0..turns).map(|k| -TAU * (turns - k) as f64).collect();
+        let mut crests: Vec<f64> = crest_psi.iter().map(|&p| at(p)).collect();
+        let troughs: Vec<f64> = crest_psi.iter().map(|&p| at(p + PI)).collect();
+        crests.push(at(0.0) - 0.25 * (at(0.0) - at(-TAU)));
+        let series = |last: signal::ExtremumMethod| {
+            let local = signal::ExtremumMethod::LocalFit;
             let peaks: Vec<signal::Peak> = crests
                 .iter()
                 .enumerate()
-                .map(|(k, &(t, _))| peak(t, methods(k)))
+                .map(|(k, &t)| extremum(t, if k == turns { last } else { local }))
                 .collect();
-            let times: Vec<f64> = crests.iter().map(|&(t, _)| t).collect();
+            let mut turning: Vec<f64> = crests.iter().chain(&troughs).copied().collect();
+            turning.sort_by(f64::total_cmp);
             PeakSeries {
                 window: (-0.5, 0.0),
-                precession: signal::precession(&times, std::f64::consts::TAU),
-                precession_half_turns: Vec::new(),
+                precession: signal::precession(&crests, TAU),
+                precession_half_turns: signal::precession(&turning, PI),
                 peaks,
-                troughs: Vec::new(),
+                troughs: troughs
+                    .iter()
+                    .map(|&t| signal::Trough {
+                        index: 0,
+                        t,
+                        method: local,
+                    })
+                    .collect(),
             }
         };
-        let local = signal::ExtremumMethod::LocalFit;
-        let rise_at_halt = series(&|k| {
-            if k == turns {
-                signal::ExtremumMethod::Parabolic
-            } else {
-                local
-            }
-        });
-        let fit = turn_timing_fit(&rise_at_halt, 0.6).expect("fit");
-        assert_eq!(fit.peaks, turns);
+        let fit = turn_timing_fit(&series(signal::ExtremumMethod::Parabolic), 0.6).expect("fit");
+        assert_eq!(fit.points, 2 * turns - 1);
         assert!((fit.n - n).abs() < 1e-6, "n = {}", fit.n);
-        let as_crest = turn_timing_fit(&series(&|_| local), 0.6).expect("fit");
-        assert_eq!(as_crest.peaks, turns + 1);
+        let as_crest =
+            turn_timing_fit(&series(signal::ExtremumMethod::LocalFit), 0.6).expect("fit");
+        assert_eq!(as_crest.points, 2 * turns + 1);
         assert!((as_crest.n - n).abs() > 1e-3, "n = {}", as_crest.n);
     }
 

@@ -365,16 +365,16 @@ fn turn_timing_sentence(
 ) -> String {
     match timing {
         Ok(t) => format!(
-            "From the turns' timing alone (the peaks' times at their counted ψ, t_k = T − c \
-             (ψ_end − ψ_k)^q with q = 1/(1 − n/2), which stationary rolling near the halt gives; \
-             no height, scale or zero of z_rim enters it): n = {:.3} (95 % CI {:.3} … {:.3}) \
-             from {} peaks, {:+.3} from the energies at the peaks; the turns end {:+.2} ms \
-             from t_φ, the peaks' times lie {:.2} ms RMS about the law. A check of the \
-             heights, not combined with them.",
+            "From the turns' timing alone (the times of z_rim's peaks and troughs at their \
+             counted ψ, t_k = T − c (ψ_end − ψ_k)^q with q = 1/(1 − n/2), which stationary \
+             rolling near the halt gives; no height, scale or zero of z_rim enters it): \
+             n = {:.3} (95 % CI {:.3} … {:.3}) from {} turning points, {:+.3} from the \
+             energies at the peaks; the turns end {:+.2} ms from t_φ, the points' times lie \
+             {:.2} ms RMS about the law. A check of the heights, not combined with them.",
             t.n,
             t.ci95_n.0,
             t.ci95_n.1,
-            t.peaks,
+            t.points,
             t.n - peaks.n,
             1e3 * t.t_end,
             1e3 * t.residual_rms_s
@@ -676,7 +676,7 @@ fn experiment_page(
             p { (turn_timing_sentence(timing, &e.peaks_fit.fit)) }
         }
         @if let Some(svg) = timing_svg {
-            (svg_figure(svg, "The peaks' times against the turns still to go (log–log), with the turns' timing law: its slope is q = 1/(1 − n/2)."))
+            (svg_figure(svg, "The times of z_rim's peaks and troughs against the turns still to go (log–log), with the turns' timing law: its slope is q = 1/(1 − n/2)."))
         }
         @if let Some(spin) = e.full_state_fit.as_ref().and(carried_spin_energy(e)) {
             p { (format!("Eq. 3.6 keeps the spin the disk carries into the flat: with β̇ = {:.2} rad/s at t_φ, \
@@ -845,7 +845,7 @@ fn footage_section(e: &Experiment, overlay: &OverlayIndex, dir: &Path) -> maud::
 
 /// Energy samples with the fitted power law and a band of the curves whose n
 /// spans its 95 % interval (A_e re-projected for each), on linear axes.
-/// The peaks' times against the turns still to go, log–log, with the timing law
+/// The turning points' times against the turns still to go, log–log, with the timing law
 /// T − t = c (ψ_end − ψ)^q: a straight line of slope q = 1/(1 − n/2) (crate::turn_timing).
 fn turn_timing_plot_svg(t: &TurnTimingFit) -> Result<String, String> {
     super::plot::ensure_font()?;
@@ -853,7 +853,7 @@ fn turn_timing_plot_svg(t: &TurnTimingFit) -> Result<String, String> {
     let go = t.psi_to_go();
     let points: Vec<(f64, f64)> = go
         .iter()
-        .zip(&t.peak_times)
+        .zip(&t.times)
         .map(|(&g, &tk)| (g / turns, (t.t_end - tk) * 1e3))
         .filter(|&(x, y)| x > 0.0 && y > 0.0)
         .collect();

@@ -363,9 +363,9 @@ pub fn write_study_report(
             "φ vs precession: φ from the rim heights over the φ that stationary rolling (eq. 2.29) \
              gives the measured precession rate, at the fit window's mean, − 1: a check of the \
              scale and the zero that shares neither (a warning beyond ±3 %; see each clip's page). \
-             n from the turns' timing: the exponent from the peaks' times alone, with no height, \
-             scale or zero in it (a check of n, never combined with it; a warning where the two \
-             intervals are disjoint)."
+             n from the turns' timing: the exponent from the times of z_rim's peaks and troughs \
+             alone, with no height, scale or zero in it (a check of n, never combined with it; a \
+             warning where the two intervals are disjoint)."
         }
         p class="note" { "Each clip's own page: " code { "experiments/<clip>/index.html" } "." }
         h2 { "Per material" }
