@@ -44,9 +44,10 @@ use thiserror::Error;
 
 use crate::lsq::levenberg_marquardt;
 
-/// Fewest turning points the timing law is fitted to: four parameters and enough degrees of
-/// freedom left for the jackknife and the residuals' scatter to mean something.
-pub const MIN_POINTS: usize = 8;
+/// Fewest turning points the timing law is fitted to: sixteen, eight turns, so that the
+/// jackknife has four blocks of two turns and each refit keeps twelve points for four
+/// parameters.
+pub const MIN_POINTS: usize = 16;
 
 /// Turns the jackknife leaves out together: each turning point's time comes from a
 /// local fit over 1.5 turns, so its error is shared with the points of the next turn
