@@ -522,12 +522,13 @@ struct NScore {
     ok: bool,
 }
 
-fn score_n(fit: Option<Fit>, truth: &Truth) -> Option<NScore> {
-    let f = fit?;
-    let delta = f.n - truth.n;
-    let covers = f.ci95_n.0 <= truth.n && truth.n <= f.ci95_n.1;
+/// An estimate of n and its 95 % interval against the truth.
+fn score_n(estimate: Option<(f64, (f64, f64))>, truth: &Truth) -> Option<NScore> {
+    let (n, (lo, hi)) = estimate?;
+    let delta = n - truth.n;
+    let covers = lo <= truth.n && truth.n <= hi;
     Some(NScore {
-        n: f.n,
+        n,
         delta,
         covers,
         ok: delta.abs() <= n_tolerance(truth.osc_amp) && covers,
@@ -601,8 +602,8 @@ fn score(clip: &str, truth: &Truth, m: Option<&Measured>, error: Option<String>)
     let t_phi = cap(m.t_phi);
 
     // n: both fits within tolerance, intervals covering the truth.
-    s.n_peaks = score_n(m.peaks_fit, truth);
-    s.n_frames = score_n(m.frames_fit, truth);
+    s.n_peaks = score_n(m.peaks_fit.map(|f| (f.n, f.ci95_n)), truth);
+    s.n_frames = score_n(m.frames_fit.map(|f| (f.n, f.ci95_n)), truth);
     // Fitted halt within 2 ms (peaks fit).
     s.t0_err_ms = m.peaks_fit.map(|f| (cap(m.t_phi + f.t0) - truth.t0) * 1e3);
     s.t0_frames_fit_err_ms = m.frames_fit.map(|f| (cap(m.t_phi + f.t0) - truth.t0) * 1e3);
@@ -639,14 +640,7 @@ fn score(clip: &str, truth: &Truth, m: Option<&Measured>, error: Option<String>)
         (!e.is_empty()).then(|| e[e.len() / 2])
     };
     s.precession_err = m.precession_agreement.map(|a| a - 1.0);
-    s.n_turn_timing = score_n(
-        m.turn_timing.map(|(n, ci95_n)| Fit {
-            n,
-            ci95_n,
-            t0: f64::NAN,
-        }),
-        truth,
-    );
+    s.n_turn_timing = score_n(m.turn_timing, truth);
     s.peaks = Some(pm);
     // Two-view: t_β − t_φ within 2 frames.
     if let Some(truth_gap) = truth.t_beta_minus_t_phi {

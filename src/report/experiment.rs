@@ -843,12 +843,9 @@ fn footage_section(e: &Experiment, overlay: &OverlayIndex, dir: &Path) -> maud::
     }
 }
 
-/// Energy samples with the fitted power law and a band of the curves whose n
-/// spans its 95 % interval (A_e re-projected for each), on linear axes.
 /// The turning points' times against the turns still to go, log–log, with the timing law
 /// T − t = c (ψ_end − ψ)^q: a straight line of slope q = 1/(1 − n/2) (crate::turn_timing).
 fn turn_timing_plot_svg(t: &TurnTimingFit) -> Result<String, String> {
-    super::plot::ensure_font()?;
     let turns = std::f64::consts::TAU;
     let go = t.psi_to_go();
     let points: Vec<(f64, f64)> = go
@@ -873,24 +870,15 @@ fn turn_timing_plot_svg(t: &TurnTimingFit) -> Result<String, String> {
         y_of(f64::min, f64::INFINITY) * 0.8,
         y_of(f64::max, 0.0) * 1.2,
     );
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (900, 520)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!(
-                    "T − t = c (ψ_end − ψ)^q: q = {:.3}, n = 2 (1 − 1/q) = {:.3} ({:.3} … {:.3})",
-                    t.q(),
-                    t.n,
-                    t.ci95_n.0,
-                    t.ci95_n.1
-                ),
-                ("sans-serif", 22),
-            )
-            .margin(12)
-            .x_label_area_size(48)
-            .y_label_area_size(72)
+    let caption = format!(
+        "T − t = c (ψ_end − ψ)^q: q = {:.3}, n = 2 (1 − 1/q) = {:.3} ({:.3} … {:.3})",
+        t.q(),
+        t.n,
+        t.ci95_n.0,
+        t.ci95_n.1
+    );
+    svg_chart(caption, |mut builder| {
+        let mut chart = builder
             .build_cartesian_2d((x_lo..x_hi).log_scale(), (y_lo..y_hi).log_scale())
             .map_err(|e| e.to_string())?;
         let sig = |v: &f64| super::plot::fmt_sig(*v, 2);
@@ -913,13 +901,37 @@ fn turn_timing_plot_svg(t: &TurnTimingFit) -> Result<String, String> {
         chart
             .draw_series(points.iter().map(|&p| Circle::new(p, 3, BLUE.filled())))
             .map_err(|e| e.to_string())?;
+        Ok(())
+    })
+}
+
+/// A titled 900 × 520 chart on white, drawn by `draw` from its builder (caption,
+/// margin and label areas set), as SVG text: what the energy and the timing plots
+/// share.
+fn svg_chart(
+    caption: String,
+    draw: impl FnOnce(ChartBuilder<'_, '_, SVGBackend<'_>>) -> Result<(), String>,
+) -> Result<String, String> {
+    super::plot::ensure_font()?;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 520)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let mut builder = ChartBuilder::on(&root);
+        builder
+            .caption(caption, ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(48)
+            .y_label_area_size(72);
+        draw(builder)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)
 }
 
+/// Energy samples with the fitted power law and a band of the curves whose n
+/// spans its 95 % interval (A_e re-projected for each), on linear axes.
 fn energy_plot_svg(f: &EnergyFit, window_s: f64) -> Result<String, String> {
-    super::plot::ensure_font()?;
     let fit = &f.fit;
     let in_window: Vec<(f64, f64)> = f
         .samples
@@ -948,21 +960,12 @@ fn energy_plot_svg(f: &EnergyFit, window_s: f64) -> Result<String, String> {
     };
     let low = curve(fit.ci95_n.0, project(fit.ci95_n.0));
     let high = curve(fit.ci95_n.1, project(fit.ci95_n.1));
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (900, 520)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!(
-                    "E = A_e (t0 − t)^n: n = {:.3} ({:.3} … {:.3})",
-                    fit.n, fit.ci95_n.0, fit.ci95_n.1
-                ),
-                ("sans-serif", 22),
-            )
-            .margin(12)
-            .x_label_area_size(48)
-            .y_label_area_size(72)
+    let caption = format!(
+        "E = A_e (t0 − t)^n: n = {:.3} ({:.3} … {:.3})",
+        fit.n, fit.ci95_n.0, fit.ci95_n.1
+    );
+    svg_chart(caption, |mut builder| {
+        let mut chart = builder
             .build_cartesian_2d(t_min..t_max, 0.0..e_max.max(1e-12))
             .map_err(|e| e.to_string())?;
         chart
@@ -992,7 +995,6 @@ fn energy_plot_svg(f: &EnergyFit, window_s: f64) -> Result<String, String> {
         chart
             .draw_series(in_window.iter().map(|&p| Circle::new(p, 3, BLUE.filled())))
             .map_err(|e| e.to_string())?;
-        root.present().map_err(|e| e.to_string())?;
-    }
-    Ok(svg)
+        Ok(())
+    })
 }
