@@ -1433,12 +1433,13 @@ pub fn analyse_clip_keeping(
             rim_zero_row_px -= shift_px;
             rim += &format!(
                 "; the motion places the zero of z_rim {:.3} ± {:.3} px {} the still disk's \
-                 edge, at row {rim_zero_row_px:.2} px (signal::motion_zero, {} windows, the \
-                 profile at ε = {:.2}°)",
+                 edge, at row {rim_zero_row_px:.2} px (signal::motion_zero, {} heights between {} \
+                 turning points, the profile at ε = {:.2}°)",
                 shift_px.abs(),
                 zero.zero.se / metres_per_px,
                 if shift_px >= 0.0 { "above" } else { "below" },
-                zero.zero.windows,
+                zero.zero.points,
+                zero.zero.turning_points,
                 scale.near_rim_elevation_rad.unwrap_or(0.0).to_degrees()
             );
         }
@@ -1828,8 +1829,7 @@ fn signal_series(
     // The heights from the zero the motion places (signal::motion_zero), with the
     // camera's own profile: every height moves by the rest level and the motion's
     // offset from it, and the peaks and states are found again on them.
-    let motion =
-        motion_profile.and_then(|camera| signal::motion_zero(&t, &z, &series, camera, config));
+    let motion = motion_profile.and_then(|camera| signal::motion_zero(&t, &z, &series, camera));
     let zero = motion.map(|zero| {
         let shift_m = series.halt.rest_level + zero.offset;
         for record in frames.iter_mut() {
@@ -2495,12 +2495,16 @@ mod tests {
                 .enumerate()
                 .map(|(k, &t)| extremum(t, if k == turns { last } else { local }))
                 .collect();
-            let mut turning: Vec<f64> = crests.iter().chain(&troughs).copied().collect();
-            turning.sort_by(f64::total_cmp);
+            let mut turning: Vec<(f64, bool)> = crests
+                .iter()
+                .map(|&t| (t, true))
+                .chain(troughs.iter().map(|&t| (t, false)))
+                .collect();
+            turning.sort_by(|a, b| a.0.total_cmp(&b.0));
             PeakSeries {
                 window: (-0.5, 0.0),
                 precession: signal::precession(&crests, TAU),
-                precession_half_turns: signal::precession(&turning, PI),
+                precession_half_turns: signal::precession_half_turns(&turning),
                 peaks,
                 troughs: troughs
                     .iter()

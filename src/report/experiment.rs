@@ -340,14 +340,15 @@ fn zero_source(plan: &ExperimentPlan) -> String {
     ) {
         (true, _, _) => " (set in the config)".into(),
         (false, Some(z), _) => format!(
-            " (placed by the motion: the rim's profile at ε = {:.2}° fitted with an offset over \
-             {} windows of the turns, {:.3} ± {:.3} px {} the still disk's edge; that and the \
+            " (placed by the motion: the rim's profile at ε = {:.2}° fitted with one offset to \
+             {} heights between {} turning points, {:.3} ± {:.3} px {} the still disk's edge; that and the \
              profile's own {} px in quadrature)",
             plan.scale
                 .near_rim_elevation_rad
                 .unwrap_or(0.0)
                 .to_degrees(),
-            z.zero.windows,
+            z.zero.points,
+            z.zero.turning_points,
             px(z.shift_m).abs(),
             px(z.zero.se),
             if z.shift_m >= 0.0 { "above" } else { "below" },

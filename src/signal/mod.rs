@@ -127,6 +127,7 @@ mod zero;
 pub use halt::{Halt, halt_time};
 pub use peaks::{
     ExtremumMethod, Peak, PeakSeries, PrecessionSample, Trough, find_peaks, precession,
+    precession_half_turns,
 };
 pub use rim::{RimModel, SideViewRim, ThesisRim};
 pub use skips::{

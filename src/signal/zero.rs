@@ -11,30 +11,49 @@
 //! The motion itself fixes the zero. Over one turn the rim's height follows the
 //! model's profile, z = R sin φ (1 + cos χ) to first order (module docs): its mean is
 //! R sin φ and its swing about the mean R sin φ too, so the heights' mean and their
-//! swing disagree by exactly an offset c. Over windows of `state_window_periods`
-//! turns, one after another through the fit window, the local model (φ = φ₀ + φ₁τ,
-//! χ = χ₀ + ωτ + ½ω̇τ²) is fitted with c as one more term ([`Terms::offset`]); the
-//! zero is the windows' mean of c, its standard error their standard deviation over
-//! √N. Not a mean weighted by each window's own error: those errors (from the
-//! residuals and the window's geometry) range over a factor of seven, and on a light
-//! plate brighter than the disk (robustness scene s05, in the prototype) one window
-//! of the seventeen, with a fifth of the others' error, read 0.09 px and moved the
-//! weighted zero 0.04 px off, the plain mean 0.01 px.
+//! swing disagree by exactly an offset c. Every height of the fit window, from its
+//! first turning point to its last, is fitted with one such profile and one c:
+//!
+//! ```text
+//! z_i = z_rim(φ(t_i), χ(t_i)) + c,
+//! ```
+//!
+//! χ(t) the precession phase counted at the turning points (the peaks at χ ≡ 0 mod
+//! 2π, the troughs at π: [`super::PeakSeries::precession_half_turns`], which is zero
+//! at the last turning point, a peak) and linear in t between them, φ(t) piecewise
+//! linear with a knot every [`KNOT_TURNS`] turns (a last piece shorter than a turn
+//! joins the one before). Least squares (Levenberg–Marquardt from the peaks' φ), c's
+//! standard error the linearised one, s² (JᵀJ)⁻¹: over the scenes below the zero's
+//! RMS error is 0.7 of it on ours, 1.3 of it on the open footage, whose side views
+//! all read their heights 0.02–0.04 px low after it (a shared error of that renderer's
+//! pictures, not noise; `vision::MOTION_ZERO_PROFILE_PX` is added for it).
+//!
+//! One fit of the whole window, not a mean over windows of 1.5 turns each fitted
+//! with its own φ, φ̇, χ, ψ̇, ψ̈ and c (the method until 2026-11-29): the turning points
+//! fix the phase, so the heights are left to fix φ and c alone, and every frame
+//! counts for all of them. The heights' offset from the truth fell from 0.0104 to
+//! 0.0089 px RMS over the 24 robustness scenes, from 0.0090 to 0.0077 px over seed
+//! 7's, and from 0.028 to 0.024 px over the open footage's eight clips; n moved by
+//! less than that suggests (BENCHMARKS.md, "The zero from one fit of the window").
 //!
 //! The profile must be the camera's: a camera at elevation ε sees the front rim move
 //! by H φ cos χ in depth, which tilts the swing against the mean by (H/R) tan ε and
 //! reads as an offset of (H/R) tan ε · R sin φ, 0.02–0.05 px on the open footage.
 //! `analyse` passes [`super::SideViewRim`] with the clip's ε for that reason.
 
-use std::f64::consts::PI;
-
+use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-use super::local::{LocalInit, Terms, fit_local};
-use super::{RimModel, SignalConfig, StateSeries, peaks, samples_to_the_halt, skips};
+use super::{RimModel, StateSeries, samples_to_the_halt};
+use crate::lsq::levenberg_marquardt;
 
-/// Fewest windows the zero is taken from: fewer do not show whether they agree.
-pub const MIN_WINDOWS: usize = 5;
+/// Turns between φ's knots: φ changes by a few per cent a turn near the halt, so a
+/// straight line over two turns leaves it within a fraction of that.
+pub const KNOT_TURNS: usize = 2;
+/// Fewest turning points the zero is fitted between: two pieces of φ.
+pub const MIN_TURNING_POINTS: usize = 4 * KNOT_TURNS + 1;
+/// Fewest degrees of freedom left for s².
+const MIN_DOF: usize = 10;
 
 /// The zero of the rim heights as the motion places it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -42,74 +61,120 @@ pub struct MotionZero {
     /// c: the moving rim's zero above the zero the heights were measured from (the
     /// rest level of [`super::Halt`]) [m]. Subtract it from the heights.
     pub offset: f64,
-    /// Standard error of c [m]: the windows' standard deviation over √N.
+    /// Standard error of c [m], √(s² (JᵀJ)⁻¹) of the fit.
     pub se: f64,
-    /// Windows fitted, N.
-    pub windows: usize,
+    /// Turning points the heights were fitted between.
+    #[serde(default)]
+    pub turning_points: usize,
+    /// Heights fitted.
+    #[serde(default)]
+    pub points: usize,
 }
 
-/// The zero of `z_rim` [m] (times `t` [s]) over the window of `series` (from
+/// The zero of `z_rim` [m] (times `t` [s]) over the fit window of `series` (from
 /// [`super::analyse`] of the same heights), with the profile `model`, or `None` when
-/// fewer than [`MIN_WINDOWS`] windows fit.
+/// fewer than [`MIN_TURNING_POINTS`] turning points lie in the window or the fit
+/// fails.
 pub fn motion_zero(
     t: &[f64],
     z_rim: &[f64],
     series: &StateSeries,
     model: &dyn RimModel,
-    config: &SignalConfig,
 ) -> Option<MotionZero> {
-    let halt = &series.halt;
-    let frame = peaks::nominal_period(t);
-    let (idx, st, v) = samples_to_the_halt(t, z_rim, halt);
-    let states = &series.states;
-    let mut offsets = Vec::new();
-    let mut k = states.partition_point(|s| s.t < series.peaks.window.0);
-    while let Some(state) = states.get(k) {
-        // A window is 1.5 turns of the state's ψ̇: an undetermined ψ̇ (11 rad/s
-        // beside 490, after a halt the codec moved, robustness scene s14) spanned
-        // 214 frames and read c 0.43 mm (1.8 px) off, which moved the mean by 0.12 px.
-        if !state.is_determined() {
-            k += 1;
-            continue;
-        }
-        let t_c = state.t;
-        let half = (0.5 * config.state_window_periods * 2.0 * PI / state.psi_dot).max(3.5 * frame);
-        let next = t_c + 2.0 * half;
-        k += states[k..].partition_point(|s| s.t <= next).max(1);
-        let (lo, hi) = (
-            st.partition_point(|&x| x < t_c - half),
-            st.partition_point(|&x| x <= t_c + half),
-        );
-        // Six parameters and two degrees of freedom at least; no window across a
-        // timestamp gap (the phase would miscount the turns in it).
-        if hi - lo < 8 || skips::spans_gap(&t[idx[lo]..=idx[hi - 1]], frame, config.gap_factor) {
-            continue;
-        }
-        let init = LocalInit {
-            phi: state.phi,
-            phi_slope: 0.0,
-            chi: state.psi,
-            omega: state.psi_dot,
-        };
-        let terms = Terms {
-            chirp: true,
-            offset: true,
-        };
-        if let Some(fit) = fit_local(model, &st[lo..hi], &v[lo..hi], t_c, init, terms, None)
-            && fit.sigma_offset > 0.0
-        {
-            offsets.push(fit.offset);
-        }
-    }
-    let windows = offsets.len();
-    if windows < MIN_WINDOWS {
+    let turning = &series.peaks.precession_half_turns;
+    if turning.len() < MIN_TURNING_POINTS {
         return None;
     }
-    let offset = offsets.iter().sum::<f64>() / windows as f64;
-    let variance = offsets.iter().map(|c| (c - offset).powi(2)).sum::<f64>() / (windows - 1) as f64;
-    Some(MotionZero {
+    let (first, last) = (turning[0].t, turning[turning.len() - 1].t);
+    let (_, st, v) = samples_to_the_halt(t, z_rim, &series.halt);
+    let (times, heights): (Vec<f64>, Vec<f64>) = st
+        .iter()
+        .zip(&v)
+        .filter(|&(&x, _)| x >= first && x <= last)
+        .unzip();
+    // φ's knots: every KNOT_TURNS turns (twice as many turning points), and the last;
+    // a last piece of less than a turn joins the one before it.
+    let step = 2 * KNOT_TURNS;
+    let mut knots: Vec<f64> = turning.iter().step_by(step).map(|s| s.t).collect();
+    match (turning.len() - 1) % step {
+        0 => {}
+        rest if rest < KNOT_TURNS => *knots.last_mut().expect("a knot") = last,
+        _ => knots.push(last),
+    }
+    let parameters = knots.len() + 1;
+    if times.len() < parameters + MIN_DOF {
+        return None;
+    }
+    // χ at each height, and its place among the knots (piece j, weight of knot j + 1).
+    let chi: Vec<f64> = times
+        .iter()
+        .map(|&x| {
+            let k = turning
+                .partition_point(|s| s.t <= x)
+                .clamp(1, turning.len() - 1);
+            let (a, b) = (&turning[k - 1], &turning[k]);
+            a.psi + (b.psi - a.psi) * (x - a.t) / (b.t - a.t)
+        })
+        .collect();
+    let place: Vec<(usize, f64)> = times
+        .iter()
+        .map(|&x| {
+            let j = (knots.partition_point(|&k| k <= x).max(1) - 1).min(knots.len() - 2);
+            (j, (x - knots[j]) / (knots[j + 1] - knots[j]))
+        })
+        .collect();
+    let phi_at = |p: &[f64], (j, w): (usize, f64)| (1.0 - w) * p[j] + w * p[j + 1];
+    // Start: φ of the peaks, interpolated at the knots; c = 0.
+    let peaks: Vec<&super::Peak> = series
+        .peaks
+        .peaks
+        .iter()
+        .filter(|pk| pk.phi.is_finite() && pk.phi > 0.0)
+        .collect();
+    let mut p0: Vec<f64> = knots
+        .iter()
+        .map(|&k| {
+            let i = peaks
+                .partition_point(|pk| pk.t <= k)
+                .clamp(1, peaks.len().max(2) - 1);
+            match (peaks.get(i - 1), peaks.get(i)) {
+                (Some(a), Some(b)) => {
+                    a.phi + (b.phi - a.phi) * ((k - a.t) / (b.t - a.t)).clamp(0.0, 1.0)
+                }
+                (Some(a), None) => a.phi,
+                _ => f64::NAN,
+            }
+        })
+        .collect();
+    if !p0.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    p0.push(0.0);
+    let c = parameters - 1;
+    let fit = levenberg_marquardt(
+        |p, out| {
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = model.z_rim(phi_at(p, place[i]), chi[i]) + p[c] - heights[i];
+            }
+        },
+        |p, jac: &mut DMatrix<f64>| {
+            jac.fill(0.0);
+            for (i, &(j, w)) in place.iter().enumerate() {
+                let (dz_dphi, _) = model.z_rim_partials(phi_at(p, (j, w)), chi[i]);
+                jac[(i, j)] = dz_dphi * (1.0 - w);
+                jac[(i, j + 1)] = dz_dphi * w;
+                jac[(i, c)] = 1.0;
+            }
+        },
+        &p0,
+        times.len(),
+    )?;
+    let se = fit.covariance.as_ref()?[(c, c)].sqrt();
+    let offset = fit.params[c];
+    (offset.is_finite() && se.is_finite() && se > 0.0).then_some(MotionZero {
         offset,
-        se: (variance / windows as f64).sqrt(),
-        windows,
+        se,
+        turning_points: turning.len(),
+        points: times.len(),
     })
 }

@@ -19,14 +19,15 @@
 
 use serde::{Deserialize, Serialize};
 
-/// How far the zero the motion places lies from the truth beyond its windows'
-/// scatter [px]: the profile fitted is the first-order one with the camera's
-/// elevation, which the clip's calibration knows to ±0.5°, and φ may oscillate
-/// about stationary rolling. Measured as the RMS over clips of the difference
-/// from the truth's offset of the lifted heights (BENCHMARKS.md "The zero from the
-/// motion"): 0.025 px over the open footage's eight clips (the largest 0.044 px,
-/// o04 with φ oscillating) and 0.013 px over the 24 robustness scenes (the largest
-/// 0.040 px, s05's light plate brighter than the disk); 0.03 px.
+/// How far the zero the motion places lies from the truth beyond its fit's
+/// standard error [px]: the camera's elevation in the profile is known to ±0.5°, φ
+/// may oscillate about stationary rolling, and a renderer's or a camera's pictures
+/// of a lifted rim may share an error no fit of the motion sees. Measured as the RMS
+/// over clips of the difference from the truth's offset of the lifted heights
+/// (BENCHMARKS.md "The zero from the motion", "The zero from one fit of the
+/// window"): 0.024 px over the open footage's eight clips (the largest 0.044 px, o04
+/// with φ oscillating; its side views all 0.02–0.04 px low), 0.009 and 0.008 px over
+/// the robustness scenes of two seeds (the largest 0.037 px, s17 at crf 28); 0.03 px.
 pub const MOTION_ZERO_PROFILE_PX: f64 = 0.03;
 
 /// The method that read the rim's heights, as far as it decides how well their zero
