@@ -6,9 +6,7 @@
 //! z_rim(t) = [`RimModel::z_rim`](super::RimModel::z_rim)(φ(τ), χ(τ)) is fitted by
 //! least squares. ω is the precession rate ψ̇ at t_c and χ₀ the phase there. The model is
 //! even in χ, so (χ₀, ω) and (−χ₀, −ω) fit alike; the fit returns ω ≥ 0 (a side view
-//! cannot tell the sense of precession). With [`Terms::offset`] the heights also carry
-//! a constant c, z = z_rim(φ, χ) + c: the zero of the measured heights as the motion
-//! itself places it ([`super::motion_zero`]).
+//! cannot tell the sense of precession).
 
 use super::RimModel;
 use crate::lsq::levenberg_marquardt;
@@ -28,25 +26,17 @@ pub(crate) struct LocalInit {
 pub(crate) struct Terms {
     /// ½ ω̇ τ² in the phase.
     pub chirp: bool,
-    /// A constant c added to the model's heights.
-    pub offset: bool,
 }
 
 impl Terms {
     /// φ₀, φ₁, χ₀, ω only.
     #[cfg(test)]
-    pub const PLAIN: Terms = Terms {
-        chirp: false,
-        offset: false,
-    };
+    pub const PLAIN: Terms = Terms { chirp: false };
     /// With the chirp ½ ω̇ τ².
-    pub const CHIRP: Terms = Terms {
-        chirp: true,
-        offset: false,
-    };
+    pub const CHIRP: Terms = Terms { chirp: true };
 
     fn parameters(self) -> usize {
-        4 + usize::from(self.chirp) + usize::from(self.offset)
+        4 + usize::from(self.chirp)
     }
 }
 
@@ -60,13 +50,9 @@ pub(crate) struct LocalFit {
     pub omega: f64,
     /// dω/dt of the chirp (0 without it).
     pub omega_dot: f64,
-    /// The constant c added to the heights, in their units (0 without it).
-    pub offset: f64,
     pub sigma_phi: f64,
     pub sigma_chi: f64,
     pub sigma_omega: f64,
-    /// Standard error of c (0 without it).
-    pub sigma_offset: f64,
     pub ssr: f64,
     pub dof: usize,
     pub points: usize,
@@ -88,8 +74,6 @@ pub(crate) fn fit_local(
 ) -> Option<LocalFit> {
     let parameters = terms.parameters();
     let chirp = terms.chirp;
-    // Index of c in the parameters, after the chirp's.
-    let c_index = 4 + usize::from(chirp);
     if t.len() <= parameters {
         return None;
     }
@@ -115,10 +99,6 @@ pub(crate) fn fit_local(
     if chirp {
         p0.push(0.0);
     }
-    if terms.offset {
-        p0.push(0.0);
-    }
-    let offset = |p: &[f64]| if terms.offset { p[c_index] } else { 0.0 };
     // The Jacobian by the chain rule: with φ_i = p₀ + p₁u_i and
     // χ_i = p₂ + p₃u_i (+ p₄u_i²), ∂r_i/∂p = (∂z/∂φ [1, u_i], ∂z/∂χ [1, u_i, u_i²]),
     // from the model's partials: two sin/cos pairs per sample instead of the ten
@@ -134,7 +114,7 @@ pub(crate) fn fit_local(
         |p, out| {
             for ((o, &ui), &zi) in out.iter_mut().zip(&u).zip(z) {
                 let (phi, chi) = state(p, ui);
-                *o = model.z_rim(phi, chi) + offset(p) - zi;
+                *o = model.z_rim(phi, chi) - zi;
             }
         },
         |p, jac| {
@@ -147,9 +127,6 @@ pub(crate) fn fit_local(
                 jac[(i, 3)] = dz_dchi * ui;
                 if chirp {
                     jac[(i, 4)] = dz_dchi * ui * ui;
-                }
-                if terms.offset {
-                    jac[(i, c_index)] = 1.0;
                 }
             }
         },
@@ -169,15 +146,9 @@ pub(crate) fn fit_local(
         } else {
             0.0
         },
-        offset: offset(p.as_slice()),
         sigma_phi: cov[(0, 0)].sqrt(),
         sigma_chi: cov[(2, 2)].sqrt(),
         sigma_omega: cov[(3, 3)].sqrt() / half_width,
-        sigma_offset: if terms.offset {
-            cov[(c_index, c_index)].sqrt()
-        } else {
-            0.0
-        },
         ssr: fit.ssr,
         dof: fit.dof,
         points: u.len(),
@@ -190,8 +161,6 @@ pub(crate) fn fit_local(
         result.sigma_phi,
         result.sigma_chi,
         result.sigma_omega,
-        result.offset,
-        result.sigma_offset,
     ]
     .iter()
     .all(|x| x.is_finite());
