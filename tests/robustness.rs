@@ -353,7 +353,10 @@ struct SceneErrors {
 /// Where n's error comes from, over the measured scenes (information, printed under
 /// the table): the RMS of each fit's Δn, how much of it a straight line in the
 /// heights' offset explains (least squares Δn = s·a + d, with R²), and how far the
-/// fitted halt and the turns' end lie from the true halt (RMS).
+/// fitted halt and the turns' end lie from the true halt (RMS). R² is a correlation,
+/// not the zero's share: a zero 15 % closer to the truth left Δn as it was, since the
+/// coding that moves the zero shaves the peaks too (BENCHMARKS.md, "The zero from one
+/// fit of the window").
 fn error_budget(errors: &[SceneErrors]) -> String {
     let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
     let line = |pairs: &[(f64, f64)]| {
