@@ -87,21 +87,21 @@ use crate::model::simulate::{
 };
 use crate::model::tuning::{TuningError, tune_eta};
 
-/// Default time between the initial state and the halt [s] (eq. 4.43: 0.5 s).
+/// Default time between the initial state and the halt \[s\] (eq. 4.43: 0.5 s).
 pub const DEFAULT_LEAD_S: f64 = 0.5;
 /// μ when the experiment's material is unknown: stainless steel, Table 3.1.
 pub const DEFAULT_MU: f64 = 0.134;
-/// Stopping angle of the comparisons [rad]. The thesis integrates to 1e-10; below
+/// Stopping angle of the comparisons \[rad\]. The thesis integrates to 1e-10; below
 /// 1e-6 the end moves by milliseconds only (ERRATA, numerical advice; reproduce.rs
 /// `TABLE_4_1_FLAT_ANGLE`), and footage cannot see φ below ~1e-3.
 pub const FLAT_ANGLE: f64 = 1e-6;
-/// Output interval of the simulations [s] (a tenth of a 480 fps frame).
+/// Output interval of the simulations \[s\] (a tenth of a 480 fps frame).
 pub const OUTPUT_INTERVAL_S: f64 = 1e-4;
-/// Gap at which asperities touch and the air-film phase ends [m]. The thesis gives
+/// Gap at which asperities touch and the air-film phase ends \[m\]. The thesis gives
 /// none; 25 µm reproduces its "≈ 0.03 s" contactless phase for its inputs
 /// (model::post_flat, `air_film_closing_time`).
 pub const DEFAULT_CONTACT_GAP_M: f64 = 25e-6;
-/// Tolerance of the halt tuning [s] (a twentieth of a 480 fps frame).
+/// Tolerance of the halt tuning \[s\] (a twentieth of a 480 fps frame).
 pub const TUNE_TOLERANCE_S: f64 = 1e-4;
 /// The thesis's residual angular velocity at the discontinuity set with augmented
 /// contour friction, ψ̇ = −0.14 rad/s (§4.7.1).
@@ -161,13 +161,13 @@ pub struct CompareOptions {
     pub model: ModelKind,
     /// Tuned to the halt or least squares.
     pub method: EtaMethod,
-    /// Time of the initial state before the halt [s].
+    /// Time of the initial state before the halt \[s\].
     pub lead_s: f64,
     /// Exponent p of augmented contour friction (start value of the fit).
     pub augmented_exponent: f64,
     /// μ; `None`: from the experiment's material (Table 3.1).
     pub mu: Option<f64>,
-    /// Contact gap of the air-film phase [m].
+    /// Contact gap of the air-film phase \[m\].
     pub contact_gap_m: f64,
 }
 
@@ -233,7 +233,7 @@ pub fn load_experiment(dir: &Path) -> Result<Experiment, CompareError> {
 /// A measured value at one instant (experiment time, halt at 0).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Point {
-    /// Time [s], halt at 0.
+    /// Time \[s\], halt at 0.
     pub t: f64,
     /// Value (SI).
     pub value: f64,
@@ -242,9 +242,9 @@ pub struct Point {
 /// ψ̇ by eq. (3.11): the mean rate over the turn from `t` to `t_next`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct TurnRate {
-    /// The peak [s].
+    /// The peak \[s\].
     pub t: f64,
-    /// The next peak [s].
+    /// The next peak \[s\].
     pub t_next: f64,
     /// ψ̇ in the thesis's sense (negative) [rad/s].
     pub value: f64,
@@ -253,7 +253,7 @@ pub struct TurnRate {
 /// The measured series the model is compared with, in the thesis's sign convention.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Measured {
-    /// φ at the peaks [rad].
+    /// φ at the peaks \[rad\].
     pub phi: Vec<Point>,
     /// ψ̇ at the peaks (eq. 3.11), negative [rad/s].
     pub psi_dot: Vec<TurnRate>,
@@ -265,15 +265,15 @@ pub struct Measured {
     pub beta_sign: f64,
     /// Mean β̇ over the frames within two frame periods of t_φ [rad/s].
     pub beta_dot_at_halt: Option<f64>,
-    /// t_β − t_φ [s] (two-view clips).
+    /// t_β − t_φ \[s\] (two-view clips).
     pub t_beta_minus_t_phi: Option<f64>,
-    /// Rim height of the last peak above the rest level [m].
+    /// Rim height of the last peak above the rest level \[m\].
     pub last_peak_z_rim: Option<f64>,
     /// dφ/dt over the last two peaks [rad/s].
     pub last_phi_dot: Option<f64>,
-    /// Motion threshold of the halt detection, above the rest level [m].
+    /// Motion threshold of the halt detection, above the rest level \[m\].
     pub halt_threshold_m: f64,
-    /// Frame period [s].
+    /// Frame period \[s\].
     pub frame_period_s: f64,
 }
 
@@ -378,7 +378,7 @@ impl Measured {
 /// The initial state and where each component came from.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct InitialEstimate {
-    /// Experiment time of the state [s] (−lead).
+    /// Experiment time of the state \[s\] (−lead).
     pub t: f64,
     /// The state, SI, thesis sense (ψ̇ < 0, θ̇ > 0).
     pub state: InitialState,
@@ -753,7 +753,7 @@ pub fn misfit(
 pub struct Residual {
     /// Why the model ended.
     pub end_reason: EndReason,
-    /// φ at the end [rad].
+    /// φ at the end \[rad\].
     pub phi: f64,
     /// ψ̇ at the end [rad/s] (the thesis's residual angular velocity on D_c).
     pub psi_dot: f64,
@@ -776,23 +776,23 @@ pub struct Residual {
 pub struct PostFlat {
     /// "flat" (air film, eq. 4.104, then eq. 4.111) or "concave" (eq. 4.113 only).
     pub plate: String,
-    /// Z_b(0): half the last measured peak rim height (§4.8.1) [m].
+    /// Z_b(0): half the last measured peak rim height (§4.8.1) \[m\].
     pub initial_gap_m: Option<f64>,
     /// Ż_b(0) = φ̇ R with φ̇ over the last two peaks (§4.8.1) [m/s].
     pub initial_gap_velocity_m_s: Option<f64>,
-    /// Contact gap that ends the air-film phase [m].
+    /// Contact gap that ends the air-film phase \[m\].
     pub contact_gap_m: f64,
-    /// Duration of the contactless phase, eq. (4.104) [s].
+    /// Duration of the contactless phase, eq. (4.104) \[s\].
     pub contactless_s: Option<f64>,
     /// Why it is missing, if it is.
     pub contactless_note: Option<String>,
-    /// Contact phase from the model's residual β̇ (eq. 4.111 or 4.113) [s].
+    /// Contact phase from the model's residual β̇ (eq. 4.111 or 4.113) \[s\].
     pub contact_from_model_s: Option<f64>,
-    /// Contact phase from the measured β̇ at t_φ [s].
+    /// Contact phase from the measured β̇ at t_φ \[s\].
     pub contact_from_measured_s: Option<f64>,
-    /// contactless + contact (model β̇) [s].
+    /// contactless + contact (model β̇) \[s\].
     pub predicted_s: Option<f64>,
-    /// Measured t_β − t_φ [s].
+    /// Measured t_β − t_φ \[s\].
     pub measured_s: Option<f64>,
 }
 
@@ -825,9 +825,9 @@ pub struct Comparison {
     pub misfit: f64,
     /// Errors per variable.
     pub errors: Vec<VariableError>,
-    /// Model end time after the initial state [s].
+    /// Model end time after the initial state \[s\].
     pub end_time_s: f64,
-    /// End time − lead: the model's halt relative to the measured one [s].
+    /// End time − lead: the model's halt relative to the measured one \[s\].
     pub end_time_error_s: f64,
     /// When the model's peak rim height 2R sin φ last exceeds the experiment's halt
     /// threshold [model time, s]: the halt this footage could have seen.
@@ -1373,7 +1373,7 @@ pub struct Ranked {
     pub energy_exponent: Option<f64>,
     /// Normalised RMS per variable.
     pub normalised_rms: Vec<(String, f64)>,
-    /// End time − lead [s].
+    /// End time − lead \[s\].
     pub end_time_error_s: Option<f64>,
     /// The failure, if any.
     pub error: Option<String>,

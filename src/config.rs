@@ -119,15 +119,15 @@ pub struct DiskConfig {
 pub struct VisionConfig {
     /// Threshold γ on the mean RGB intensity as a fraction of white, 0–1 (thesis §3.2.4).
     pub gamma: Option<f64>,
-    /// Columns each side of the centre line searched for the rim edge [px].
+    /// Columns each side of the centre line searched for the rim edge \[px\].
     pub band_half_width_px: Option<u32>,
-    /// Two-view clips: the first row of the plan view [px].
+    /// Two-view clips: the first row of the plan view \[px\].
     pub split_row: Option<u32>,
-    /// Region of interest `[x, y, width, height]` [px].
+    /// Region of interest `[x, y, width, height]` \[px\].
     pub roi: Option<[u32; 4]>,
 }
 
-/// Rest-frame calibration points [px] (thesis §3.2.4, eq. 3.10 with ERRATA).
+/// Rest-frame calibration points \[px\] (thesis §3.2.4, eq. 3.10 with ERRATA).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CalibrationConfig {
@@ -141,12 +141,12 @@ pub struct CalibrationConfig {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FitConfig {
-    /// Length of the fit window before the halt [s].
+    /// Length of the fit window before the halt \[s\].
     pub window_s: Option<f64>,
     pub halt: Option<HaltChoice>,
     /// Where the zero of z_rim comes from (default: the motion).
     pub rim_zero: Option<RimZeroChoice>,
-    /// 1σ uncertainty of the zero of z_rim [px], carried into the interval of n
+    /// 1σ uncertainty of the zero of z_rim \[px\], carried into the interval of n
     /// (default: the motion's ([`RimReading::motion_zero_uncertainty_px`]), else the
     /// one measured for how the rim was read
     /// ([`RimReading::zero_uncertainty_px`](crate::vision::RimReading::zero_uncertainty_px));
@@ -171,7 +171,7 @@ pub struct ExperimentConfig {
     /// Plate orientation or any other grouping label of the study.
     pub orientation: Option<String>,
     pub disk: Option<DiskConfig>,
-    /// The camera's distance from the disk's near rim, measured along the plate [m]:
+    /// The camera's distance from the disk's near rim, measured along the plate \[m\]:
     /// overrides the distance the perspective factor gives (`analyse::ScaleReport`),
     /// from which the camera's elevation at the near rim and the local scale there
     /// follow.
@@ -181,7 +181,7 @@ pub struct ExperimentConfig {
     pub fit: Option<FitConfig>,
 }
 
-/// Default fit window before the halt [s] (the thesis's last 0.5 s).
+/// Default fit window before the halt \[s\] (the thesis's last 0.5 s).
 pub const DEFAULT_WINDOW_S: f64 = 0.5;
 
 impl ExperimentConfig {
@@ -376,7 +376,7 @@ impl ExperimentConfig {
         params
     }
 
-    /// The fit window before the halt [s].
+    /// The fit window before the halt \[s\].
     pub fn window_s(&self) -> f64 {
         self.fit
             .as_ref()
@@ -384,7 +384,7 @@ impl ExperimentConfig {
             .unwrap_or(DEFAULT_WINDOW_S)
     }
 
-    /// The 1σ uncertainty of the zero of z_rim [px] carried into n's interval, when
+    /// The 1σ uncertainty of the zero of z_rim \[px\] carried into n's interval, when
     /// the config sets it; `None`: the one measured for how the rim was read
     /// ([`RimReading::zero_uncertainty_px`](crate::vision::RimReading::zero_uncertainty_px)).
     pub fn rim_zero_uncertainty_px(&self) -> Option<f64> {
@@ -401,7 +401,7 @@ impl ExperimentConfig {
 }
 
 /// The band's half-width when the config names none: [`BAND_FRACTION`] of the disk's
-/// width at rest, `x_r − x_l` [px], and at least `default_px` (the side view's own
+/// width at rest, `x_r − x_l` \[px\], and at least `default_px` (the side view's own
 /// default).
 ///
 /// Why a fixed fraction of the width. Across the band the rim's edge slopes: the
@@ -424,7 +424,7 @@ pub fn band_for_disk(disk_width_px: f64, default_px: usize) -> usize {
 /// [`band_for_disk`]): the edges across it lie within ±2 % of the peak height.
 pub const BAND_FRACTION: f64 = 0.02;
 
-/// Checks the rim band against the disk's width at rest, `x_r − x_l` [px]. The rim
+/// Checks the rim band against the disk's width at rest, `x_r − x_l` \[px\]. The rim
 /// height is read on the centre line; a band wider than a tenth of the radius either
 /// side reads it where the rim is lower by more than 0.5 % (√(1 − 0.1²) = 0.995).
 ///

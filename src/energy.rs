@@ -91,7 +91,7 @@ use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, StudentsT};
 use thiserror::Error;
 
-/// Energy under stationary rolling, thesis eq. (3.8) [J], measured from the flat rest
+/// Energy under stationary rolling, thesis eq. (3.8) \[J\], measured from the flat rest
 /// state (E − m g H), so it is zero when the disk lies flat (φ = 0):
 ///
 /// E = C/2 (H/R ψ̇ sin φ)² + A/2 ψ̇² sin² φ + m g (R sin φ + H cos φ) − m g H.
@@ -100,7 +100,7 @@ use thiserror::Error;
 /// R θ̇ = −ψ̇ (R cos φ − H sin φ): then θ̇ + ψ̇ cos φ = (H/R) ψ̇ sin φ, the centre of mass
 /// is at rest and the translational term of eq. (3.6) vanishes.
 ///
-/// `phi` is the nutation angle φ [rad], `psi_dot` the precession rate ψ̇ [rad/s].
+/// `phi` is the nutation angle φ \[rad\], `psi_dot` the precession rate ψ̇ [rad/s].
 pub fn stationary_rolling_energy(params: &DiskParams, phi: f64, psi_dot: f64) -> f64 {
     let spin_about_axis = params.half_thickness / params.radius * psi_dot * phi.sin();
     params.inertia_c / 2.0 * spin_about_axis * spin_about_axis
@@ -108,7 +108,7 @@ pub fn stationary_rolling_energy(params: &DiskParams, phi: f64, psi_dot: f64) ->
         + potential_above_flat(params, phi)
 }
 
-/// Energy of stationary rolling at nutation φ [J]: eq. (3.8) with the stationary
+/// Energy of stationary rolling at nutation φ \[J\]: eq. (3.8) with the stationary
 /// precession rate ψ̇(φ) of eq. (4.40) (the sense of ψ̇ does not change it). The error
 /// is [`closed_form::stationary_rolling`]'s, where no stationary rolling exists.
 pub fn stationary_energy_at(params: &DiskParams, phi: f64) -> Result<f64, String> {
@@ -116,7 +116,7 @@ pub fn stationary_energy_at(params: &DiskParams, phi: f64) -> Result<f64, String
         .map(|(psi_dot, _)| stationary_rolling_energy(params, phi, psi_dot))
 }
 
-/// Energy of the rolling disk in its full state, thesis eq. (3.6) [J], measured from
+/// Energy of the rolling disk in its full state, thesis eq. (3.6) \[J\], measured from
 /// the flat rest state (minus m g H, as eq. 3.8):
 ///
 /// E = φ̇²/2 (A + mH² + mR²) + C/2 (θ̇ + ψ̇ cos φ)² + m/2 (R(θ̇ + ψ̇ cos φ) − H ψ̇ sin φ)²
@@ -162,7 +162,7 @@ fn potential_above_flat(params: &DiskParams, phi: f64) -> f64 {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum HaltTime {
-    /// t0 is known (e.g. the stop frame, t_φ) and held fixed [s].
+    /// t0 is known (e.g. the stop frame, t_φ) and held fixed \[s\].
     Fixed(f64),
     /// t0 is fitted together with A_e and n (as in thesis §4.6).
     Free,
@@ -205,18 +205,18 @@ pub enum HaltTime {
 /// (BENCHMARKS.md, "The halt seen from the final turns").
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct HaltSighting {
-    /// t_φ, the time of the last frame with rim motion [s].
+    /// t_φ, the time of the last frame with rim motion \[s\].
     pub t_phi: f64,
-    /// The frame interval δt [s].
+    /// The frame interval δt \[s\].
     pub frame_s: f64,
     /// Energy of stationary rolling at the smallest rim rise the footage shows
-    /// ([`HaltSighting::visible_rise`]) [J].
+    /// ([`HaltSighting::visible_rise`]) \[J\].
     pub visible_energy: f64,
     /// The halt detector's threshold: the smallest rise of the rim above its rest
-    /// that it takes for motion [m] (z_v when the rest level is the zero).
+    /// that it takes for motion \[m\] (z_v when the rest level is the zero).
     #[serde(default)]
     pub threshold_m: f64,
-    /// Noise σ of the rim at rest [m]: a frame continuing the rim's descent after a
+    /// Noise σ of the rim at rest \[m\]: a frame continuing the rim's descent after a
     /// rise is motion while it stays more than σ above rest.
     #[serde(default)]
     pub noise_m: f64,
@@ -225,7 +225,7 @@ pub struct HaltSighting {
     #[serde(default)]
     pub visible_precession: f64,
     /// How far the still disk's rest level lies above the zero the energies' heights
-    /// are measured from [m]: −c of the zero the motion places (`signal::MotionZero`),
+    /// are measured from \[m\]: −c of the zero the motion places (`signal::MotionZero`),
     /// 0 when the rest level is the zero. The detector counts rises above the rest,
     /// so a peak is seen when it reaches [`HaltSighting::visible_rise`] above the zero.
     #[serde(default)]
@@ -251,27 +251,27 @@ pub const SIGHTING_DISAGREEMENT: f64 = 3.0;
 /// How a [`HaltSighting`] entered the fit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SightingUse {
-    /// t0 as the sighting gives it, t_φ plus the mean of t0 − t_φ [s], for the Δ of
+    /// t0 as the sighting gives it, t_φ plus the mean of t0 − t_φ \[s\], for the Δ of
     /// the combined law (of the free fit's when not combined).
     pub t0_seen: f64,
-    /// Its standard deviation [s].
+    /// Its standard deviation \[s\].
     pub se_t0_seen: f64,
-    /// Δ, the time before t0 over which the motion is too small to see [s], of the
+    /// Δ, the time before t0 over which the motion is too small to see \[s\], of the
     /// same law.
     pub unseen_s: f64,
-    /// t0 from the energy alone [s].
+    /// t0 from the energy alone \[s\].
     pub t0_fitted: f64,
-    /// Standard error of `t0_fitted` [s].
+    /// Standard error of `t0_fitted` \[s\].
     pub se_t0_fitted: f64,
     /// Whether it was combined: false when the two differ by more than
     /// 3 standard deviations of their difference.
     pub combined: bool,
     /// The least rise above the heights' zero the detector sees
-    /// ([`HaltSighting::visible_rise`]) [m].
+    /// ([`HaltSighting::visible_rise`]) \[m\].
     #[serde(default)]
     pub visible_rise_m: f64,
     /// The still disk's rest level above the heights' zero
-    /// ([`HaltSighting::rest_above_zero_m`]) [m].
+    /// ([`HaltSighting::rest_above_zero_m`]) \[m\].
     #[serde(default)]
     pub rest_above_zero_m: f64,
 }
@@ -283,7 +283,7 @@ pub struct PowerLawFit {
     pub a_e: f64,
     /// Energy exponent n (dimensionless).
     pub n: f64,
-    /// Halt time t0 [s], fitted or the fixed value.
+    /// Halt time t0 \[s\], fitted or the fixed value.
     pub t0: f64,
     /// Standard error of A_e [J s^-n].
     pub se_a_e: f64,
@@ -293,11 +293,11 @@ pub struct PowerLawFit {
     /// `se_n` it shows how much their measured autocorrelation widens the interval.
     #[serde(default)]
     pub se_n_uncorrelated: f64,
-    /// Bartlett bandwidth S [blocks] of the prewhitened long-run covariance
+    /// Bartlett bandwidth S \[blocks\] of the prewhitened long-run covariance
     /// (Andrews' AR(1) plug-in; 0: nothing correlated left after the AR(1) filter).
     #[serde(default)]
     pub bandwidth: f64,
-    /// Standard error of t0 [s]: the wider of the sandwich's and the jackknife's for a
+    /// Standard error of t0 \[s\]: the wider of the sandwich's and the jackknife's for a
     /// free t0 (module docs), the combination's for a sighted one; `None` when t0 was
     /// fixed.
     pub se_t0: Option<f64>,
@@ -312,14 +312,14 @@ pub struct PowerLawFit {
     /// 95 % confidence interval of n: the statistical half-width (Student t, from
     /// `se_n`) and the zero's (normal, from `se_n_zero`) added in quadrature.
     pub ci95_n: (f64, f64),
-    /// 95 % confidence interval of t0 [s]; `None` when t0 was fixed.
+    /// 95 % confidence interval of t0 \[s\]; `None` when t0 was fixed.
     pub ci95_t0: Option<(f64, f64)>,
     /// The halt seen in the footage as a second measurement of t0, when given.
     #[serde(default)]
     pub halt_sighting: Option<SightingUse>,
     /// Coefficient of determination 1 − SSR/SST on E.
     pub r_squared: f64,
-    /// Root-mean-square residual √(SSR/points) [J].
+    /// Root-mean-square residual √(SSR/points) \[J\].
     pub residual_rms: f64,
     /// Number of samples fitted.
     pub points: usize,
@@ -348,7 +348,7 @@ impl PowerLawFit {
         self
     }
 
-    /// The fitted energy A_e (t0 − t)^n at time `t` [J]; zero at and after the halt.
+    /// The fitted energy A_e (t0 − t)^n at time `t` \[J\]; zero at and after the halt.
     pub fn energy_at(&self, t: f64) -> f64 {
         if t < self.t0 {
             self.a_e * (self.t0 - t).powf(self.n)
@@ -444,7 +444,7 @@ impl FitError {
     }
 }
 
-/// Fits E = A_e (t0 − t)^n, eq. (3.2)/(4.93), to samples (`t` [s], `energy` [J]) by
+/// Fits E = A_e (t0 − t)^n, eq. (3.2)/(4.93), to samples (`t` \[s\], `energy` \[J\]) by
 /// nonlinear least squares on E, with t0 fixed or free (see the module docs for the
 /// method). Every sample must be finite, have E > 0 and, for a fixed t0, lie before t0.
 /// Times need not be sorted.
@@ -551,7 +551,7 @@ pub fn fit_window(
 }
 
 /// [`fit_window`] for samples that are not one a turn (per frame): the covariance is
-/// estimated over the samples and over the turns that `turns` (the peaks' times [s],
+/// estimated over the samples and over the turns that `turns` (the peaks' times \[s\],
 /// sorted) separate, and the one with the wider interval of n kept, as the module
 /// docs say; with fewer than [`LEAST_TURN_BLOCKS`] turns in the window, or none
 /// given, over the samples only.
@@ -600,7 +600,7 @@ pub fn fit_window_in_turns(
     fit_in_turns(&ts, &es, t0, turns).map_err(|e| e.reindex(&selected))
 }
 
-/// Fits the power law over each window in `windows` [s] (see [`fit_window_in_turns`],
+/// Fits the power law over each window in `windows` \[s\] (see [`fit_window_in_turns`],
 /// `turns` as there), to show how the exponent depends on the window (ERRATA:
 /// pivoting friction gives n ≈ 2.21 or 2.13 depending on it).
 pub fn window_sensitivity(
@@ -917,7 +917,7 @@ impl LongRun {
 }
 
 impl HaltSighting {
-    /// The least peak rise above the energies' zero the detector sees, z_v [m]: its
+    /// The least peak rise above the energies' zero the detector sees, z_v \[m\]: its
     /// threshold above the rest level plus the rest level's height above the zero, at
     /// least the rest noise σ (a rise smaller than the noise is no rise).
     pub fn visible_rise(&self) -> f64 {

@@ -321,10 +321,10 @@ pub const TABLE_4_1: [(ModelKind, f64, f64); 10] = [
     (ModelKind::Cylinder, 0.5, 2.2e-3),
 ];
 
-/// Tolerance on the end time when tuning η for Table 4.1 [s].
+/// Tolerance on the end time when tuning η for Table 4.1 \[s\].
 pub const TABLE_4_1_TIME_TOLERANCE: f64 = 1e-4;
 
-/// Stopping angle of the Table 4.1 runs [rad] (the thesis: 1e-10, §4.3.1). Models with
+/// Stopping angle of the Table 4.1 runs \[rad\] (the thesis: 1e-10, §4.3.1). Models with
 /// n > 1 fall flat with ψ̇ growing without bound (ψ̇² ≈ 1/(aφ), eq. 4.40), so every
 /// decade of φ below 1e-4 costs more precession cycles (and slip phases) than the
 /// last, while below 1e-6 rad the end moves by a few milliseconds and E is below

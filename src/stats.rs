@@ -248,7 +248,7 @@ impl ExponentRecord {
 pub struct MaterialProperties {
     /// Material name, as in [`THESIS_MATERIAL_ORDER`].
     pub material: String,
-    /// Young's modulus E [GPa].
+    /// Young's modulus E \[GPa\].
     pub youngs_modulus_gpa: f64,
     /// Poisson's ratio ν [-].
     pub poisson_ratio: f64,
@@ -674,7 +674,7 @@ fn t_critical(level: f64, dof: f64) -> f64 {
 pub enum Correction {
     /// No correction: each p against α.
     None,
-    /// Bonferroni: each p against α/k (the thesis's choice, §3.2.6, ref. [84]).
+    /// Bonferroni: each p against α/k (the thesis's choice, §3.2.6, ref. \[84\]).
     #[default]
     Bonferroni,
     /// Holm's step-down: the i-th smallest p against α/(k − i + 1), stopping at the

@@ -406,7 +406,7 @@ pub struct ExperimentSummary {
     /// Fitted exponent n of E = A_e (t0 − t)^n and its 95 % interval.
     pub n: f64,
     pub n_ci95: [f64; 2],
-    /// Fitted halt time t0 [s] relative to the measured halt.
+    /// Fitted halt time t0 \[s\] relative to the measured halt.
     pub t0_s: f64,
     pub r_squared: f64,
     pub points: usize,

@@ -59,7 +59,7 @@ pub const REST_FRAMES: usize = 5;
 /// frames' to find duplicated and interpolated frames (footage::RepeatGauge).
 const REPEAT_SAMPLE_STEP: usize = 2;
 
-/// The windows of the window-sensitivity table [s] (issue: 1, 0.5, 0.25, 0.1 s).
+/// The windows of the window-sensitivity table \[s\] (issue: 1, 0.5, 0.25, 0.1 s).
 pub const SENSITIVITY_WINDOWS_S: [f64; 4] = [1.0, 0.5, 0.25, 0.1];
 
 /// Clips up to this long [s, capture clock] are decoded whole: every clip the
@@ -99,7 +99,7 @@ pub struct DecodedSpan {
     pub last_frame: usize,
     /// Frames in the clip.
     pub clip_frames: usize,
-    /// Capture time of the first decoded frame from the clip's first [s].
+    /// Capture time of the first decoded frame from the clip's first \[s\].
     pub first_t_capture_s: f64,
     /// Spans decoded before the last one held the motion the fits need, plus one.
     pub attempts: usize,
@@ -352,9 +352,9 @@ struct MeasuredSpan {
 /// moved every height.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ZeroFromMotion {
-    /// The windows' offset c above the rest tail's level, and its standard error [m].
+    /// The windows' offset c above the rest tail's level, and its standard error \[m\].
     pub zero: signal::MotionZero,
-    /// How far every height moved down: the rest tail's level plus c [m]. The
+    /// How far every height moved down: the rest tail's level plus c \[m\]. The
     /// profile fitted is the camera's at [`ScaleReport::near_rim_elevation_rad`].
     pub shift_m: f64,
 }
@@ -387,7 +387,7 @@ pub enum AnalyseError {
         path: PathBuf,
         /// "fit window" or "rest tail".
         span: &'static str,
-        /// The span's capture times from the clip's first frame [s].
+        /// The span's capture times from the clip's first frame \[s\].
         start_s: f64,
         end_s: f64,
         /// The clip's sections, as [`FrameTiming::sections_text`] lists them.
@@ -416,9 +416,9 @@ pub struct ExperimentPlan {
     /// were decoded: the whole clip).
     #[serde(default)]
     pub decoded: Option<DecodedSpan>,
-    /// Displayed frame width [px] (after `orientation`).
+    /// Displayed frame width \[px\] (after `orientation`).
     pub width: usize,
-    /// Displayed frame height [px].
+    /// Displayed frame height \[px\].
     pub height: usize,
     /// The display matrix's rotation and mirror, applied to every frame before it
     /// was measured (identity in results written before it was recorded).
@@ -435,7 +435,7 @@ pub struct ExperimentPlan {
     pub layout: String,
     /// Dark or light plate, and whether the config said so or how it was detected.
     pub plate: String,
-    /// Two-view clips: the first row of the plan view [px] and whether it came from
+    /// Two-view clips: the first row of the plan view \[px\] and whether it came from
     /// the config.
     pub split_row: Option<(usize, bool)>,
     /// The rest frames' calibration; its z_t is [`Self::top_rim_leaning`]'s when that
@@ -456,7 +456,7 @@ pub struct ExperimentPlan {
     /// contour, or the edge alone and why.
     #[serde(default)]
     pub rim: String,
-    /// The side view's row where z_rim = 0 [px]: where the motion places it
+    /// The side view's row where z_rim = 0 \[px\]: where the motion places it
     /// ([`Self::rim_zero_from_motion`]), else the rim edge at rest (the mirror-edge
     /// model's fitted e_rest on a dark plate, the shadow-edge contour's on a light
     /// one, else the plate line z_base). A frame's measured rim edge lies at this
@@ -469,7 +469,7 @@ pub struct ExperimentPlan {
     /// known, with `fit.rim_zero = "rest"`, and in results written before it.
     #[serde(default)]
     pub rim_zero_from_motion: Option<ZeroFromMotion>,
-    /// 1σ uncertainty of that zero [px], carried into the intervals of n
+    /// 1σ uncertainty of that zero \[px\], carried into the intervals of n
     /// (`PowerLawFit::se_n_zero`): the config's `fit.rim_zero_uncertainty_px`, else
     /// the motion's ([`vision::RimReading::motion_zero_uncertainty_px`]), else the
     /// one measured for [`Self::rim_reading`]; 0 in results written before it was.
@@ -485,7 +485,7 @@ pub struct ExperimentPlan {
 }
 
 impl ExperimentPlan {
-    /// The side view's row of the rim edge for a rim height `z_rim_px` [px]: the
+    /// The side view's row of the rim edge for a rim height `z_rim_px` \[px\]: the
     /// row where z_rim = 0 ([`Self::rim_zero_row_px`]) less the height.
     pub fn rim_edge_row(&self, z_rim_px: f64) -> f64 {
         self.rim_zero_row_px
@@ -493,7 +493,7 @@ impl ExperimentPlan {
             - z_rim_px
     }
 
-    /// The side view's width [px]: the region of interest's, else the frame's.
+    /// The side view's width \[px\]: the region of interest's, else the frame's.
     pub fn side_view_width(&self) -> usize {
         let roi = self.config.vision.as_ref().and_then(|v| v.roi);
         roi.map_or(self.width, |r| r[2] as usize)
@@ -514,7 +514,7 @@ impl ExperimentPlan {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TopRimLeaning {
     pub reading: vision::LeaningTopRim,
-    /// The rest frame's reading of z_t, which it replaced [px].
+    /// The rest frame's reading of z_t, which it replaced \[px\].
     pub rest_z_t: f64,
 }
 
@@ -522,13 +522,13 @@ pub struct TopRimLeaning {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct FrameRecord {
     pub index: usize,
-    /// Capture time from the first frame [s]: the container's timestamp mapped to
+    /// Capture time from the first frame \[s\]: the container's timestamp mapped to
     /// the capture clock, or index / fps without timestamps (see
     /// [`ExperimentPlan::frame_times`]), one frame later for each frame the rim's
     /// phase shows missing before it where the timestamps show no gap
     /// ([`signal::missing_frames`]).
     pub t_capture: f64,
-    /// Time with the halt at 0 [s].
+    /// Time with the halt at 0 \[s\].
     pub t: f64,
     /// The container's presentation time [s, playback clock], when it has one.
     pub container_time_s: Option<f64>,
@@ -536,7 +536,7 @@ pub struct FrameRecord {
     /// `None` for frame folders and in results written before it was recorded.
     #[serde(default)]
     pub picture_type: Option<char>,
-    /// Rim height above the plate line [px]; 0 when the rim touches; `None`
+    /// Rim height above the plate line \[px\]; 0 when the rim touches; `None`
     /// when no edge was found.
     pub z_rim_px: Option<f64>,
     /// The same in metres.
@@ -548,13 +548,13 @@ pub struct FrameRecord {
 /// Energy at one instant, with the state it came from.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 pub struct EnergySample {
-    /// Time, halt at 0 [s].
+    /// Time, halt at 0 \[s\].
     pub t: f64,
     pub phi: f64,
     pub psi_dot: f64,
     /// θ̇ = β̇ − ψ̇ (eq. 3.22), for eq. 3.6.
     pub theta_dot: Option<f64>,
-    /// Energy above the flat rest state [J].
+    /// Energy above the flat rest state \[J\].
     pub energy: f64,
 }
 
@@ -565,7 +565,7 @@ pub struct EnergyFit {
     pub method: String,
     pub samples: Vec<EnergySample>,
     pub fit: PowerLawFit,
-    /// n over other windows: (window [s], fit or the reason it failed).
+    /// n over other windows: (window \[s\], fit or the reason it failed).
     pub windows: Vec<(f64, Result<PowerLawFit, String>)>,
 }
 

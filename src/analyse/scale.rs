@@ -23,7 +23,7 @@ pub struct ScaleReport {
     pub diameter_metres_per_px: f64,
     /// 2H/(z_b − z_t) [m/px] (eq. 3.10 with ERRATA).
     pub thickness_metres_per_px: f64,
-    /// z_b [px]: the row where the near bottom rim meets the plate. The calibration's
+    /// z_b \[px\]: the row where the near bottom rim meets the plate. The calibration's
     /// z_base, the edge of the side at rest, unless the mirror-edge model measured
     /// the rim (a dark plate): then the plate line where the rim meets its mirror
     /// image (on the open footage's rounded rims z_base lies 0.8–2.3 px above the
@@ -34,7 +34,7 @@ pub struct ScaleReport {
     pub bottom_rim_row_px: Option<f64>,
     /// diameter ÷ thickness scale: 1 for a distant (orthographic) camera.
     pub perspective_factor: f64,
-    /// The camera's distance from the near rim [m]: R/(f − 1) when f > 1, or the
+    /// The camera's distance from the near rim \[m\]: R/(f − 1) when f > 1, or the
     /// config's `camera_distance_m` ([`Self::camera_distance_from_config`]).
     pub camera_distance_m: Option<f64>,
     /// Whether [`Self::camera_distance_m`] is the config's (false in results written
@@ -44,14 +44,14 @@ pub struct ScaleReport {
     /// Which scale is used: "thickness (eq. 3.10, at the near rim)" or
     /// "diameter (…reason)".
     pub used: String,
-    /// The silhouette's top on the centre line at rest, the top face's far rim [px]
+    /// The silhouette's top on the centre line at rest, the top face's far rim \[px\]
     /// ([`vision::silhouette_top`]; where that sees no face 1.5 px above the rest
     /// frames' z_t and the leaning frames read the near top rim
     /// ([`super::TopRimLeaning`]), the rest frames' z_t, which is then the silhouette's
     /// top); `None` when not seen, and in results written before it was recorded.
     #[serde(default)]
     pub silhouette_top_px: Option<f64>,
-    /// ε: the elevation of the camera's ray to the near bottom rim [rad], where
+    /// ε: the elevation of the camera's ray to the near bottom rim \[rad\], where
     /// z_rim is read ([`Self::with_near_rim_elevation`]); `None` without the
     /// silhouette's top.
     #[serde(default)]
@@ -62,7 +62,7 @@ pub struct ScaleReport {
     /// camera's distance and elevation, and in results written before it was recorded.
     #[serde(default)]
     pub near_rim_local_factor: Option<f64>,
-    /// The row of the camera's principal point in the side view [px] that
+    /// The row of the camera's principal point in the side view \[px\] that
     /// [`Self::near_rim_local_factor`] assumes: the centre of the frame's side view.
     #[serde(default)]
     pub principal_row_px: Option<f64>,
@@ -108,7 +108,7 @@ impl ScaleReport {
         }
     }
 
-    /// The scale with the camera's distance from the near rim measured, `given` [m]
+    /// The scale with the camera's distance from the near rim measured, `given` \[m\]
     /// (the config's `camera_distance_m`), in place of the perspective factor's; the
     /// scale itself stays eq. 3.10's, and the elevation and the local scale at the
     /// near bottom rim follow from the distance.

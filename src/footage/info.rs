@@ -58,9 +58,9 @@ pub struct ClipInfo {
     /// The file or folder probed.
     pub path: PathBuf,
     pub kind: ClipKind,
-    /// Frame width [px].
+    /// Frame width \[px\].
     pub width: u32,
-    /// Frame height [px].
+    /// Frame height \[px\].
     pub height: u32,
     /// The display matrix's rotation and mirror (a phone's orientation tag), which
     /// every command applies: `width` × `height` is the displayed size.
@@ -79,7 +79,7 @@ pub struct ClipInfo {
     /// A capture rate the container stores beside its playback fps (Android's
     /// capture-fps tag, an iPhone's slowing edit list), when there is one.
     pub capture_rate: Option<ContainerCaptureRate>,
-    /// `frame_count / container_fps` [s]: the playback duration.
+    /// `frame_count / container_fps` \[s\]: the playback duration.
     pub duration_s: Option<f64>,
     /// The intervals between the container's per-frame timestamps (what `analyse`
     /// times frames by), when every packet has one.

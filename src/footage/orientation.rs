@@ -33,7 +33,7 @@ const RIGHT_ANGLE_TOLERANCE: f64 = 1e-3;
 /// (if `mirrored`), then rotate clockwise by `rotation_cw_deg`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Orientation {
-    /// Clockwise rotation from the stored to the displayed frame [deg]: 0, 90,
+    /// Clockwise rotation from the stored to the displayed frame \[deg\]: 0, 90,
     /// 180 or 270.
     pub rotation_cw_deg: u16,
     /// Whether the stored frame is mirrored left–right before the rotation.
@@ -58,9 +58,9 @@ pub struct PixelMap {
     /// R as `[[a, c], [b, d]]`: x = a p + c q + tx, y = b p + d q + ty.
     r: [[i64; 2]; 2],
     t: [i64; 2],
-    /// Stored frame (width, height) [px].
+    /// Stored frame (width, height) \[px\].
     pub stored: (usize, usize),
-    /// Displayed frame (width, height) [px].
+    /// Displayed frame (width, height) \[px\].
     pub displayed: (usize, usize),
 }
 

@@ -18,9 +18,9 @@
 /// Fewest frames of a picture type whose α is fitted.
 const MIN_FRAMES: usize = 10;
 
-/// α of the P and of the B pictures [frame²] from `(picture type, z″, e)` per frame
+/// α of the P and of the B pictures \[frame²\] from `(picture type, z″, e)` per frame
 /// (z″ the true heights' second difference per frame, e the measured height's error,
-/// both px), by least squares on e = a + α_P z″ [P] + α_B z″ [B] with one shared a
+/// both px), by least squares on e = a + α_P z″ \[P\] + α_B z″ \[B\] with one shared a
 /// (I pictures and frames of no known type enter a only). `None` for a type with
 /// fewer than [`MIN_FRAMES`] frames.
 pub fn smoothing_by_picture_type(

@@ -42,7 +42,7 @@ pub struct StreamIndex {
 /// One frame's 8-bit planar 4:2:0 samples ([`FrameSource::yuv420`]).
 #[derive(Clone, Copy, Debug)]
 pub struct Yuv420<'a> {
-    /// Frame size [px].
+    /// Frame size \[px\].
     pub width: usize,
     pub height: usize,
     /// (samples, row stride) of Y, U and V; U and V cover 2 × 2 pixels each.

@@ -101,9 +101,9 @@ pub struct TimeSection {
     pub container_end_s: f64,
     /// Mean interval between its frames, gaps left out [s, playback clock].
     pub container_interval_s: f64,
-    /// Capture time of the first frame from the clip's first [s].
+    /// Capture time of the first frame from the clip's first \[s\].
     pub start_s: f64,
-    /// Capture time of the last frame from the clip's first [s].
+    /// Capture time of the last frame from the clip's first \[s\].
     pub end_s: f64,
     /// Container (playback) seconds per capture second: fps × the mean interval,
     /// 1 within 1 % (a section stored at the capture rate).
@@ -150,13 +150,13 @@ pub struct FrameTiming {
     /// sections were recorded).
     #[serde(default)]
     pub sections: Vec<TimeSection>,
-    /// Median interval between consecutive frames, capture clock [s].
+    /// Median interval between consecutive frames, capture clock \[s\].
     pub median_interval_s: f64,
-    /// Spread of the intervals: 1.4826 × their median absolute deviation [s].
+    /// Spread of the intervals: 1.4826 × their median absolute deviation \[s\].
     pub interval_spread_s: f64,
-    /// Shortest interval [s].
+    /// Shortest interval \[s\].
     pub min_interval_s: f64,
-    /// Longest interval [s] (a gap in the timestamps shows here).
+    /// Longest interval \[s\] (a gap in the timestamps shows here).
     pub max_interval_s: f64,
 }
 
@@ -181,7 +181,7 @@ impl FrameTiming {
     }
 }
 
-/// The capture time of every frame from the first [s], and how it was found.
+/// The capture time of every frame from the first \[s\], and how it was found.
 ///
 /// `container_times` holds each frame's container timestamp [s, playback clock]
 /// in clip order. They are used when every frame has one and they increase;

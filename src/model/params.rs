@@ -12,11 +12,11 @@ pub const STANDARD_GRAVITY: f64 = 9.81;
 /// *half*-thickness, so `Z_G = R sin φ + H cos φ` (eq. 4.12).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DiskParams {
-    /// Mass m [kg].
+    /// Mass m \[kg\].
     pub mass: f64,
-    /// Radius R [m].
+    /// Radius R \[m\].
     pub radius: f64,
-    /// Half-thickness H [m] (half-height of the can).
+    /// Half-thickness H \[m\] (half-height of the can).
     pub half_thickness: f64,
     /// Moment of inertia about a diameter, A [kg m²].
     pub inertia_a: f64,
@@ -112,12 +112,12 @@ impl DiskParams {
         self.c() / (self.a() + self.c() * self.a_p())
     }
 
-    /// The time unit of the scaled equations, √(R/g) [s] (eq. 4.21: τ = t √(g/R)).
+    /// The time unit of the scaled equations, √(R/g) \[s\] (eq. 4.21: τ = t √(g/R)).
     pub fn time_unit(&self) -> f64 {
         (self.radius / self.gravity).sqrt()
     }
 
-    /// The energy unit of the scaled equations, m g R [J].
+    /// The energy unit of the scaled equations, m g R \[J\].
     pub fn energy_unit(&self) -> f64 {
         self.mass * self.gravity * self.radius
     }

@@ -62,23 +62,23 @@ pub const MAX_RIM_SPEED_M_S: f64 = 343.0;
 /// slip position in m and slip velocity in m/s (intermediate frame).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct InitialState {
-    /// ψ [rad].
+    /// ψ \[rad\].
     pub psi: f64,
     /// ψ̇ [rad/s].
     pub psi_dot: f64,
-    /// φ [rad].
+    /// φ \[rad\].
     pub phi: f64,
     /// φ̇ [rad/s].
     pub phi_dot: f64,
-    /// θ [rad].
+    /// θ \[rad\].
     pub theta: f64,
     /// θ̇ [rad/s].
     pub theta_dot: f64,
-    /// x [m].
+    /// x \[m\].
     pub x: f64,
     /// ẋ [m/s].
     pub x_dot: f64,
-    /// y [m].
+    /// y \[m\].
     pub y: f64,
     /// ẏ [m/s].
     pub y_dot: f64,
@@ -131,13 +131,13 @@ pub struct SimulationSpec {
     pub dissipation: Dissipation,
     /// Initial state (SI).
     pub initial: InitialState,
-    /// Integration stops at this time at the latest [s].
+    /// Integration stops at this time at the latest \[s\].
     pub t_end: f64,
-    /// Output sampling interval [s]; events are always recorded as well.
+    /// Output sampling interval \[s\]; events are always recorded as well.
     pub output_interval: f64,
-    /// The disk counts as fallen flat below this φ [rad] (thesis: 1e-10).
+    /// The disk counts as fallen flat below this φ \[rad\] (thesis: 1e-10).
     pub flat_angle: f64,
-    /// Angle of the strip on the top face at θ = 0 [rad] (eq. 3.13).
+    /// Angle of the strip on the top face at θ = 0 \[rad\] (eq. 3.13).
     pub beta0: f64,
 }
 
@@ -176,37 +176,37 @@ pub enum EndReason {
 /// One output sample, SI.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 pub struct Sample {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
-    /// ψ [rad].
+    /// ψ \[rad\].
     pub psi: f64,
     /// ψ̇ [rad/s].
     pub psi_dot: f64,
-    /// φ [rad].
+    /// φ \[rad\].
     pub phi: f64,
     /// φ̇ [rad/s].
     pub phi_dot: f64,
-    /// θ [rad].
+    /// θ \[rad\].
     pub theta: f64,
     /// θ̇ [rad/s].
     pub theta_dot: f64,
-    /// x [m].
+    /// x \[m\].
     pub x: f64,
     /// ẋ [m/s].
     pub x_dot: f64,
-    /// y [m].
+    /// y \[m\].
     pub y: f64,
     /// ẏ [m/s].
     pub y_dot: f64,
     /// Contact mode.
     pub mode: Mode,
-    /// Energy above the flat rest state, eq. (4.94) − mgH [J].
+    /// Energy above the flat rest state, eq. (4.94) − mgH \[J\].
     pub energy: f64,
-    /// Normal force N [N].
+    /// Normal force N \[N\].
     pub normal_force: f64,
     /// Friction ratio |F|/N (eq. 4.33).
     pub friction_ratio: f64,
-    /// Strip angle β (eq. 3.20), unwrapped [rad].
+    /// Strip angle β (eq. 3.20), unwrapped \[rad\].
     pub beta: f64,
     /// Strip rate β̇ (eq. 3.21) [rad/s].
     pub beta_dot: f64,
@@ -221,9 +221,9 @@ pub struct Sample {
 pub struct Phase {
     /// Mode during the interval.
     pub mode: Mode,
-    /// Start [s].
+    /// Start \[s\].
     pub start: f64,
-    /// End [s].
+    /// End \[s\].
     pub end: f64,
 }
 
@@ -279,7 +279,7 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
-    /// End time [s].
+    /// End time \[s\].
     pub fn end_time(&self) -> f64 {
         self.end.t
     }
@@ -299,7 +299,7 @@ pub enum SimulationError {
     /// The integrator failed.
     #[error("integration failed at t = {t:.6} s: {reason}")]
     Integration {
-        /// Time of failure [s].
+        /// Time of failure \[s\].
         t: f64,
         /// Integrator message.
         reason: String,
@@ -307,15 +307,15 @@ pub enum SimulationError {
     /// The equations of motion became singular.
     #[error("equations of motion singular at t = {t:.6} s (φ = {phi:e} rad)")]
     Singular {
-        /// Time [s].
+        /// Time \[s\].
         t: f64,
-        /// Nutation [rad].
+        /// Nutation \[rad\].
         phi: f64,
     },
     /// Rolling and slipping switched too many times.
     #[error("more than {MAX_SWITCHES} rolling/slipping switches by t = {t:.6} s")]
     Chattering {
-        /// Time [s].
+        /// Time \[s\].
         t: f64,
     },
     /// The run took [`MAX_STEPS`] integrator steps without ending.
@@ -324,9 +324,9 @@ pub enum SimulationError {
          {t_end} s; lower t_end (--t-end), or check the initial rates"
     )]
     NoProgress {
-        /// Time reached [s].
+        /// Time reached \[s\].
         t: f64,
-        /// The time asked for [s].
+        /// The time asked for \[s\].
         t_end: f64,
     },
     /// The run would produce more output samples than [`MAX_SAMPLES`].
@@ -336,13 +336,13 @@ pub enum SimulationError {
          (--dt)"
     )]
     TooManySamples {
-        /// Time reached [s].
+        /// Time reached \[s\].
         t: f64,
     },
     /// The caller's sink refused a sample (e.g. the CSV could not be written).
     #[error("output failed at t = {t:.6} s: {reason}")]
     Output {
-        /// Time of the sample [s].
+        /// Time of the sample \[s\].
         t: f64,
         /// The sink's message.
         reason: String,

@@ -29,15 +29,15 @@ pub enum TuningError {
          (end times {t_low} s and {t_high} s)"
     )]
     NoBracket {
-        /// Target end time [s].
+        /// Target end time \[s\].
         target: f64,
         /// Lowest η tried.
         low: f64,
         /// Highest η tried.
         high: f64,
-        /// End time at the lowest η [s].
+        /// End time at the lowest η \[s\].
         t_low: f64,
-        /// End time at the highest η [s].
+        /// End time at the highest η \[s\].
         t_high: f64,
     },
 }

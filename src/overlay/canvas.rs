@@ -30,10 +30,10 @@ use crate::footage::{ChannelOrder, FrameView};
 pub struct Window {
     /// What the window shows ("side view", "centre band ×8", "plan view").
     pub name: &'static str,
-    /// The frame rectangle's first column and row [px].
+    /// The frame rectangle's first column and row \[px\].
     pub src_x: usize,
     pub src_y: usize,
-    /// Its size [px].
+    /// Its size \[px\].
     pub width: usize,
     pub height: usize,
     /// Where it starts on the canvas [canvas px].

@@ -67,7 +67,7 @@ const CONTEXT_PX: usize = 360;
 /// Which part of a clip the overlay shows, and how slowly.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OverlaySpec {
-    /// Start and end of the span, t − t_φ [s] (default: the last 0.5 s before the
+    /// Start and end of the span, t − t_φ \[s\] (default: the last 0.5 s before the
     /// halt and 0.1 s after it).
     pub span_s: (f64, f64),
     /// Frames per second the video plays at (default 30: a 480 fps clip plays
@@ -113,7 +113,7 @@ pub const OVERLAY_H264: H264Settings = H264Settings {
 pub struct OverlayFrame {
     /// Frame index in the clip (as `frames.csv`'s `index`).
     pub index: usize,
-    /// t − t_φ [s].
+    /// t − t_φ \[s\].
     pub t: f64,
 }
 
@@ -126,13 +126,13 @@ pub struct OverlayIndex {
     pub playback_fps: f64,
     /// How many times slower than it happened the video plays.
     pub slow_down: f64,
-    /// The span asked for, t − t_φ [s].
+    /// The span asked for, t − t_φ \[s\].
     pub span_s: (f64, f64),
     /// Video frame k shows `frames[k]`.
     pub frames: Vec<OverlayFrame>,
     /// The contact sheet's file name and its tiles, in order (`None`: no peaks).
     pub last_turns: Option<(String, Vec<OverlayFrame>)>,
-    /// Canvas size [px].
+    /// Canvas size \[px\].
     pub width: u32,
     pub height: u32,
     /// Where each part of the picture comes from in the clip's frames.

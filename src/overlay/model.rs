@@ -59,14 +59,14 @@ const RIM_POINTS: usize = 96;
 pub struct EdgeError {
     /// Frames with both edges.
     pub frames: usize,
-    /// Mean model − footage [px] (positive: the model's edge lower in the image,
+    /// Mean model − footage \[px\] (positive: the model's edge lower in the image,
     /// its rim nearer the plate).
     pub mean_px: f64,
-    /// RMS [px].
+    /// RMS \[px\].
     pub rms_px: f64,
-    /// Largest |model − footage| [px].
+    /// Largest |model − footage| \[px\].
     pub max_abs_px: f64,
-    /// The same in metres, at the near rim's scale δ [m].
+    /// The same in metres, at the near rim's scale δ \[m\].
     pub mean_m: f64,
     pub rms_m: f64,
     pub max_abs_m: f64,
@@ -80,7 +80,7 @@ pub struct ModelOverlay {
     pub errors_csv: String,
     /// The camera pose the model was drawn with.
     pub pose: CameraPose,
-    /// Added to the model's ψ so that its rim peaks at the measured peaks [rad].
+    /// Added to the model's ψ so that its rim peaks at the measured peaks \[rad\].
     pub psi_offset_rad: f64,
     /// Whether the model was mirrored to the footage's sense of precession.
     pub mirrored: bool,

@@ -31,9 +31,9 @@ use crate::render::scene::{Camera, Pinhole, View};
 /// The pose and how it was found, for the compare report.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct CameraPose {
-    /// Elevation ε [rad].
+    /// Elevation ε \[rad\].
     pub elevation: f64,
-    /// Depth of the near rim's mid-height point along the optical axis [m]; `None`:
+    /// Depth of the near rim's mid-height point along the optical axis \[m\]; `None`:
     /// orthographic.
     pub distance_m: Option<f64>,
     /// Scale at the disk centre's depth [m/px].

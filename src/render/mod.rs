@@ -191,7 +191,7 @@ impl RenderError {
 pub struct Effects {
     /// Read noise σ [grey levels], Gaussian, per channel.
     pub noise_sigma: f64,
-    /// Gaussian blur σ [px].
+    /// Gaussian blur σ \[px\].
     pub blur_sigma: f64,
     /// Mains flicker at 100 Hz (50 Hz mains, full-wave): relative amplitude A₁₀₀ of
     /// the light gain 1 + A₁₀₀ sin(2π·100 Hz·t + p₁₀₀) + A₅₀ sin(2π·50 Hz·t + p₅₀),
@@ -201,17 +201,17 @@ pub struct Effects {
     /// frequency itself).
     #[serde(default)]
     pub flicker_50hz_amplitude: f64,
-    /// Phase p₁₀₀ of the 100 Hz flicker [rad].
+    /// Phase p₁₀₀ of the 100 Hz flicker \[rad\].
     #[serde(default)]
     pub flicker_phase_100: f64,
-    /// Phase p₅₀ of the 50 Hz flicker [rad].
+    /// Phase p₅₀ of the 50 Hz flicker \[rad\].
     #[serde(default)]
     pub flicker_phase_50: f64,
     /// Shot noise k [grey levels^½]: a pixel of level v has noise σ² = σ_read² + k² v
     /// (v after the light gain; k² is grey levels per photo-electron).
     #[serde(default)]
     pub shot_noise: f64,
-    /// Exposure time [s]: each frame averages `exposure_samples` poses evenly spread
+    /// Exposure time \[s\]: each frame averages `exposure_samples` poses evenly spread
     /// over it, centred on the capture time (motion smear). 0: instantaneous.
     #[serde(default)]
     pub exposure_s: f64,
@@ -248,7 +248,7 @@ impl Default for Effects {
 }
 
 impl Effects {
-    /// The light gain at clip time `t` [s] (first captured frame at 0): mains flicker.
+    /// The light gain at clip time `t` \[s\] (first captured frame at 0): mains flicker.
     pub fn light_gain(&self, t: f64) -> f64 {
         let tau = 2.0 * std::f64::consts::PI;
         1.0 + self.flicker_amplitude * (tau * 100.0 * t + self.flicker_phase_100).sin()
@@ -271,9 +271,9 @@ pub struct Scenery {
     /// Fraction of the plate's radiance that is mirror image; `None`: 0.25 (dark),
     /// 0 (light).
     pub reflectivity: Option<f64>,
-    /// Gaussian σ of the mirror image's blur [px] (a rough or brushed plate).
+    /// Gaussian σ of the mirror image's blur \[px\] (a rough or brushed plate).
     pub reflection_blur_px: f64,
-    /// Elevation of the fill light that shades the paper [deg]: 20° lights the side
+    /// Elevation of the fill light that shades the paper \[deg\]: 20° lights the side
     /// more than the top face, above 45° the top face more.
     pub fill_elevation_deg: f64,
 }
@@ -281,7 +281,7 @@ pub struct Scenery {
 impl Scenery {
     /// The paper's grey level by default.
     pub const DEFAULT_PAPER_GREY: f64 = 238.0;
-    /// The fill light's elevation by default [deg].
+    /// The fill light's elevation by default \[deg\].
     pub const DEFAULT_FILL_ELEVATION_DEG: f64 = 20.0;
 }
 
@@ -301,29 +301,29 @@ impl Default for Scenery {
 /// Everything about the picture (not the motion).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RenderSpec {
-    /// Frame width [px].
+    /// Frame width \[px\].
     pub width: u32,
-    /// Frame height [px].
+    /// Frame height \[px\].
     pub height: u32,
     /// Plate type.
     pub plate: Plate,
     /// Side view above, plan view with the strip below (fig. 3.19).
     pub two_view: bool,
-    /// Camera elevation ε of the side view [deg], in (0, 30].
+    /// Camera elevation ε of the side view \[deg\], in (0, 30].
     pub elevation_deg: f64,
     /// Image scale [m/px] (at the disk's centre for a pinhole); `None` fits the
     /// disk's diameter into 90 % of the width (and of the plan view's height).
     pub metres_per_px: Option<f64>,
-    /// Pinhole side camera at this depth from the near rim [m] (along its optical
+    /// Pinhole side camera at this depth from the near rim \[m\] (along its optical
     /// axis, to the rim's mid-height at rest); `None`: orthographic (infinitely far).
     #[serde(default)]
     pub camera_distance_m: Option<f64>,
     /// Grey levels, texture, reflection and light.
     #[serde(default)]
     pub scenery: Scenery,
-    /// Width of the red strip [m].
+    /// Width of the red strip \[m\].
     pub strip_width: f64,
-    /// Radius of the rounding of the disk's two rims [m] ([`DiskShape::edge_radius`]);
+    /// Radius of the rounding of the disk's two rims \[m\] ([`DiskShape::edge_radius`]);
     /// 0: sharp.
     #[serde(default)]
     pub edge_radius: f64,
@@ -362,7 +362,7 @@ pub struct RenderSpec {
 pub struct SlowedSection {
     /// Clip time where the slowing starts [s, capture clock, first frame at 0].
     pub start_s: f64,
-    /// Clip time where it ends [s].
+    /// Clip time where it ends \[s\].
     pub end_s: f64,
     /// Container seconds per capture second, > 1 (16: 480 fps played at 30).
     pub factor: f64,
@@ -400,15 +400,15 @@ impl RenderSpec {
 /// in px, pixel centres at integers, rows growing downward.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Calibration {
-    /// Left edge of the bottom of the disk [px].
+    /// Left edge of the bottom of the disk \[px\].
     pub x_l: f64,
-    /// Right edge of the bottom of the disk [px].
+    /// Right edge of the bottom of the disk \[px\].
     pub x_r: f64,
-    /// Centre column (x_l + x_r)/2 [px].
+    /// Centre column (x_l + x_r)/2 \[px\].
     pub x_centre: f64,
-    /// Near top rim on the centre column [row].
+    /// Near top rim on the centre column \[row\].
     pub z_t: f64,
-    /// Plate line: the bottom rim on the centre column [row].
+    /// Plate line: the bottom rim on the centre column \[row\].
     pub z_base: f64,
 }
 
@@ -419,16 +419,16 @@ pub struct FrameTruth {
     pub index: usize,
     /// Position in the written clip (0-based; `frame_{file_index + 1:06}.png`).
     pub file_index: usize,
-    /// Time relative to the halt [s] (t = 0 at the halt).
+    /// Time relative to the halt \[s\] (t = 0 at the halt).
     pub t: f64,
-    /// Nutation φ [rad].
+    /// Nutation φ \[rad\].
     pub phi: f64,
-    /// Precession ψ [rad] (z_rim peaks at ψ ≡ −π/2 mod 2π).
+    /// Precession ψ \[rad\] (z_rim peaks at ψ ≡ −π/2 mod 2π).
     pub psi: f64,
-    /// Spin θ [rad].
+    /// Spin θ \[rad\].
     pub theta: f64,
     /// Strip angle β seen from above (eq. 3.20), unwrapped, counter-clockwise from
-    /// the image's +x axis with image up = +y [rad].
+    /// the image's +x axis with image up = +y \[rad\].
     pub beta: f64,
     /// ψ̇ [rad/s].
     pub psi_dot: f64,
@@ -436,14 +436,14 @@ pub struct FrameTruth {
     pub theta_dot: f64,
     /// β̇ [rad/s].
     pub beta_dot: f64,
-    /// Energy above the flat rest state [J].
+    /// Energy above the flat rest state \[J\].
     pub energy: f64,
     /// Bottom edge of the white disk on the centre column above the plate line,
-    /// z_base − row [px]; `None` if the disk is not on the column.
+    /// z_base − row \[px\]; `None` if the disk is not on the column.
     pub z_rim_px: Option<f64>,
-    /// z_rim_px · δ [m].
+    /// z_rim_px · δ \[m\].
     pub z_rim_m: Option<f64>,
-    /// Horizontal offset of the disk's centre from its rest column (drift) [px].
+    /// Horizontal offset of the disk's centre from its rest column (drift) \[px\].
     pub drift_px: f64,
     /// Light gain of the frame (mains flicker, [`Effects::light_gain`]).
     #[serde(default = "unit_gain")]
@@ -475,12 +475,12 @@ pub struct CameraTruth {
     /// Orthographic or perspective.
     pub projection: Projection,
     /// Depth of the near rim's mid-height point (0, −R, H) at rest along the
-    /// optical axis [m] (perspective).
+    /// optical axis \[m\] (perspective).
     pub distance_to_near_rim_m: Option<f64>,
-    /// Centre of projection [m], world frame (origin on the plate under the disk's
+    /// Centre of projection \[m\], world frame (origin on the plate under the disk's
     /// centre at rest, y away from the camera, z up) (perspective).
     pub position_m: Option<[f64; 3]>,
-    /// Focal length [px] (perspective).
+    /// Focal length \[px\] (perspective).
     pub focal_px: Option<f64>,
     /// Perspective factor: depth of the disk's centre (0, 0, H) over depth of the
     /// near rim (0, −R, H) at rest, (d + R cos ε)/d; 1 for orthographic.
@@ -490,12 +490,12 @@ pub struct CameraTruth {
     pub near_rim_metres_per_px: f64,
     /// Horizontal scale at the depth of the disk's centre [m/px] (the orthographic s).
     pub centre_metres_per_px: f64,
-    /// Left end of the top rim's silhouette at rest [px] (x_l is the bottom's;
+    /// Left end of the top rim's silhouette at rest \[px\] (x_l is the bottom's;
     /// through a pinhole the top, nearer the camera, is wider).
     pub x_l_top: f64,
-    /// Right end of the top rim's silhouette at rest [px].
+    /// Right end of the top rim's silhouette at rest \[px\].
     pub x_r_top: f64,
-    /// Top of the silhouette on the centre column at rest: the far top rim [row]
+    /// Top of the silhouette on the centre column at rest: the far top rim \[row\]
     /// (z_t is the near top rim, below it by the top face's image height).
     pub z_t_far: f64,
 }
@@ -513,17 +513,17 @@ pub struct GroundTruth {
     pub two_view: bool,
     /// First row of the plan view (two views only); the side view is above it.
     pub split_row: Option<u32>,
-    /// Frame width [px].
+    /// Frame width \[px\].
     pub width: u32,
-    /// Frame height [px].
+    /// Frame height \[px\].
     pub height: u32,
     /// Capture rate [frames/s].
     pub fps: f64,
     /// Captured frames, including dropped ones.
     pub captured_frames: usize,
-    /// Clip time of the halt [s] (first captured frame at 0).
+    /// Clip time of the halt \[s\] (first captured frame at 0).
     pub halt_time: f64,
-    /// Stop of the strip after the halt, t_β [s] (eq. 4.113).
+    /// Stop of the strip after the halt, t_β \[s\] (eq. 4.113).
     pub t_beta: f64,
     /// β̇ just after the halt [rad/s].
     pub post_flat_beta_dot: f64,
@@ -533,9 +533,9 @@ pub struct GroundTruth {
     pub a_e: Option<f64>,
     /// Disk parameters.
     pub disk: DiskParams,
-    /// Strip angle on the top face β0 [rad] (eq. 3.13).
+    /// Strip angle on the top face β0 \[rad\] (eq. 3.13).
     pub beta0: f64,
-    /// Side camera elevation ε [rad].
+    /// Side camera elevation ε \[rad\].
     pub elevation: f64,
     /// Image scale s [m/px]: orthographic, or a pinhole's at the disk's centre.
     pub metres_per_px_image: f64,
@@ -622,13 +622,13 @@ fn sorted(indices: &[usize]) -> Vec<usize> {
 }
 
 /// z_rim at a peak (ψ ≡ −π/2, contact point straight behind) as the thesis converts
-/// it, 2R sin φ + (R(1 − cos φ) − H sin φ) tan ε [m] (see the module docs).
+/// it, 2R sin φ + (R(1 − cos φ) − H sin φ) tan ε \[m\] (see the module docs).
 pub fn peak_z_rim(params: &DiskParams, phi: f64, elevation: f64) -> f64 {
     let (r, h) = (params.radius, params.half_thickness);
     2.0 * r * phi.sin() + (r * (1.0 - phi.cos()) - h * phi.sin()) * elevation.tan()
 }
 
-/// Largest frame rendered [px] (3840 × 2160, 4K UHD): a frame and its background
+/// Largest frame rendered \[px\] (3840 × 2160, 4K UHD): a frame and its background
 /// are held in memory as floats, 16 frames at a time.
 pub const MAX_FRAME_PIXELS: u64 = 3840 * 2160;
 
@@ -1728,7 +1728,7 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
     Ok(())
 }
 
-/// Distances of a pinhole side camera from the near rim that render accepts [m]
+/// Distances of a pinhole side camera from the near rim that render accepts \[m\]
 /// (phones are held at 0.2–0.5 m; beyond 10 m a pinhole is orthographic to 0.4 %).
 pub const CAMERA_DISTANCE_RANGE_M: (f64, f64) = (0.1, 10.0);
 

@@ -27,15 +27,15 @@ use std::f64::consts::PI;
 /// State of the disk at one frame (SI; t relative to the halt).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DiskState {
-    /// Time relative to the halt [s].
+    /// Time relative to the halt \[s\].
     pub t: f64,
-    /// Nutation φ [rad].
+    /// Nutation φ \[rad\].
     pub phi: f64,
-    /// Precession ψ [rad] (zero at the halt for a prescribed motion).
+    /// Precession ψ \[rad\] (zero at the halt for a prescribed motion).
     pub psi: f64,
-    /// Spin θ [rad].
+    /// Spin θ \[rad\].
     pub theta: f64,
-    /// Strip angle β seen from above, eq. (3.20), unwrapped [rad].
+    /// Strip angle β seen from above, eq. (3.20), unwrapped \[rad\].
     pub beta: f64,
     /// ψ̇ [rad/s].
     pub psi_dot: f64,
@@ -43,10 +43,10 @@ pub struct DiskState {
     pub theta_dot: f64,
     /// Strip rate β̇ [rad/s] (eq. 3.21 before the halt, the post-flat spin after).
     pub beta_dot: f64,
-    /// Energy above the flat rest state [J] (eq. 3.8 for a prescribed motion, the
+    /// Energy above the flat rest state \[J\] (eq. 3.8 for a prescribed motion, the
     /// simulator's eq. 4.94 − mgH for a trajectory; zero after the halt).
     pub energy: f64,
-    /// Horizontal position of the centre of mass relative to its rest position [m].
+    /// Horizontal position of the centre of mass relative to its rest position \[m\].
     pub centre: [f64; 2],
 }
 
@@ -55,9 +55,9 @@ pub struct DiskState {
 pub struct Timing {
     /// Capture rate [frames/s] (thesis: 480).
     pub fps: f64,
-    /// Clip time of the halt [s] (the first frame is at clip time 0).
+    /// Clip time of the halt \[s\] (the first frame is at clip time 0).
     pub halt_time: f64,
-    /// Duration filmed after the halt [s]: the post-flat spin and the rest frames
+    /// Duration filmed after the halt \[s\]: the post-flat spin and the rest frames
     /// that calibration uses.
     pub after_halt: f64,
     /// Capture times jittered about k/fps, as a phone's variable frame rate
@@ -89,7 +89,7 @@ impl Timing {
         ((self.halt_time + self.after_halt) * self.fps + 1e-9).floor() as usize + 1
     }
 
-    /// Capture times relative to the halt, one per captured frame [s].
+    /// Capture times relative to the halt, one per captured frame \[s\].
     pub fn times(&self) -> Vec<f64> {
         let Some(jitter) = self.jitter else {
             return (0..self.frame_count())
@@ -160,7 +160,7 @@ pub struct PostFlatSpin {
 }
 
 impl PostFlatSpin {
-    /// Stop time t_β after the halt [s], eq. (4.113) with the disk's own C.
+    /// Stop time t_β after the halt \[s\], eq. (4.113) with the disk's own C.
     pub fn stop_time(&self, params: &DiskParams) -> f64 {
         if self.beta_dot0 == 0.0 {
             return 0.0;
@@ -193,9 +193,9 @@ pub struct PowerLaw {
     pub a_e: f64,
     /// Sign of ψ̇ (Euler's disk of eq. 4.43 turns with ψ̇ < 0).
     pub precession_sign: f64,
-    /// Strip angle β0 on the top face (eq. 3.13) [rad].
+    /// Strip angle β0 on the top face (eq. 3.13) \[rad\].
     pub beta0: f64,
-    /// Precession angle ψ at the halt [rad]: where the disk falls flat, as seen from
+    /// Precession angle ψ at the halt \[rad\]: where the disk falls flat, as seen from
     /// the camera. 0 (the thesis zeroes ψ there, §3.2.5) puts the contact point
     /// facing the camera at the halt, so the rim is at its lowest in the last frames;
     /// real footage stops at any phase.
@@ -237,7 +237,7 @@ pub struct Motion {
     pub true_n: Option<f64>,
     /// The prescribed A_e [J s^-n], if any.
     pub a_e: Option<f64>,
-    /// Strip angle β0 on the top face [rad].
+    /// Strip angle β0 on the top face \[rad\].
     pub beta0: f64,
     /// The post-flat spin.
     pub post_flat: PostFlatSpin,
@@ -251,7 +251,7 @@ pub struct Motion {
 }
 
 impl Motion {
-    /// Stop time of the strip t_β after the halt [s] (eq. 4.113).
+    /// Stop time of the strip t_β after the halt \[s\] (eq. 4.113).
     pub fn t_beta(&self) -> f64 {
         self.post_flat.stop_time(&self.params)
     }
@@ -264,12 +264,12 @@ fn stationary_psi_dot(params: &DiskParams, phi: f64, sign: f64) -> Result<f64, R
         .map_err(RenderError::invalid)
 }
 
-/// Energy of stationary rolling at nutation φ, eq. (3.8) with ψ̇ of eq. (4.40) [J].
+/// Energy of stationary rolling at nutation φ, eq. (3.8) with ψ̇ of eq. (4.40) \[J\].
 pub fn stationary_energy_at(params: &DiskParams, phi: f64) -> Result<f64, RenderError> {
     crate::energy::stationary_energy_at(params, phi).map_err(RenderError::invalid)
 }
 
-/// The nutation angle φ whose stationary-rolling energy (eq. 3.8) is `energy` [J]:
+/// The nutation angle φ whose stationary-rolling energy (eq. 3.8) is `energy` \[J\]:
 /// bisection on (0, φ_max], with φ_max half the smaller of the balancing angle and the
 /// angle where ψ̇ of eq. (4.40) diverges (E(φ) increases there).
 pub fn invert_stationary_energy(params: &DiskParams, energy: f64) -> Result<f64, RenderError> {
@@ -440,7 +440,7 @@ pub struct Nutation {
     pub amplitude: f64,
     /// Frequency ratio r = ω/|ψ̇| (> 0).
     pub ratio: f64,
-    /// Phase χ₀ at the halt [rad].
+    /// Phase χ₀ at the halt \[rad\].
     pub phase: f64,
 }
 

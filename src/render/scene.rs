@@ -63,7 +63,7 @@ pub enum Plate {
 /// A rigid placement of the disk: its centre of mass and body-to-world rotation.
 #[derive(Clone, Copy, Debug)]
 pub struct Pose {
-    /// Centre of mass G in the world frame [m].
+    /// Centre of mass G in the world frame \[m\].
     pub centre: [f64; 3],
     /// Body (F) → world rotation, row-major: world = centre + m · body.
     pub m: [[f64; 3]; 3],
@@ -71,7 +71,7 @@ pub struct Pose {
 
 impl Pose {
     /// The pose of a disk rolling on the plate with Euler angles (ψ, φ, θ) of eq.
-    /// (3.14) and its centre of mass above the horizontal point `(gx, gy)` [m].
+    /// (3.14) and its centre of mass above the horizontal point `(gx, gy)` \[m\].
     pub fn rolling(params: &DiskParams, psi: f64, phi: f64, theta: f64, gx: f64, gy: f64) -> Self {
         let (sp, cp) = psi.sin_cos();
         let (sf, cf) = phi.sin_cos();
@@ -122,15 +122,15 @@ impl Pose {
 /// The disk's shape and the strip drawn on its top face.
 #[derive(Clone, Copy, Debug)]
 pub struct DiskShape {
-    /// Radius R [m].
+    /// Radius R \[m\].
     pub radius: f64,
-    /// Half-thickness H [m].
+    /// Half-thickness H \[m\].
     pub half_thickness: f64,
-    /// Strip angle β0 on the top face (eq. 3.13) [rad].
+    /// Strip angle β0 on the top face (eq. 3.13) \[rad\].
     pub beta0: f64,
-    /// Half-width of the strip [m].
+    /// Half-width of the strip \[m\].
     pub strip_half_width: f64,
-    /// Radius of the rounding of both rims [m]; 0: sharp. The rounding is drawn in
+    /// Radius of the rounding of both rims \[m\]; 0: sharp. The rounding is drawn in
     /// the shading: over the last `edge_radius` of the side and of each face the
     /// normal turns as a quarter circle's of that radius does, seen along the face
     /// (sin α = depth into the band / radius), from the face's to the other face's
@@ -559,7 +559,7 @@ pub enum View {
 /// Image coordinates are pixel units with pixel centres at integers; rows grow
 /// downward. Orthographic side view: image x = `cx + X/s`, row = `cy − v/s` with the
 /// image-up coordinate v = y sin ε + z cos ε. Plan view: image x = `cx + X/s`, row =
-/// `cy − Y/s`. Pinhole side view at C with focal length F [px], looking along
+/// `cy − Y/s`. Pinhole side view at C with focal length F \[px\], looking along
 /// f = (0, cos ε, −sin ε) with up u = (0, sin ε, cos ε) and right (1, 0, 0): with
 /// d = p − C, image x = `cx + F d_x/(d·f)`, row = `cy − F (d·u)/(d·f)`.
 #[derive(Clone, Copy, Debug)]
@@ -572,7 +572,7 @@ pub struct Camera {
     pub cy: f64,
     /// Metres per pixel of the image plane (orthographic scale s).
     pub scale: f64,
-    /// Elevation ε of the side camera [rad] (unused in plan view).
+    /// Elevation ε of the side camera \[rad\] (unused in plan view).
     pub elevation: f64,
     /// First image row of this view's region.
     pub row_start: u32,
@@ -585,9 +585,9 @@ pub struct Camera {
 /// Centre of projection and focal length of a pinhole camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pinhole {
-    /// Centre of projection C [m].
+    /// Centre of projection C \[m\].
     pub position: [f64; 3],
-    /// Focal length F [px].
+    /// Focal length F \[px\].
     pub focal_px: f64,
 }
 
@@ -640,7 +640,7 @@ impl Camera {
         ([0.0, ce, -se], [0.0, se, ce])
     }
 
-    /// Depth of a world point along a pinhole's optical axis, (p − C)·f [m].
+    /// Depth of a world point along a pinhole's optical axis, (p − C)·f \[m\].
     pub fn depth(&self, p: [f64; 3]) -> Option<f64> {
         self.pinhole
             .map(|ph| dot(sub(p, ph.position), self.side_frame().0))
@@ -684,10 +684,10 @@ pub struct Scene {
     pub disk: DiskShape,
     /// Colours and lights.
     pub look: Look,
-    /// How far the plate reaches behind the disk's rest position (+y) [m]; its far
+    /// How far the plate reaches behind the disk's rest position (+y) \[m\]; its far
     /// edge is the horizon of the side view (the 30 cm plate of §3.2.3: 0.15 m).
     pub plate_back: f64,
-    /// How far the plate reaches in front (−y) and to either side (±x) [m]: far
+    /// How far the plate reaches in front (−y) and to either side (±x) \[m\]: far
     /// enough to fill the frame below the disk.
     pub plate_front: f64,
 }

@@ -30,17 +30,17 @@ pub struct SimulationSummary {
     pub spec: SimulationSpec,
     /// Why the integration stopped.
     pub end_reason: EndReason,
-    /// End time [s].
+    /// End time \[s\].
     pub end_time: f64,
-    /// φ at the end [rad].
+    /// φ at the end \[rad\].
     pub end_phi: f64,
     /// ψ̇ at the end [rad/s].
     pub end_psi_dot: f64,
     /// θ̇ at the end [rad/s].
     pub end_theta_dot: f64,
-    /// Energy at the start and the end [J].
+    /// Energy at the start and the end \[J\].
     pub energy_start: f64,
-    /// Energy at the end [J].
+    /// Energy at the end \[J\].
     pub energy_end: f64,
     /// The slipping phases.
     pub slip_phases: Vec<Phase>,

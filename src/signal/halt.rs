@@ -40,18 +40,18 @@ use serde::{Deserialize, Serialize};
 pub struct Halt {
     /// Index of the last frame with rim motion (in the caller's series).
     pub index: usize,
-    /// t_φ on the caller's time axis [s].
+    /// t_φ on the caller's time axis \[s\].
     pub t_phi: f64,
-    /// Rest level of z_rim after the halt (median of the rest tail) [m].
+    /// Rest level of z_rim after the halt (median of the rest tail) \[m\].
     pub rest_level: f64,
     /// Noise σ of z_rim at rest (robust: a 3σ-clipped RMS started from the MAD), at
-    /// least [`SignalConfig::noise_floor`] [m].
+    /// least [`SignalConfig::noise_floor`] \[m\].
     pub noise: f64,
-    /// Motion threshold: a frame moves if z_rim − rest level exceeds it [m].
+    /// Motion threshold: a frame moves if z_rim − rest level exceeds it \[m\].
     pub threshold: f64,
     /// Frames after t_φ with a rim height (the rest tail the noise came from).
     pub rest_frames: usize,
-    /// Times shifted so that the halt is t = 0 (t − t_φ) [s], one per input frame.
+    /// Times shifted so that the halt is t = 0 (t − t_φ) \[s\], one per input frame.
     pub shifted_t: Vec<f64>,
 }
 
@@ -109,7 +109,7 @@ const MAX_HALT_ITERATIONS: usize = 8;
 /// Fewest rim heights a rest tail needs to measure its noise.
 pub(crate) const MIN_REST_FRAMES: usize = 8;
 
-/// Finds t_φ from per-frame times `t` [s] and rim heights `z_rim` [m] (NaN where a
+/// Finds t_φ from per-frame times `t` \[s\] and rim heights `z_rim` \[m\] (NaN where a
 /// frame has no edge).
 ///
 /// 1. The rest tail is the last [`SignalConfig::rest_tail_s`] seconds. Its median is

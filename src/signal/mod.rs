@@ -150,16 +150,16 @@ use thiserror::Error;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct SignalConfig {
-    /// Analysis window before the halt [s]; the thesis keeps the final 0.5 s (§3.2.4).
+    /// Analysis window before the halt \[s\]; the thesis keeps the final 0.5 s (§3.2.4).
     pub window_s: f64,
-    /// Length of the rest tail at the end of the clip that measures the noise [s].
+    /// Length of the rest tail at the end of the clip that measures the noise \[s\].
     pub rest_tail_s: f64,
     /// The rim moves where z_rim rises above its rest level by this many noise σ.
     pub motion_sigmas: f64,
-    /// Lower bound of the noise σ [m]; for edges quantised to pixels of δ metres
+    /// Lower bound of the noise σ \[m\]; for edges quantised to pixels of δ metres
     /// (eq. 3.10) a constant rest tail has MAD 0, and δ/√12 is a sensible floor.
     pub noise_floor: f64,
-    /// The step [m] in which the heights are read, when they are read on whole pixels
+    /// The step \[m\] in which the heights are read, when they are read on whole pixels
     /// (δ of eq. 3.10, as the thesis did); `None` for sub-pixel readings. Sub-pixel
     /// readings never repeat exactly unless the decoder showed a picture again, which
     /// the halt then takes as no new motion (`halt::repeated`); readings on whole
@@ -167,7 +167,7 @@ pub struct SignalConfig {
     pub quantum: Option<f64>,
     /// A peak needs a prominence above this many noise σ.
     pub prominence_sigmas: f64,
-    /// A peak needs a prominence above this [m] in any case (e.g. one pixel).
+    /// A peak needs a prominence above this \[m\] in any case (e.g. one pixel).
     pub min_prominence: f64,
     /// Width of the per-frame fit window in oscillation periods.
     pub state_window_periods: f64,
@@ -176,13 +176,13 @@ pub struct SignalConfig {
     /// Time [s, caller's axis] after which β has certainly settled (fig. 3.22); `None`:
     /// the last `strip_settled_tail_s` of the clip.
     pub strip_settled_after: Option<f64>,
-    /// Length of the settled part of β when `strip_settled_after` is `None` [s].
+    /// Length of the settled part of β when `strip_settled_after` is `None` \[s\].
     pub strip_settled_tail_s: f64,
     /// A frame interval above this many nominal periods is a timestamp gap.
     pub gap_factor: f64,
     /// A step of the strip's angle this many robust σ from zero is a skip.
     pub strip_step_sigmas: f64,
-    /// Lower bound of the steps' spread in that test [rad].
+    /// Lower bound of the steps' spread in that test \[rad\].
     pub strip_step_floor: f64,
     /// The phase-step test runs where the peak height exceeds this many noise σ.
     pub skip_min_snr: f64,
@@ -330,7 +330,7 @@ pub enum SignalError {
         tail_start: f64,
         lag: usize,
         correlation: f64,
-        /// RMS of the tail's readings about their median [m].
+        /// RMS of the tail's readings about their median \[m\].
         rms: f64,
     },
     /// Nothing moves beyond the noise.
@@ -378,22 +378,22 @@ pub enum SignalError {
 pub struct FrameState {
     /// Frame index.
     pub index: usize,
-    /// Time, halt at t = 0 [s].
+    /// Time, halt at t = 0 \[s\].
     pub t: f64,
-    /// Nutation angle φ [rad].
+    /// Nutation angle φ \[rad\].
     pub phi: f64,
-    /// Standard error of φ [rad].
+    /// Standard error of φ \[rad\].
     pub sigma_phi: f64,
-    /// Precession angle ψ [rad] on the peak series' scale (2πk at peaks, 0 at the last
+    /// Precession angle ψ \[rad\] on the peak series' scale (2πk at peaks, 0 at the last
     /// peak of the window).
     pub psi: f64,
-    /// Standard error of ψ [rad].
+    /// Standard error of ψ \[rad\].
     pub sigma_psi: f64,
     /// Precession rate ψ̇ [rad/s].
     pub psi_dot: f64,
     /// Standard error of ψ̇ [rad/s].
     pub sigma_psi_dot: f64,
-    /// Root-mean-square residual of the fit [m].
+    /// Root-mean-square residual of the fit \[m\].
     pub residual_rms: f64,
     /// Rim heights in the fit.
     pub points: usize,
@@ -533,7 +533,7 @@ pub struct StripAnalysis {
     pub series: StripSeries,
     /// t_β by the band method.
     pub stop: StripStop,
-    /// t_β − t_φ [s] (§3.3.3: 0.04 s on unlubricated stainless steel).
+    /// t_β − t_φ \[s\] (§3.3.3: 0.04 s on unlubricated stainless steel).
     pub rotation_after_flat: f64,
 }
 
@@ -552,8 +552,8 @@ pub struct StateSeries {
     pub flags: Vec<FrameFlag>,
 }
 
-/// Runs the whole stage on one clip: `t` [s], `z_rim` [m] (NaN: no edge) and, for
-/// two-view clips, `beta` [rad] in (−π/2, π/2] (NaN: no strip), frame by frame.
+/// Runs the whole stage on one clip: `t` \[s\], `z_rim` \[m\] (NaN: no edge) and, for
+/// two-view clips, `beta` \[rad\] in (−π/2, π/2] (NaN: no strip), frame by frame.
 pub fn analyse(
     t: &[f64],
     z_rim: &[f64],
@@ -605,7 +605,7 @@ pub fn analyse(
 }
 
 /// The peaks and states of `series` (from [`analyse`] of `t`, `z_rim`) again, with
-/// every rim height up to the halt moved up by `shift` [m]: a zero of z_rim that much
+/// every rim height up to the halt moved up by `shift` \[m\]: a zero of z_rim that much
 /// lower, as an error of the edge at rest would make it. The halt, strip and flags
 /// stay. How the energy fits respond to it is the zero's share of their errors.
 pub fn with_zero_moved(

@@ -24,22 +24,22 @@ pub enum ExtremumMethod {
 pub struct Peak {
     /// Frame of the highest sample.
     pub index: usize,
-    /// Interpolated peak time, halt at t = 0 [s].
+    /// Interpolated peak time, halt at t = 0 \[s\].
     pub t: f64,
-    /// Interpolated peak height above the rest level [m].
+    /// Interpolated peak height above the rest level \[m\].
     pub z: f64,
-    /// Nutation angle at the peak [rad]: eq. (3.9) (corrected, φ = arcsin(z/2R)) for
+    /// Nutation angle at the peak \[rad\]: eq. (3.9) (corrected, φ = arcsin(z/2R)) for
     /// [`ThesisRim`](super::ThesisRim), its analogue for other rim models.
     pub phi: f64,
-    /// Standard error of φ from the local fit [rad]; `None` for a parabolic peak.
+    /// Standard error of φ from the local fit \[rad\]; `None` for a parabolic peak.
     pub sigma_phi: Option<f64>,
     /// Precession rate ω = ψ̇ of the local fit and its standard error [rad/s].
     pub psi_dot_local: Option<(f64, f64)>,
-    /// Time [s] and height [m] of the highest sample (no interpolation).
+    /// Time \[s\] and height \[m\] of the highest sample (no interpolation).
     pub sample: (f64, f64),
-    /// Time [s] and height [m] of the parabolic vertex through three samples.
+    /// Time \[s\] and height \[m\] of the parabolic vertex through three samples.
     pub parabolic: (f64, f64),
-    /// Topographic prominence of the peak [m].
+    /// Topographic prominence of the peak \[m\].
     pub prominence: f64,
     /// How `t` and `z` were found.
     pub method: ExtremumMethod,
@@ -50,7 +50,7 @@ pub struct Peak {
 pub struct Trough {
     /// Frame of the lowest sample between two peaks.
     pub index: usize,
-    /// Interpolated trough time, halt at t = 0 [s].
+    /// Interpolated trough time, halt at t = 0 \[s\].
     pub t: f64,
     /// How `t` was found.
     pub method: ExtremumMethod,
@@ -59,9 +59,9 @@ pub struct Trough {
 /// ψ and ψ̇ at the turning points of z_rim (thesis §3.2.5).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct PrecessionSample {
-    /// Time, halt at t = 0 [s].
+    /// Time, halt at t = 0 \[s\].
     pub t: f64,
-    /// Precession angle ψ [rad], zero at the last turning point (the thesis zeroes ψ
+    /// Precession angle ψ \[rad\], zero at the last turning point (the thesis zeroes ψ
     /// where the motion ends) and increasing.
     pub psi: f64,
     /// ψ̇ by eq. (3.11), the slope of the succeeding segment [rad/s]; `None` at the last.
@@ -74,7 +74,7 @@ pub struct PrecessionSample {
 /// Peaks in the analysis window before the halt, with φ and ψ.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PeakSeries {
-    /// Analysis window (start, end), halt at t = 0 [s].
+    /// Analysis window (start, end), halt at t = 0 \[s\].
     pub window: (f64, f64),
     /// Peaks in the window, in time order.
     pub peaks: Vec<Peak>,

@@ -11,10 +11,10 @@
 
 use std::f64::consts::FRAC_PI_2;
 
-/// Rim height on the centre column above the plate as the camera sees it [m].
+/// Rim height on the centre column above the plate as the camera sees it \[m\].
 pub trait RimModel: Sync {
-    /// z_rim for nutation `phi` = φ [rad] and precession phase `chi` = χ = ψ − ψ_c
-    /// [rad], where χ = 0 is the orientation of fig. 3.6 (the raised side of the
+    /// z_rim for nutation `phi` = φ \[rad\] and precession phase `chi` = χ = ψ − ψ_c
+    /// \[rad\], where χ = 0 is the orientation of fig. 3.6 (the raised side of the
     /// disk, and its underside, face the camera; the contact point is farthest away).
     /// Must be even and 2π-periodic in χ, and largest at χ = 0.
     fn z_rim(&self, phi: f64, chi: f64) -> f64;
@@ -31,7 +31,7 @@ pub trait RimModel: Sync {
         )
     }
 
-    /// The nutation angle φ whose peak height z_rim(φ, 0) is `z_peak` [m]; eq. (3.9)
+    /// The nutation angle φ whose peak height z_rim(φ, 0) is `z_peak` \[m\]; eq. (3.9)
     /// for [`ThesisRim`]. The default solves z_rim(φ, 0) = z_peak by bisection on
     /// [0, π/2] (z_rim(·, 0) must increase there); NaN when z_peak lies outside.
     fn phi_from_peak(&self, z_peak: f64) -> f64 {
@@ -58,7 +58,7 @@ pub trait RimModel: Sync {
 /// eq. (3.9) as corrected in ERRATA.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ThesisRim {
-    /// Disk radius R [m].
+    /// Disk radius R \[m\].
     pub radius: f64,
 }
 
@@ -92,17 +92,17 @@ impl RimModel for ThesisRim {
 /// rim, divided by cos ε.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SideViewRim {
-    /// Disk radius R [m].
+    /// Disk radius R \[m\].
     pub radius: f64,
-    /// Half-thickness H [m] (the bottom face is at −H from the centre).
+    /// Half-thickness H \[m\] (the bottom face is at −H from the centre).
     pub half_thickness: f64,
-    /// Camera elevation ε above the plate's plane [rad]; 0 for a level camera.
+    /// Camera elevation ε above the plate's plane \[rad\]; 0 for a level camera.
     pub camera_elevation: f64,
 }
 
 impl SideViewRim {
     /// The front bottom-rim point on the centre column, as (α, height above the plate
-    /// [m], horizontal offset towards the camera from the centre [m]); α is the body
+    /// \[m\], horizontal offset towards the camera from the centre \[m\]); α is the body
     /// angle from the body x axis (which points from the contact point to the centre).
     pub fn front_rim_point(&self, phi: f64, chi: f64) -> (f64, f64, f64) {
         let (r, h) = (self.radius, self.half_thickness);

@@ -17,9 +17,9 @@ use std::f64::consts::PI;
 pub enum SkipReason {
     /// The time since the previous frame exceeds `gap_factor` nominal periods.
     TimestampGap {
-        /// Time since the previous frame [s].
+        /// Time since the previous frame \[s\].
         gap_s: f64,
-        /// Nominal frame period (median interval) [s].
+        /// Nominal frame period (median interval) \[s\].
         nominal_s: f64,
         /// Frames missing by the gap: round(gap / nominal) − 1.
         missing_frames: usize,
@@ -28,19 +28,19 @@ pub enum SkipReason {
     /// before it lead (the thesis saw such skips as spikes in β̇, fig. 3.24).
     StripAngleStep {
         /// The after-fit minus the before-fit between this frame and the previous
-        /// [rad].
+        /// \[rad\].
         step: f64,
         /// One frame's turn at the local rate, β̇ × nominal period: the step that a
-        /// dropped frame makes [rad].
+        /// dropped frame makes \[rad\].
         frame_turn: f64,
         /// Robust spread of the steps over the clip (1.4826 × MAD, at least the
-        /// configured floor) [rad].
+        /// configured floor) \[rad\].
         sigma: f64,
     },
     /// The rim's phase jumps between the previous frame and this one: the local rim fit
     /// improves greatly when the frames from this one on are taken one period later.
     RimPhaseStep {
-        /// Phase step ψ̇ × (one frame) that the hypothesis inserts [rad].
+        /// Phase step ψ̇ × (one frame) that the hypothesis inserts \[rad\].
         phase_step: f64,
         /// (SSR without − SSR with the step) / (residual variance with it).
         statistic: f64,
@@ -106,7 +106,7 @@ impl SkipReason {
 pub struct FrameFlag {
     /// The frame after the suspected skip.
     pub index: usize,
-    /// Its time on the caller's axis [s].
+    /// Its time on the caller's axis \[s\].
     pub t: f64,
     /// Why it was flagged.
     pub reason: SkipReason,
@@ -172,7 +172,7 @@ const CONSISTENT_SIGMAS: f64 = 4.0;
 /// within [`CONSISTENT_SIGMAS`] errors of a whole number m ≥ 1 of frame turns (e
 /// combined with m × the turn's own error), a turn itself standing that many errors
 /// from zero (on a still strip any step is some number of turns). e is the larger of the robust spread of
-/// the steps over the clip (at least `floor` [rad]) and the step's own standard
+/// the steps over the clip (at least `floor` \[rad\]) and the step's own standard
 /// error from the two fits' residuals (a jump of β̇ inside a window, which the
 /// quadratics cannot follow, raises the residual and the error with it, and hides a
 /// skip within 12 frames of it). A skip is thus seen only where the strip turns by

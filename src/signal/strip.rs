@@ -10,9 +10,9 @@ use std::f64::consts::PI;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StripSeries {
     /// β made continuous by adding multiples of π (the PCA angle, eq. 3.24, is only
-    /// known mod π) [rad].
+    /// known mod π) \[rad\].
     pub beta: Vec<f64>,
-    /// `beta` after the centred moving average (5 points in the thesis) [rad].
+    /// `beta` after the centred moving average (5 points in the thesis) \[rad\].
     pub beta_smoothed: Vec<f64>,
     /// β̇ from `beta_smoothed` by central differences on the (possibly uneven) frame
     /// times [rad/s]; eq. (3.22): β̇ = ψ̇ + θ̇ + O(φ²).
@@ -20,7 +20,7 @@ pub struct StripSeries {
 }
 
 /// Unwraps, smooths (`points`-point centred moving average) and differentiates β
-/// (thesis §3.3.2). `t` [s] and `beta` [rad, in (−π/2, π/2], NaN for no strip] pair up
+/// (thesis §3.3.2). `t` \[s\] and `beta` [rad, in (−π/2, π/2], NaN for no strip] pair up
 /// frame by frame.
 pub fn strip_series(t: &[f64], beta: &[f64], points: usize) -> Result<StripSeries, SignalError> {
     super::check_series(t, beta, "beta")?;
@@ -109,12 +109,12 @@ pub fn derivative(t: &[f64], y: &[f64]) -> Vec<f64> {
 pub struct StripStop {
     /// First frame at or after t_β.
     pub index: usize,
-    /// t_β on the caller's time axis [s]: the fitted stop ([`CoulombStop::t_stop`]), or
+    /// t_β on the caller's time axis \[s\]: the fitted stop ([`CoulombStop::t_stop`]), or
     /// the band's first intersection when no fit could be made.
     pub t_beta: f64,
-    /// The band: minimum and maximum of β after `settled_after` [rad].
+    /// The band: minimum and maximum of β after `settled_after` \[rad\].
     pub band: (f64, f64),
-    /// The time after which β was taken as settled [s].
+    /// The time after which β was taken as settled \[s\].
     pub settled_after: f64,
     /// Frames in the settled part that defined the band.
     pub settled_frames: usize,
@@ -122,7 +122,7 @@ pub struct StripStop {
     /// approach (fig. 3.22).
     #[serde(default)]
     pub band_index: usize,
-    /// The time of `band_index` [s].
+    /// The time of `band_index` \[s\].
     #[serde(default)]
     pub band_t_beta: f64,
     /// The fitted stop, if the approach held enough frames.

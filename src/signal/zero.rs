@@ -59,9 +59,9 @@ const MIN_DOF: usize = 10;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MotionZero {
     /// c: the moving rim's zero above the zero the heights were measured from (the
-    /// rest level of [`super::Halt`]) [m]. Subtract it from the heights.
+    /// rest level of [`super::Halt`]) \[m\]. Subtract it from the heights.
     pub offset: f64,
-    /// Standard error of c [m], √(s² (JᵀJ)⁻¹) of the fit.
+    /// Standard error of c \[m\], √(s² (JᵀJ)⁻¹) of the fit.
     pub se: f64,
     /// Turning points the heights were fitted between.
     #[serde(default)]
@@ -71,9 +71,9 @@ pub struct MotionZero {
     pub points: usize,
 }
 
-/// The zero of `z_rim` [m] (times `t` [s]) over the fit window of `series` (from
+/// The zero of `z_rim` \[m\] (times `t` \[s\]) over the fit window of `series` (from
 /// [`super::analyse`] of the same heights), with the profile `model`, or `None` when
-/// fewer than [`MIN_TURNING_POINTS`] turning points lie in the window or the fit
+/// fewer than `MIN_TURNING_POINTS` (nine) turning points lie in the window or the fit
 /// fails.
 pub fn motion_zero(
     t: &[f64],

@@ -62,7 +62,7 @@ const MIN_GUESS_PX: f64 = 2.0;
 /// Fewest frames with a resolved face for a reading.
 pub const MIN_FRAMES: usize = 10;
 
-/// The tallest face at rest [px] this reading stands in for: the rest frame's own
+/// The tallest face at rest \[px\] this reading stands in for: the rest frame's own
 /// readings need plateaus REACH rows clear of both edges, and below this leave the
 /// face to `top_rim::thin_top_face` or the silhouette's top.
 pub const THIN_AT_REST_PX: f64 = (REACH + 2) as f64;
@@ -122,16 +122,16 @@ impl LeanGauge {
 /// z_t from the frames that show the face leaning towards the camera.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LeaningTopRim {
-    /// The near top rim's row at rest [px]: the median of near + z_rim.
+    /// The near top rim's row at rest \[px\]: the median of near + z_rim.
     pub z_t: f64,
-    /// Its standard error [px]: 1.2533 × the robust σ over √N.
+    /// Its standard error \[px\]: 1.2533 × the robust σ over √N.
     pub se: f64,
     /// Frames with a resolved face, N.
     pub frames: usize,
     /// Whether B pictures that showed the face were left out (enough others did).
     #[serde(default)]
     pub b_pictures_left_out: bool,
-    /// The tallest face among them [px] (near − far).
+    /// The tallest face among them \[px\] (near − far).
     pub tallest_face_px: f64,
 }
 

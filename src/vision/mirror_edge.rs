@@ -101,7 +101,7 @@ const SEARCH_PX: f64 = 2.0;
 /// off the minimum the SSR is already larger by 13 times 2s².
 const LIKELIHOOD_PX: f64 = 0.4;
 /// The rim is sharp at this resolution when the plate line lies less than this
-/// below the edge at rest [px]: a rim rounded over less than half a pixel. Decided
+/// below the edge at rest \[px\]: a rim rounded over less than half a pixel. Decided
 /// on c as the frames near contact fit it
 /// ([`MirrorEdgeModel::plate_offset_near_contact`]): our own sharp renders, blurred
 /// or not, +0.03 … +0.16 px; the open footage's rounded rims 0.75–2.51 px.
@@ -125,7 +125,7 @@ const REST_ROWS_BELOW_PX: f64 = 2.0 + MIRROR_REACH_PX;
 const PLATE_OFFSET_PX: Range<f64> = -1.0..(ROWS_BELOW as f64 - 3.0);
 
 /// D(u): the disk's bottom-edge profile divided by the disk's level, at offsets u
-/// from the edge [px], tabulated every [`BIN_PX`] (bins with too few samples
+/// from the edge \[px\], tabulated every [`BIN_PX`] (bins with too few samples
 /// between two others interpolated linearly).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EdgeTemplate {
@@ -137,7 +137,7 @@ pub struct EdgeTemplate {
 
 impl EdgeTemplate {
     /// Learns D from frames with an open gap: (window, first-pass edge row,
-    /// first-pass z_rim [px]), each read above 2 z − `reach` [px], where its mirror
+    /// first-pass z_rim \[px\]), each read above 2 z − `reach` \[px\], where its mirror
     /// image's light cannot reach ([`MIRROR_REACH_PX`], more on a rough plate).
     /// `None` with fewer than [`MIN_TEMPLATE_FRAMES`] frames lifted past `reach`, or
     /// no bin below the edge.
@@ -582,7 +582,7 @@ impl MirrorEdgeModel {
         MIRROR_REACH_PX + self.plate_blur.as_ref().map_or(0.0, |b| 3.0 * b.sigma)
     }
 
-    /// The plate's blur of the mirror image, σ_m [px] (0: a sharp reflection).
+    /// The plate's blur of the mirror image, σ_m \[px\] (0: a sharp reflection).
     pub fn mirror_blur_px(&self) -> f64 {
         self.plate_blur.as_ref().map_or(0.0, |b| b.sigma)
     }
@@ -594,7 +594,7 @@ impl MirrorEdgeModel {
         self.plate_offset_test < SHARP_RIM_PX
     }
 
-    /// z_rim [px] of one frame: e_rest − e.
+    /// z_rim \[px\] of one frame: e_rest − e.
     pub fn z_rim_px(&self, window: &BandWindow, edge0: f64) -> f64 {
         self.rest_edge - self.edge(window, edge0)
     }
@@ -648,7 +648,7 @@ fn near_contact_samples(near: &[(&BandWindow, f64, f64)]) -> Vec<NearContact> {
 }
 
 /// Re-measures a clip's rim heights with the model (module docs): `heights` are
-/// the first-pass z_rim per frame [px] (`None`: no edge, left alone), `windows`
+/// the first-pass z_rim per frame \[px\] (`None`: no edge, left alone), `windows`
 /// each frame's band rows about its first-pass edge z_base − z, `rest` the rest
 /// frames' mean window about `rest_edge0`. Returns the model, or why it was not
 /// used (and then changes nothing): too few frames open the gap to learn D.

@@ -20,7 +20,7 @@
 use serde::{Deserialize, Serialize};
 
 /// How far the zero the motion places lies from the truth beyond its fit's
-/// standard error [px]: the camera's elevation in the profile is known to ±0.5°, φ
+/// standard error \[px\]: the camera's elevation in the profile is known to ±0.5°, φ
 /// may oscillate about stationary rolling, and a renderer's or a camera's pictures
 /// of a lifted rim may share an error no fit of the motion sees. Measured as the RMS
 /// over clips of the difference from the truth's offset of the lifted heights
@@ -47,7 +47,7 @@ pub enum RimReading {
 }
 
 impl RimReading {
-    /// 1σ of the zero of z_rim [px] for heights read this way (BENCHMARKS.md "The
+    /// 1σ of the zero of z_rim \[px\] for heights read this way (BENCHMARKS.md "The
     /// zero's uncertainty by how the rim is read").
     ///
     /// * Sharp rim, mirror-edge model: RMS 0.039 px (mean −0.028, −0.094 … +0.011 px)
@@ -71,7 +71,7 @@ impl RimReading {
         }
     }
 
-    /// 1σ of the zero of z_rim [px] where the motion places it (`signal::motion_zero`),
+    /// 1σ of the zero of z_rim \[px\] where the motion places it (`signal::motion_zero`),
     /// from the windows' standard error `se_px`: that and the profile's own error,
     /// [`MOTION_ZERO_PROFILE_PX`], in quadrature.
     pub fn motion_zero_uncertainty_px(se_px: f64) -> f64 {

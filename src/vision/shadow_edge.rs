@@ -74,7 +74,7 @@ const MAX_BLUR_PX: f64 = 3.0;
 pub struct ShadowEdgeModel {
     /// f: the shadow under a lifted rim, relative to the disk's side.
     pub shadow_ratio: f64,
-    /// σ: the width of the Gaussian blur of the edge [px].
+    /// σ: the width of the Gaussian blur of the edge \[px\].
     pub blur_px: f64,
     /// e_rest: the rest frames' crossing (continuous row, px), the zero of z_rim.
     pub rest_edge: f64,
@@ -194,7 +194,7 @@ fn shadow_ratio(window: &BandWindow, edge: f64) -> Option<f64> {
 }
 
 /// Re-measures a clip's rim heights on a light plate (module docs): `heights` are
-/// the first-pass z_rim per frame [px] (`None`: no edge, left alone), `windows`
+/// the first-pass z_rim per frame \[px\] (`None`: no edge, left alone), `windows`
 /// each frame's band rows about its first-pass edge z_base − z, `rest` the rest
 /// frames' mean window. Returns the model, or why it was not used (and then
 /// changes nothing).
