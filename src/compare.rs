@@ -390,7 +390,7 @@ pub struct InitialEstimate {
     pub theta_dot_source: String,
 }
 
-/// Half-width of the local fits of the initial state [s], widened until it holds
+/// Half-width of the local fits of the initial state \[s\], widened until it holds
 /// at least three points (up to [`MAX_LOCAL_HALF_WIDTH_S`]).
 const LOCAL_HALF_WIDTH_S: f64 = 0.04;
 const MAX_LOCAL_HALF_WIDTH_S: f64 = 0.15;

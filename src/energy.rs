@@ -453,7 +453,7 @@ pub fn fit_power_law(t: &[f64], energy: &[f64], t0: HaltTime) -> Result<PowerLaw
 }
 
 /// [`fit_power_law`] with the covariance estimated over turns: the samples between
-/// consecutive `turns` (times [s], sorted: the peaks) form one block (module docs).
+/// consecutive `turns` (times \[s\], sorted: the peaks) form one block (module docs).
 fn fit_in_turns(
     t: &[f64],
     energy: &[f64],
@@ -858,7 +858,7 @@ fn fit_with_limit(
 struct LongRun {
     /// Covariance of the scaled parameters (a, n[, d]).
     cov_scaled: DMatrix<f64>,
-    /// Bartlett bandwidth S [blocks].
+    /// Bartlett bandwidth S \[blocks\].
     bandwidth: f64,
     /// Blocks the residuals and scores were summed over.
     blocks: usize,
@@ -1145,7 +1145,7 @@ impl HaltSighting {
     }
 
     /// Δ = (E_v/A_e)^{1/n}, the time before t0 over which the law E = A_e (t0 − t)^n
-    /// lies below the visible energy E_v [s]; 0 without one.
+    /// lies below the visible energy E_v \[s\]; 0 without one.
     fn unseen(&self, a_e: f64, n: f64) -> f64 {
         if self.visible_energy > 0.0 && self.visible_energy.is_finite() && n > 0.0 && a_e > 0.0 {
             (self.visible_energy / a_e).powf(1.0 / n)

@@ -1,4 +1,8 @@
 //! eulerdisk: slow-motion footage of spinning disks turned into physics.
+//!
+//! The docs name the constants and helpers each method's numbers come from, most of
+//! them private: read them with `cargo doc --document-private-items`.
+#![allow(rustdoc::private_intra_doc_links)]
 pub mod analyse;
 pub mod compare;
 pub mod config;

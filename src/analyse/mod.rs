@@ -140,7 +140,7 @@ impl DecodedSpan {
 struct SpanPlan {
     /// The index, when a span may be decoded (`None`: the whole clip is).
     index: Option<footage::StreamIndex>,
-    /// Capture time of every frame from the clip's first [s] (empty without index).
+    /// Capture time of every frame from the clip's first \[s\] (empty without index).
     times: Vec<f64>,
     clip_frames: usize,
     /// Why the whole clip is decoded, when it is.
@@ -193,7 +193,7 @@ impl SpanPlan {
         }
     }
 
-    /// The key frame at or before the last frame at capture time `t` [s] (0
+    /// The key frame at or before the last frame at capture time `t` \[s\] (0
     /// before the clip's first key frame, or without an index).
     fn key_frame_at(&self, t: f64) -> usize {
         let frame = self.times.partition_point(|&x| x <= t).saturating_sub(1);
@@ -338,7 +338,7 @@ struct MeasuredSpan {
     metres_per_px: f64,
     /// Width of the local fits' window [turns of the rim].
     local_fit_periods: f64,
-    /// The rest tail's length [s] (SignalConfig::rest_tail_s).
+    /// The rest tail's length \[s\] (SignalConfig::rest_tail_s).
     rest_tail_s: f64,
     /// The overlay's pictures of the frames near the last motion.
     kept: Option<KeptFrames>,
@@ -1906,7 +1906,7 @@ fn known_flags(
 /// as measured): each such frame and every one after it moves one nominal period
 /// later on the capture clock (`t_capture`), so that no local fit, precession rate or
 /// energy time spans a frame that is not there. Returns the rim phase steps that
-/// showed them (positions in `frames`; `period` is the nominal frame interval [s]);
+/// showed them (positions in `frames`; `period` is the nominal frame interval \[s\]);
 /// none when the first pass fails (the signal stage then reports why).
 fn hidden_drops(
     frames: &mut [FrameRecord],
@@ -1961,7 +1961,7 @@ fn motion_profile(
     }
 }
 
-/// The strip angles β [rad] of a two-view clip's frames (NaN: no strip), as the
+/// The strip angles β \[rad\] of a two-view clip's frames (NaN: no strip), as the
 /// signal stage reads them; `None` for a side view.
 fn strip_angles(frames: &[FrameRecord], two_view: bool) -> Option<Vec<f64>> {
     two_view.then(|| {
@@ -1972,7 +1972,7 @@ fn strip_angles(frames: &[FrameRecord], two_view: bool) -> Option<Vec<f64>> {
     })
 }
 
-/// The frames' capture times [s] and rim heights z_rim [m] (NaN: no edge), as the
+/// The frames' capture times \[s\] and rim heights z_rim \[m\] (NaN: no edge), as the
 /// signal stage reads them.
 fn rim_series(frames: &[FrameRecord]) -> (Vec<f64>, Vec<f64>) {
     let t = frames.iter().map(|f| f.t_capture).collect();
@@ -2199,7 +2199,7 @@ fn tail_rest_window(windows: &[Option<BandWindow>], pass1: &BandWindow, tail: us
     BandWindow::tail_mean(windows, pass1, tail, REST_FRAMES).unwrap_or_else(|| pass1.clone())
 }
 
-/// Moves the zero of `heights` [px] to the median of the last `tail` frames'
+/// Moves the zero of `heights` \[px\] to the median of the last `tail` frames'
 /// readings (light plate, vision::shadow_edge), when [`REST_FRAMES`] of them have
 /// one; returns the shift (0 otherwise).
 ///

@@ -61,9 +61,9 @@ pub(super) struct VideoDecoder {
     fps: Option<f64>,
     /// Frames the container says it holds (or its duration times its fps).
     frames: Option<usize>,
-    /// The stored (coded) frame's width [px].
+    /// The stored (coded) frame's width \[px\].
     width: usize,
-    /// The stored (coded) frame's height [px].
+    /// The stored (coded) frame's height \[px\].
     height: usize,
     /// The display matrix's rotation and mirror.
     orientation: Orientation,
@@ -212,7 +212,7 @@ impl VideoDecoder {
         self.fps
     }
 
-    /// The displayed frame's (width, height) [px].
+    /// The displayed frame's (width, height) \[px\].
     pub(super) fn size(&self) -> (usize, usize) {
         self.orientation.displayed_size((self.width, self.height))
     }
@@ -400,7 +400,7 @@ impl VideoDecoder {
 
     /// Position the stream so that [`Self::next`] returns the first frame whose
     /// timestamp is at or after `time_s` [s from the stream's start] less
-    /// `early_s` [s]; `what` names the target in an error.
+    /// `early_s` \[s\]; `what` names the target in an error.
     pub(super) fn seek_time(
         &mut self,
         time_s: f64,

@@ -282,11 +282,11 @@ const FPS_AGREEMENT: f64 = 0.005;
 /// packets without decoding (`VideoDecoder::packet_stamps`, playback clock).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TimestampSummary {
-    /// Median interval [s].
+    /// Median interval \[s\].
     pub median_interval_s: f64,
-    /// 1.4826 × the intervals' median absolute deviation [s]: a phone's jitter.
+    /// 1.4826 × the intervals' median absolute deviation \[s\]: a phone's jitter.
     pub interval_spread_s: f64,
-    /// Longest interval [s].
+    /// Longest interval \[s\].
     pub max_interval_s: f64,
     /// Intervals longer than 1.5 × their section's median: frames missing there.
     pub gaps: usize,
@@ -444,7 +444,7 @@ fn file_name(path: &Path) -> String {
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
 }
 
-/// Width and height [px] of one frame image, decoded by OpenCV.
+/// Width and height \[px\] of one frame image, decoded by OpenCV.
 fn image_size(path: &Path) -> Result<(u32, u32), FootageError> {
     let image = imgcodecs::imread(path, imgcodecs::IMREAD_UNCHANGED)
         .map_err(|e| FootageError::unreadable(path, format!("OpenCV: {}", e.message)))?;

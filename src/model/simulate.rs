@@ -1105,13 +1105,13 @@ fn seed_slip(disk: &ScaledDisk, y: &mut StateVector, tau: f64) -> Result<(), Sim
 
 /// Conversion between SI and the scaled units of eq. (4.21).
 struct Units {
-    /// √(R/g) [s].
+    /// √(R/g) \[s\].
     time: f64,
-    /// R [m].
+    /// R \[m\].
     length: f64,
-    /// mg [N].
+    /// mg \[N\].
     force: f64,
-    /// mgR [J].
+    /// mgR \[J\].
     energy: f64,
 }
 

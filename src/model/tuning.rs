@@ -135,7 +135,7 @@ struct Search {
 }
 
 impl Search {
-    /// Signed miss of the run with this η: end time minus target [s]; a run that
+    /// Signed miss of the run with this η: end time minus target \[s\]; a run that
     /// never ends counts as ending at t_end.
     fn miss(&mut self, eta: f64) -> Result<f64, TuningError> {
         let mut spec = self.base;

@@ -293,7 +293,7 @@ impl Window {
 /// What the overlays draw marks and text on: an RGB image, or the encoder's
 /// 4:2:0 samples ([`YuvCanvas`]). Colours are given in RGB.
 pub trait Canvas {
-    /// Width and height [px].
+    /// Width and height \[px\].
     fn size(&self) -> (u32, u32);
 
     /// Blends `colour` over the canvas box [x0, x1) × [y0, y1) (canvas px), each

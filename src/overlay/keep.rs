@@ -48,10 +48,10 @@ use crate::vision::Strip;
 /// is found by the signal stage after every frame is read).
 pub const MOVING_PX: f64 = 0.5;
 /// Margin on either side of the span, for where the halt falls against the last
-/// moving frame [s].
+/// moving frame \[s\].
 pub const MARGIN_S: f64 = 0.05;
 /// Blocks of frames whose highest raw rim tells whether the disk is far from
-/// its halt ([`FarFromHalt`]) [s].
+/// its halt ([`FarFromHalt`]) \[s\].
 const BLOCK_S: f64 = 0.25;
 /// A block whose highest rim is at least this share of the block's before (and
 /// not above it) is far from the halt: see [`FarFromHalt`].
@@ -59,7 +59,7 @@ const FAR_RATIO: f64 = 0.941;
 /// ... and at least this high [px, raw pass-2 height]: below it (a disk filmed
 /// small, or at rest) every frame is kept.
 const FAR_MIN_PX: f64 = 4.0;
-/// The most the kept frames may take [bytes]; a longer span or a larger clip is
+/// The most the kept frames may take \[bytes\]; a longer span or a larger clip is
 /// decoded again instead. The side view is kept at most 360 px wide (the
 /// overlay's context views) with a chroma sample per pixel when shrunk: about
 /// 0.3 MB a frame whatever the clip's size, so this holds the default span of
@@ -88,7 +88,7 @@ impl Region {
         }
     }
 
-    /// The kept picture's size [px].
+    /// The kept picture's size \[px\].
     fn size(&self) -> (usize, usize) {
         (self.width / self.shrink, self.height / self.shrink)
     }
@@ -776,10 +776,10 @@ pub struct FrameKeeper {
 struct FarFromHalt {
     /// Frames a block.
     block: usize,
-    /// Frames of the current block read, and its highest rim [px].
+    /// Frames of the current block read, and its highest rim \[px\].
     read: usize,
     highest: f64,
-    /// The last complete block's highest rim [px].
+    /// The last complete block's highest rim \[px\].
     last: Option<f64>,
     /// The current block's frames are not kept.
     far: bool,
@@ -885,7 +885,7 @@ impl FrameKeeper {
     }
 
     /// Offers the frame last read from `source`, at `position` of the measured
-    /// frames, with its raw rim height [px] (moving at [`MOVING_PX`] or more);
+    /// frames, with its raw rim height \[px\] (moving at [`MOVING_PX`] or more);
     /// keeps it if the overlay may need it.
     ///
     /// # Errors

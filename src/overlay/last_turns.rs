@@ -10,9 +10,9 @@ use crate::analyse::ExperimentPlan;
 
 /// Tiles per row of the sheet.
 const COLUMNS: usize = 4;
-/// Gap between tiles and around them [px].
+/// Gap between tiles and around them \[px\].
 const GAP: u32 = 6;
-/// Title band [px].
+/// Title band \[px\].
 const TITLE_PX: u32 = 30;
 /// Tiles wider than this are halved.
 const MAX_TILE_WIDTH: u32 = 720;

@@ -59,7 +59,7 @@ pub(super) const BACKGROUND: Rgb<u8> = Rgb([20, 20, 20]);
 const BATCH: usize = 8;
 /// Header band above the picture [canvas px]: three lines of text.
 const HEADER_PX: u32 = 62;
-/// Text size in the header [px].
+/// Text size in the header \[px\].
 const TEXT_PX: u32 = 14;
 /// Widest context (side, plan) view on the canvas before it is shrunk [canvas px].
 const CONTEXT_PX: usize = 360;
@@ -158,7 +158,7 @@ pub(crate) struct LayoutGeometry {
     pub calibration: vision::Calibration,
     /// The side view's pixel (0, 0) in the frame ([`ExperimentPlan::side_view_origin`]).
     pub origin: (usize, usize),
-    /// The region of interest's size, else the frame's [px].
+    /// The region of interest's size, else the frame's \[px\].
     pub view: (usize, usize),
     /// The row splitting the side view (above) from the plan view (two-view clips).
     pub split_row: Option<usize>,
@@ -297,7 +297,7 @@ struct FrameMarks<'a> {
     /// Position in [`Experiment::frames`].
     position: usize,
     /// Detected peaks nearest this frame: (peak number, height above the rest
-    /// level [m], φ [rad]).
+    /// level \[m\], φ \[rad\]).
     peaks: Vec<(usize, f64, f64)>,
     halt: bool,
     flags: Vec<&'a FrameFlag>,
@@ -674,10 +674,10 @@ enum Match {
 /// container skips frames and an index would not), else by its index (frame
 /// folders, whose index is exact).
 struct FrameMatcher {
-    /// (container time [s], position) of the frames wanted, in order; empty
+    /// (container time \[s\], position) of the frames wanted, in order; empty
     /// without timestamps.
     stamps: Vec<(f64, usize)>,
-    /// Half the shortest interval between them [s].
+    /// Half the shortest interval between them \[s\].
     tolerance: f64,
     first: usize,
     last: usize,

@@ -474,10 +474,10 @@ const TEXTURE_SEED: u64 = 0x7E47_17E5_0F9A_7E11;
 /// Waves in a [`PlateTexture`].
 const TEXTURE_WAVES: usize = 12;
 
-/// Shortest and longest wavelength of the texture's waves [m].
+/// Shortest and longest wavelength of the texture's waves \[m\].
 const TEXTURE_WAVELENGTHS: (f64, f64) = (1.5e-3, 30e-3);
 
-/// Width σ of the pixel filter the texture is seen through [px]: waves are
+/// Width σ of the pixel filter the texture is seen through \[px\]: waves are
 /// attenuated by exp(−σ²ω²/2) at their image frequency ω [rad/px], so that the 2 × 2
 /// blocks of the rasteriser (sampled every 2 px, Nyquist π/2 rad/px, attenuated to
 /// 0.29 there and 0.007 at π) do not alias them.
@@ -490,7 +490,7 @@ const TEXTURE_FILTER_PX: f64 = 1.0;
 /// 1 + contrast · (sum), at least 0, each wave seen through a Gaussian pixel filter.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlateTexture {
-    /// (k_x, k_y) [rad/m], phase [rad], amplitude.
+    /// (k_x, k_y) [rad/m], phase \[rad\], amplitude.
     waves: [([f64; 2], f64, f64); TEXTURE_WAVES],
     /// RMS relative albedo variation (before the pixel filter).
     contrast: f64,
@@ -591,7 +591,7 @@ pub struct Pinhole {
     pub focal_px: f64,
 }
 
-/// Distance from which rays start [m] (far outside the scene).
+/// Distance from which rays start \[m\] (far outside the scene).
 const RAY_START: f64 = 2.0;
 
 impl Camera {

@@ -31,9 +31,9 @@ use crate::overlay::ModelOverlay;
 const MEASURED: RGBColor = RGBColor(0, 140, 60);
 /// Colour of the model (orange, as the thesis's figures).
 const MODEL: RGBColor = RGBColor(230, 110, 0);
-/// Overlay figure width [px].
+/// Overlay figure width \[px\].
 const WIDTH: u32 = 1100;
-/// Height per panel [px].
+/// Height per panel \[px\].
 const PANEL_H: u32 = 260;
 
 /// The kebab-case name of a model, as on the command line ("augmented-contour").

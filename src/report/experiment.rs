@@ -414,7 +414,7 @@ fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
 }
 
 /// β̇ at t_φ and the energy eq. (3.6) keeps there, at φ = 0 with θ̇ = β̇ (eq. 3.22):
-/// C/2 β̇² + m/2 (R β̇)² [J].
+/// C/2 β̇² + m/2 (R β̇)² \[J\].
 fn carried_spin_energy(e: &Experiment) -> Option<(f64, f64)> {
     let strip = e.series.strip.as_ref()?;
     let beta_dot = *strip.series.beta_dot.get(e.series.halt.index)?;

@@ -399,7 +399,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
 
 /// Whether the reading at position `n` of `samples` belongs to a held picture: some
 /// window of consecutive readings that contains it and spans at least
-/// [`HELD_TURN_FRACTION`] of the final turn `period` [s] has all its readings
+/// [`HELD_TURN_FRACTION`] of the final turn `period` \[s\] has all its readings
 /// within half the motion `threshold` of each other, and either one of them repeats
 /// one of the [`REFERENCE_PICTURES`] readings before it ([`repeated`]; in the window
 /// or before it), or all of them stand more than [`RESOLVED_SIGMAS`] σ above the

@@ -3,7 +3,7 @@
 //!
 //! Over a short window around a centre time t_c the state is taken as
 //! φ(τ) = φ₀ + φ₁ τ and χ(τ) = χ₀ + ω τ (+ ½ ω̇ τ² with `chirp`), τ = t − t_c, and
-//! z_rim(t) = [`RimModel::z_rim`](super::RimModel::z_rim)(φ(τ), χ(τ)) is fitted by
+//! z_rim(t) = [`RimModel::z_rim`] (φ(τ), χ(τ)) is fitted by
 //! least squares. ω is the precession rate ψ̇ at t_c and χ₀ the phase there. The model is
 //! even in χ, so (χ₀, ω) and (−χ₀, −ω) fit alike; the fit returns ω ≥ 0 (a side view
 //! cannot tell the sense of precession).

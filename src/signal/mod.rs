@@ -632,7 +632,7 @@ pub fn with_zero_moved(
 }
 
 /// The samples the local fits take: those up to the halt with a rim height, as their
-/// indices, their times from the halt [s] and their heights above the rest level [m].
+/// indices, their times from the halt \[s\] and their heights above the rest level \[m\].
 fn samples_to_the_halt(t: &[f64], z_rim: &[f64], halt: &Halt) -> (Vec<usize>, Vec<f64>, Vec<f64>) {
     let idx: Vec<usize> = finite_samples(t, z_rim)
         .into_iter()

@@ -351,7 +351,7 @@ pub(crate) fn phase_track(peaks: &[Peak], troughs: &[Trough]) -> PhaseTrack {
     PhaseTrack::new(psi, phi)
 }
 
-/// Median frame interval [s] (the nominal period of the footage).
+/// Median frame interval \[s\] (the nominal period of the footage).
 pub(crate) fn nominal_period(t: &[f64]) -> f64 {
     let dt: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
     if dt.is_empty() {

@@ -137,21 +137,21 @@ pub struct StripStop {
 /// brakes from the halt on, `t_decel` comes out at the start of the fit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CoulombStop {
-    /// First time in the fit [s]: where the smoothed |β̇| peaks after the halt.
+    /// First time in the fit \[s\]: where the smoothed |β̇| peaks after the halt.
     pub fit_from: f64,
-    /// Start of the linear deceleration [s].
+    /// Start of the linear deceleration \[s\].
     pub t_decel: f64,
-    /// The stop, t_β [s].
+    /// The stop, t_β \[s\].
     pub t_stop: f64,
     /// β̇ before the deceleration [rad/s].
     pub rate: f64,
-    /// The final angle [rad].
+    /// The final angle \[rad\].
     pub beta_final: f64,
     /// |β̇| / (t_stop − t_decel): the friction's angular deceleration [rad/s²]; eq.
     /// (4.112) gives μ m g R / C = 2μg/R for a uniform disk (69 rad/s² for Euler's disk
     /// on steel).
     pub deceleration: f64,
-    /// RMS residual of the fit over the frames before `t_stop` [rad].
+    /// RMS residual of the fit over the frames before `t_stop` \[rad\].
     pub rms_residual: f64,
     /// Frames in the fit (before and after the stop).
     pub frames: usize,
@@ -248,7 +248,7 @@ pub fn strip_stop_time(
 }
 
 /// The Coulomb-stop fit of [`strip_stop_time`]: the fit starts where the smoothed |β̇|
-/// peaks in [`flat_from`, t[band_index]], and runs to the end of the clip. `None` with
+/// peaks in [`flat_from`, t\[band_index\]], and runs to the end of the clip. `None` with
 /// fewer than [`MIN_MOVING_FRAMES`] frames of motion in it.
 fn coulomb_stop(
     t: &[f64],
@@ -333,7 +333,7 @@ fn coulomb_stop(
 }
 
 /// β(t) − β_∞ for a unit rate: −∫_t^∞ of the rate profile (1 until `td`, linear to 0
-/// at `ts`, 0 after) [s].
+/// at `ts`, 0 after) \[s\].
 fn remaining_turn(t: f64, td: f64, ts: f64) -> f64 {
     if t >= ts {
         0.0
@@ -349,7 +349,7 @@ fn remaining_turn(t: f64, td: f64, ts: f64) -> f64 {
 /// it.
 struct Profile<'a> {
     t: &'a [f64],
-    /// β relative to its last sample (for precision) [rad].
+    /// β relative to its last sample (for precision) \[rad\].
     y: Vec<f64>,
     y0: f64,
     /// (Σy, Σy²) over samples k.. [rad, rad²].

@@ -48,7 +48,7 @@ use crate::footage::FrameView;
 use crate::lsq::levenberg_marquardt;
 use crate::signal::{mad_sigma, median};
 
-/// Largest tilt towards the camera the profile makes room for [rad]: the far top
+/// Largest tilt towards the camera the profile makes room for \[rad\]: the far top
 /// rim rises by up to this fraction of the disk's diameter above its rest row.
 const MAX_LEAN: f64 = 0.08;
 /// Rows of the side below the rest frame's near top rim in the profile.
@@ -57,7 +57,7 @@ const SIDE_ROWS: usize = REACH + 8;
 /// contrast (as [`super::top_rim`]'s plateaus).
 const FACE_STEP_FRACTION: f64 = 0.15;
 /// The face's height from the silhouette's top to the near rim's guess below which a
-/// frame is not fitted [px].
+/// frame is not fitted \[px\].
 const MIN_GUESS_PX: f64 = 2.0;
 /// Fewest frames with a resolved face for a reading.
 pub const MIN_FRAMES: usize = 10;

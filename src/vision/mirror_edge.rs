@@ -84,19 +84,19 @@ use rayon::prelude::*;
 use super::band_window::{BandWindow, ROWS_ABOVE, ROWS_BELOW};
 use super::profile::{golden_section, steps};
 
-/// Width of the template's bins [px].
+/// Width of the template's bins \[px\].
 pub const BIN_PX: f64 = 0.1;
 /// Samples a bin needs to count.
 const MIN_BIN_SAMPLES: usize = 3;
-/// How far above its own edge a mirror image's light can reach [px]: three
+/// How far above its own edge a mirror image's light can reach \[px\]: three
 /// rows of blur. A frame's rows at u < 2 z₀ − this see no mirror light.
 pub const MIRROR_REACH_PX: f64 = 3.0;
 /// Frames with an open gap the template needs.
 pub const MIN_TEMPLATE_FRAMES: usize = 20;
-/// How far from its first-pass edge a frame's fitted edge may lie [px].
+/// How far from its first-pass edge a frame's fitted edge may lie \[px\].
 const SEARCH_PX: f64 = 2.0;
 /// How far either side of its least-squares edge a frame's likelihood is averaged
-/// ([`MirrorEdgeModel::edge`]) [px]: four times the 0.1 px between the near-equal
+/// ([`MirrorEdgeModel::edge`]) \[px\]: four times the 0.1 px between the near-equal
 /// minima that codec ringing makes. On the long clip's frame that showed them, 0.3 px
 /// off the minimum the SSR is already larger by 13 times 2s².
 const LIKELIHOOD_PX: f64 = 0.4;
@@ -107,21 +107,21 @@ const LIKELIHOOD_PX: f64 = 0.4;
 /// or not, +0.03 … +0.16 px; the open footage's rounded rims 0.75–2.51 px.
 pub const SHARP_RIM_PX: f64 = 0.5;
 /// The frames that decide c with the rest frames: first-pass lifts up to this
-/// [px], over which the gap between the rim and its mirror image (2 (c + z) wide)
+/// \[px\], over which the gap between the rim and its mirror image (2 (c + z) wide)
 /// opens through the blur ([`MIRROR_REACH_PX`]).
 const NEAR_CONTACT_PX: f64 = MIRROR_REACH_PX;
 /// Frames near contact the test needs; with fewer the rest frames' own c decides.
 const MIN_NEAR_CONTACT_FRAMES: usize = MIN_TEMPLATE_FRAMES;
-/// The lowest c the test searches [px]: a plate line above the edge at rest is not
+/// The lowest c the test searches \[px\]: a plate line above the edge at rest is not
 /// physical (the mirror image would overlap the disk); half a pixel is left for
 /// noise.
 const MIN_PLATE_OFFSET_PX: f64 = -0.5;
-/// Rows below the rest frames' first-pass edge that the rest fit reads [px]: a
+/// Rows below the rest frames' first-pass edge that the rest fit reads \[px\]: a
 /// rounded band of 2 px (the open footage's is 1–2.6 px) and the mirror's blur
 /// ([`MIRROR_REACH_PX`]).
 const REST_ROWS_BELOW_PX: f64 = 2.0 + MIRROR_REACH_PX;
 /// The distance from the edge to the plate line at rest searched, c = y_p − e
-/// [px]: from a sharp rim (c ≈ 0) to one rounded over most of the window below.
+/// \[px\]: from a sharp rim (c ≈ 0) to one rounded over most of the window below.
 const PLATE_OFFSET_PX: Range<f64> = -1.0..(ROWS_BELOW as f64 - 3.0);
 
 /// D(u): the disk's bottom-edge profile divided by the disk's level, at offsets u
@@ -129,7 +129,7 @@ const PLATE_OFFSET_PX: Range<f64> = -1.0..(ROWS_BELOW as f64 - 3.0);
 /// between two others interpolated linearly).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EdgeTemplate {
-    /// The first bin's centre [px].
+    /// The first bin's centre \[px\].
     first: f64,
     /// Mean normalised level per bin, one every [`BIN_PX`] from `first`.
     levels: Vec<f64>,
@@ -213,7 +213,7 @@ impl EdgeTemplate {
         self.levels[self.levels.len() - 1]
     }
 
-    /// The width of D's fall from the side to the gap, as a Gaussian's σ [px]: half
+    /// The width of D's fall from the side to the gap, as a Gaussian's σ \[px\]: half
     /// the distance between its 84 % and 16 % levels. For a sharp rim it is the
     /// camera's blur; a rounded rim widens it.
     fn edge_width(&self) -> f64 {
@@ -256,7 +256,7 @@ struct PlateBlur {
     sigma: f64,
 }
 
-/// The widest plate blur searched [px].
+/// The widest plate blur searched \[px\].
 const MAX_PLATE_BLUR_PX: f64 = 4.0;
 
 impl PlateBlur {
@@ -406,7 +406,7 @@ impl MirrorEdgeModel {
         c.is_finite().then_some(c)
     }
 
-    /// The plate's blur of the mirror image, σ_m [px] ([`PlateBlur`]), fitted to
+    /// The plate's blur of the mirror image, σ_m \[px\] ([`PlateBlur`]), fitted to
     /// the rest frames and the frames near contact together at the model's c
     /// (`plate_offset_test`), as [`MirrorEdgeModel::plate_offset_near_contact`]
     /// reads them: as the gap under the rim opens, a blurred reflection fills it
@@ -576,7 +576,7 @@ impl MirrorEdgeModel {
         moment / weights
     }
 
-    /// How far below its edge a mirror image's light reaches [px]:
+    /// How far below its edge a mirror image's light reaches \[px\]:
     /// [`MIRROR_REACH_PX`], and three σ_m more on a rough plate.
     fn mirror_reach(&self) -> f64 {
         MIRROR_REACH_PX + self.plate_blur.as_ref().map_or(0.0, |b| 3.0 * b.sigma)
@@ -607,7 +607,7 @@ fn edge_ssr(profile: Profile, samples: &[(f64, f64)], e: f64, plate_row: f64, rh
 }
 
 /// The edge row fitted to one frame's (row centre, value) `samples` within
-/// ±[`SEARCH_PX`] of `edge0`, and its SSR: a grid of `step` [px], then
+/// ±[`SEARCH_PX`] of `edge0`, and its SSR: a grid of `step` \[px\], then
 /// golden-section search.
 fn edge_fit(
     profile: Profile,

@@ -56,17 +56,17 @@ use rayon::prelude::*;
 use super::band_window::{BandWindow, LEVEL_ROWS, ROWS_ABOVE};
 use super::profile::{golden_section, steps};
 
-/// Lift past which the rows just under the edge show the shadow [px]: the
+/// Lift past which the rows just under the edge show the shadow \[px\]: the
 /// rounded band and the blur (≈ 3 rows) no longer reach the plate.
 pub const OPEN_GAP_PX: f64 = 3.0;
 /// Rows under a frame's edge whose darkest is the shadow's level.
 const SHADOW_ROWS: usize = 4;
 /// Frames with an open gap the shadow's level needs.
 pub const MIN_OPEN_FRAMES: usize = 20;
-/// How far from its first-pass edge a frame's crossing may lie [px]; further,
+/// How far from its first-pass edge a frame's crossing may lie \[px\]; further,
 /// the window did not start on the disk's side and the first pass is kept.
 const SEARCH_PX: f64 = 2.0;
-/// Widest blur σ of the edge that is searched for [px].
+/// Widest blur σ of the edge that is searched for \[px\].
 const MAX_BLUR_PX: f64 = 3.0;
 
 /// The light-plate rim model: the shadow's relative level and the edge at rest.
@@ -152,7 +152,7 @@ impl<'a> Step<'a> {
         golden_section(cost, best.1 - 0.05, best.1 + 0.05, 1e-4)
     }
 
-    /// The blur σ [px] best fitted, with the edge, to the two rows either side of
+    /// The blur σ \[px\] best fitted, with the edge, to the two rows either side of
     /// the crossing (a frame whose rim is clear of its shadow).
     fn fit_blur(&self) -> f64 {
         let rows: Vec<usize> = (self.below.saturating_sub(2)..self.below + 2).collect();
@@ -169,7 +169,7 @@ impl<'a> Step<'a> {
 }
 
 /// The share of pixel row [j, j + 1) above a step at j + `depth` blurred by a
-/// Gaussian of `sigma` [px]: ∫_j^{j+1} Φ((e − y)/σ) dy = σ [G((e − j)/σ) −
+/// Gaussian of `sigma` \[px\]: ∫_j^{j+1} Φ((e − y)/σ) dy = σ [G((e − j)/σ) −
 /// G((e − j − 1)/σ)] with G(u) = u Φ(u) + φ(u) (Φ, φ: the standard normal's
 /// distribution and density); the area clamp(e − j, 0, 1) when σ → 0.
 fn covered(depth: f64, sigma: f64) -> f64 {
