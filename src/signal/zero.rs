@@ -24,9 +24,11 @@
 //! linear with a knot every [`KNOT_TURNS`] turns (a last piece shorter than a turn
 //! joins the one before). Least squares (Levenberg–Marquardt from the peaks' φ), c's
 //! standard error the linearised one, s² (JᵀJ)⁻¹: over the scenes below the zero's
-//! RMS error is 0.7 of it on ours, 1.3 of it on the open footage, whose side views
-//! all read their heights 0.02–0.04 px low after it (a shared error of that renderer's
-//! pictures, not noise; `vision::MOTION_ZERO_PROFILE_PX` is added for it).
+//! RMS error is 0.7 of it on ours, 1.3 of it on the open footage. There the side views
+//! read their heights 0.02–0.03 px low after it, as the codec smoothed their swing over
+//! time: the fit takes a swing shrunk about its mean for an offset, and no fit of the
+//! heights can tell the two apart (BENCHMARKS.md); `vision::MOTION_ZERO_PROFILE_PX` is
+//! added for it.
 //!
 //! One fit of the whole window, not a mean over windows of 1.5 turns each fitted
 //! with its own φ, φ̇, χ, ψ̇, ψ̈ and c (the method until 2026-11-29): the turning points
