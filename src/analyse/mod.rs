@@ -352,7 +352,7 @@ struct MeasuredSpan {
 /// moved every height.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ZeroFromMotion {
-    /// The windows' offset c above the rest tail's level, and its standard error \[m\].
+    /// The motion's offset c above the rest tail's level, and its standard error \[m\].
     pub zero: signal::MotionZero,
     /// How far every height moved down: the rest tail's level plus c \[m\]. The
     /// profile fitted is the camera's at [`ScaleReport::near_rim_elevation_rad`].
@@ -1610,7 +1610,7 @@ pub fn analyse_clip_keeping(
             ));
             (frames, series, fits, bounded) = (frames_again, again, fits_again, true);
             // The heights were re-zeroed already: what moves now is within the
-            // windows' scatter, but the zero row follows it.
+            // fit's standard error, but the zero row follows it.
             if let Some(again) = zero_again {
                 rim_zero_row_px -= again.shift_m / metres_per_px;
                 zero = Some(match zero {

@@ -1684,7 +1684,7 @@ fn lifted_heights(camera: &SideViewRim, lift: f64) -> (Vec<f64>, Vec<f64>) {
 /// one leaves them, give the offset back within three of its standard errors and
 /// 0.5 μm. The first-order profile R sin φ (1 + cos χ) on the same heights takes the
 /// camera's tilt of the swing against the mean, (H/R) tan ε · R sin φ, for an offset:
-/// it reads the zero high by about H tan ε times the windows' φ (4–7 μm here).
+/// it reads the zero high by about H tan ε times the heights' φ (4–7 μm here).
 #[test]
 fn the_motion_places_the_zero_of_the_heights() {
     let (camera, lift) = (camera_at_3_degrees(), 6.6e-6);

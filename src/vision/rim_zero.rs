@@ -72,7 +72,7 @@ impl RimReading {
     }
 
     /// 1σ of the zero of z_rim \[px\] where the motion places it (`signal::motion_zero`),
-    /// from the windows' standard error `se_px`: that and the profile's own error,
+    /// from the fit's standard error `se_px`: that and the profile's own error,
     /// [`MOTION_ZERO_PROFILE_PX`], in quadrature.
     pub fn motion_zero_uncertainty_px(se_px: f64) -> f64 {
         se_px.hypot(MOTION_ZERO_PROFILE_PX)
