@@ -307,8 +307,9 @@ fn a_slowed_section_away_from_the_window_measures_as_the_plain_clip() {
         let dt = (slowed.series.halt.t_phi - plain.series.halt.t_phi).abs();
         assert!(dt < 1e-9, "t_φ differs by {dt} s");
         // The same pixels (lossless), so the same rim heights, up to the zero the
-        // motion places: a least-squares fit over the frames' times, which differ by
-        // 4e-15 s, converged a little differently (measured 9e-6 px).
+        // motion places: it reads its phase at the turning points, whose times are
+        // themselves fitted from frame times that differ by 4e-15 s (measured 9e-6 px;
+        // polishing the zero's own fit to convergence left that unchanged).
         let dz = max_difference(&z_rim(&slowed), &z_rim(&plain));
         assert!(dz < 1e-4, "z_rim differs by {dz} px");
         // The same exponent: within 0.002, as in tests/trust.rs, where times that

@@ -350,16 +350,16 @@ struct SceneErrors {
     turns_end_ms: Option<f64>,
 }
 
-/// Where n's error comes from, over the measured scenes (information, printed under
-/// the table): the RMS of each fit's Δn, how much of it a straight line in the
-/// heights' offset explains (least squares Δn = s·a + d, with R²), and how far the
-/// fitted halt and the turns' end lie from the true halt (RMS). R² is a correlation,
-/// not the zero's share: a zero 15 % closer to the truth left Δn as it was, since the
-/// coding that moves the zero shaves the peaks too (BENCHMARKS.md, "The zero from one
-/// fit of the window").
-fn error_budget(errors: &[SceneErrors]) -> String {
-    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
-    let line = |pairs: &[(f64, f64)]| {
+/// The least-squares line y = slope·x + intercept through (x, y) pairs, with the
+/// share of y's variance it explains.
+struct StraightLine {
+    slope: f64,
+    intercept: f64,
+    r_squared: f64,
+}
+
+impl StraightLine {
+    fn through(pairs: &[(f64, f64)]) -> Self {
         let k = pairs.len() as f64;
         let (mx, my) = pairs
             .iter()
@@ -371,8 +371,24 @@ fn error_budget(errors: &[SceneErrors]) -> String {
                 c + (y - my).powi(2),
             )
         });
-        (sxy / sxx, sxy * sxy / (sxx * syy))
-    };
+        let slope = sxy / sxx;
+        Self {
+            slope,
+            intercept: my - slope * mx,
+            r_squared: sxy * sxy / (sxx * syy),
+        }
+    }
+}
+
+/// Where n's error comes from, over the measured scenes (information, printed under
+/// the table): the RMS of each fit's Δn, how much of it a straight line in the
+/// heights' offset explains (least squares Δn = s·a + d, with R²), and how far the
+/// fitted halt and the turns' end lie from the true halt (RMS). R² is a correlation,
+/// not the zero's share: a zero 15 % closer to the truth left Δn as it was, since the
+/// coding that moves the zero shaves the peaks too (BENCHMARKS.md, "The zero from one
+/// fit of the window").
+fn error_budget(errors: &[SceneErrors]) -> String {
+    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
     let peaks: Vec<(f64, f64)> = errors.iter().map(|e| (e.offset_px, e.n_peaks)).collect();
     let frames: Vec<(f64, f64)> = errors
         .iter()
@@ -381,8 +397,10 @@ fn error_budget(errors: &[SceneErrors]) -> String {
     let t0: Vec<f64> = errors.iter().map(|e| e.t0_ms).collect();
     let turns_end: Vec<f64> = errors.iter().filter_map(|e| e.turns_end_ms).collect();
     let column = |pairs: &[(f64, f64)]| pairs.iter().map(|p| p.1).collect::<Vec<_>>();
-    let (slope_peaks, r2_peaks) = line(&peaks);
-    let (slope_frames, r2_frames) = line(&frames);
+    let (on_peaks, on_frames) = (
+        StraightLine::through(&peaks),
+        StraightLine::through(&frames),
+    );
     format!(
         "Where n's error comes from (information), over {} measured scenes: Δn RMS {:.4} \
          (peaks fit), {:.4} (per frame); heights' offset RMS {:.4} px; a straight line in \
@@ -393,10 +411,10 @@ fn error_budget(errors: &[SceneErrors]) -> String {
         rms(&column(&peaks)),
         rms(&column(&frames)),
         rms(&errors.iter().map(|e| e.offset_px).collect::<Vec<_>>()),
-        100.0 * r2_peaks,
-        slope_peaks,
-        100.0 * r2_frames,
-        slope_frames,
+        100.0 * on_peaks.r_squared,
+        on_peaks.slope,
+        100.0 * on_frames.r_squared,
+        on_frames.slope,
         rms(&t0),
         rms(&turns_end),
         turns_end.len(),
@@ -507,14 +525,7 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
             .filter(|(_, t)| t.t < 0.0 && t.t >= -WINDOW_S)
             .filter_map(|(m, t)| Some((t.z_rim_px?, m.z_rim_px? - t.z_rim_px?)))
             .collect();
-        let k = pairs.len() as f64;
-        let (mx, my) = pairs
-            .iter()
-            .fold((0.0, 0.0), |(a, b), &(x, y)| (a + x / k, b + y / k));
-        let (sxx, sxy) = pairs.iter().fold((0.0, 0.0), |(a, b), &(x, y)| {
-            (a + (x - mx).powi(2), b + (x - mx) * (y - my))
-        });
-        my - sxy / sxx * mx
+        StraightLine::through(&pairs).intercept
     };
     // The codec's smoothing over time, α of the P and B pictures (frame²), over the
     // same frames (eulerdisk::footage::smoothing_by_picture_type).
