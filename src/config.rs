@@ -71,15 +71,16 @@ pub enum Plate {
     Light,
 }
 
-/// How the halt time t0 of the power law is treated in the fit.
+/// How the halt time t0 of the power law is treated in the fit, and so where t_φ lies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum HaltChoice {
-    /// t0 fixed at the measured halt t_φ = 0 (the thesis's choice). The measured
-    /// halt is the last frame with visible motion, which comes early by the time
-    /// the last sub-threshold rocking takes, and that biases n low.
+    /// t0 fixed at the measured halt t_φ = 0, the last frame with visible motion (the
+    /// thesis's choice), which comes early by the time the last sub-threshold rocking
+    /// takes, and that biases n low.
     Measured,
-    /// t0 a free parameter of the fit, from the energy samples alone.
+    /// t0 a free parameter of the fit, from the energy samples alone. With this and
+    /// the default, t_φ is placed by the laws of the motion (`analyse::law_halt`).
     Free,
     /// t0 fitted, and combined with the halt seen in the footage as a second
     /// measurement of it (the default; [`crate::energy::HaltSighting`]).

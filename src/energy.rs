@@ -162,7 +162,7 @@ fn potential_above_flat(params: &DiskParams, phi: f64) -> f64 {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum HaltTime {
-    /// t0 is known (e.g. the stop frame, t_φ) and held fixed \[s\].
+    /// t0 is known (e.g. the last frame with rim motion) and held fixed \[s\].
     Fixed(f64),
     /// t0 is fitted together with A_e and n (as in thesis §4.6).
     Free,
@@ -174,7 +174,7 @@ pub enum HaltTime {
 
 /// The halt as the footage shows it, a measurement of t0 beside the fit's own.
 ///
-/// The last frame with rim motion is at t_φ, and the disk stops at t0 after it. How
+/// The last frame with rim motion is at t_last, and the disk stops at t0 after it. How
 /// long after follows from the final turns and from how the halt detector
 /// (`signal::halt`) reads them. Near the halt the rim's rise on the centre column is
 /// z = h (1 + cos χ)/2, χ the precession phase from the rim's highest point, with
@@ -197,16 +197,16 @@ pub enum HaltTime {
 /// then each later frame that continues its descent more than σ above rest, on
 /// into the readings of the still disk after t0 while their noise keeps it up. Its
 /// distance from t0 has a mean and a variance over [`SIGHTING_DRAWS`] draws; t0 =
-/// t_φ + that mean, with one frame² of variance more for where t_φ itself falls
+/// t_last + that mean, with one frame² of variance more for where t_last itself falls
 /// (exposure and the codec move the last moving frame by up to a frame either way).
-/// With all motion visible (Δ → 0) this is t0 − t_φ uniform over a frame. On 320 px
+/// With all motion visible (Δ → 0) this is t0 − t_last uniform over a frame. On 320 px
 /// renders, whose final frames read the rim near contact or below z_v, it puts t0
-/// 1–5 frames after t_φ; on footage whose disk spans 900 px, within a frame or two
+/// 1–5 frames after t_last; on footage whose disk spans 900 px, within a frame or two
 /// (BENCHMARKS.md, "The halt seen from the final turns").
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct HaltSighting {
-    /// t_φ, the time of the last frame with rim motion \[s\].
-    pub t_phi: f64,
+    /// t_last, the time of the last frame with rim motion \[s\].
+    pub t_last: f64,
     /// The frame interval δt \[s\].
     pub frame_s: f64,
     /// Energy of stationary rolling at the smallest rim rise the footage shows
@@ -233,7 +233,7 @@ pub struct HaltSighting {
 }
 
 /// Draws of the phase and frame offset at t0 over which a [`HaltSighting`] runs the
-/// halt detector: the mean of t0 − t_φ to about 1 % of a frame.
+/// halt detector: the mean of t0 − t_last to about 1 % of a frame.
 pub const SIGHTING_DRAWS: usize = 2000;
 /// Frames before t0 within which a draw must find the last rise (beyond them the
 /// final turns are far above any threshold).
@@ -251,7 +251,7 @@ pub const SIGHTING_DISAGREEMENT: f64 = 3.0;
 /// How a [`HaltSighting`] entered the fit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SightingUse {
-    /// t0 as the sighting gives it, t_φ plus the mean of t0 − t_φ \[s\], for the Δ of
+    /// t0 as the sighting gives it, t_last plus the mean of t0 − t_last \[s\], for the Δ of
     /// the combined law (of the free fit's when not combined).
     pub t0_seen: f64,
     /// Its standard deviation \[s\].
@@ -924,7 +924,7 @@ impl HaltSighting {
         (self.threshold_m + self.rest_above_zero_m).max(self.noise_m)
     }
 
-    /// Mean and variance of t0 − t_φ [s, s²] (the model of the type's docs) for the
+    /// Mean and variance of t0 − t_last [s, s²] (the model of the type's docs) for the
     /// time `unseen_s` (Δ) over which the peak rise is below the visible rise
     /// ([`Self::visible_rise`]) and the fitted exponent `n`. Draws are seeded, so the
     /// same inputs give the same numbers.
@@ -984,7 +984,7 @@ impl HaltSighting {
             draws += 1;
         }
         if draws == 0 {
-            // No rise within SIGHTING_FRAMES: Δ spans them all, and t0 − t_φ is
+            // No rise within SIGHTING_FRAMES: Δ spans them all, and t0 − t_last is
             // taken uniform over δt + Δ.
             let width = dt + unseen_s;
             return (0.5 * width, width * width / 12.0 + dt * dt);
@@ -1008,7 +1008,7 @@ impl HaltSighting {
     ///
     /// k scaling the profile so that its curvature at the free fit gives the free
     /// fit's own σ_t0 (the wider of the sandwich's and the jackknife's, module docs),
-    /// t_seen = t_φ + the mean of t0 − t_φ and σ_seen² its variance
+    /// t_seen = t_last + the mean of t0 − t_last and σ_seen² its variance
     /// ([`HaltSighting::gap`]), both for the Δ = (E_v/A_e)^{1/n} of the law at that t0.
     /// Where the energies fix t0 well, Q is two parabolas and this is the
     /// covariance-weighted mean of two Gaussian measurements. Where they barely fix it
@@ -1136,12 +1136,12 @@ impl HaltSighting {
         })
     }
 
-    /// The sighting for the law E = A_e (t0 − t)^n: t0 as seen (t_φ plus the mean of
-    /// t0 − t_φ), its variance, and Δ ([`Self::gap`], [`Self::unseen`]).
+    /// The sighting for the law E = A_e (t0 − t)^n: t0 as seen (t_last plus the mean of
+    /// t0 − t_last), its variance, and Δ ([`Self::gap`], [`Self::unseen`]).
     fn seen_at(&self, a_e: f64, n: f64) -> (f64, f64, f64) {
         let unseen_s = self.unseen(a_e, n);
         let (mean, var) = self.gap(unseen_s, n);
-        (self.t_phi + mean, var, unseen_s)
+        (self.t_last + mean, var, unseen_s)
     }
 
     /// Δ = (E_v/A_e)^{1/n}, the time before t0 over which the law E = A_e (t0 − t)^n
@@ -1979,7 +1979,7 @@ mod tests {
             for _ in 0..200 {
                 let e = law_with_noise(&t, a_e, t0, n, sigma, &mut rng);
                 let sighting = HaltSighting {
-                    t_phi: t0 - frame_s * rng.uniform(),
+                    t_last: t0 - frame_s * rng.uniform(),
                     ..visible_to_the_end(frame_s)
                 };
                 let fit = fit_power_law(&t, &e, HaltTime::Sighted(sighting)).expect("fit");
@@ -2050,8 +2050,8 @@ mod tests {
         }
     }
 
-    /// The halt seen in the footage is a second measurement of t0: t_φ the last frame
-    /// before the true halt (δt = 5 ms apart, at a random phase u: t_φ = t0 − u δt),
+    /// The halt seen in the footage is a second measurement of t0: t_last the last frame
+    /// before the true halt (δt = 5 ms apart, at a random phase u: t_last = t0 − u δt),
     /// all motion visible (Δ = 0). Combined with the fit, t0 is closer to the truth than
     /// the fit's own, and within 1.5 times the RMS error of two independent Gaussian
     /// measurements combined by their variances (the fit's t0 errors have heavier
@@ -2070,7 +2070,7 @@ mod tests {
             for _ in 0..200 {
                 let (t, e) = noisy_series(n, &mut rng);
                 let sighting = HaltSighting {
-                    t_phi: 0.5 - frame_s * rng.uniform(),
+                    t_last: 0.5 - frame_s * rng.uniform(),
                     ..visible_to_the_end(frame_s)
                 };
                 let fit = fit_power_law(&t, &e, HaltTime::Sighted(sighting)).expect("fit");
@@ -2120,7 +2120,7 @@ mod tests {
         let se_free = free.se_t0.expect("free t0");
         assert!(se_free > 0.01, "the energies fix t0 to {se_free} s");
         let sighting = HaltSighting {
-            t_phi: t0 - 0.5 * frame_s,
+            t_last: t0 - 0.5 * frame_s,
             ..visible_to_the_end(frame_s)
         };
         let sighted = fit_power_law(&t, &e, HaltTime::Sighted(sighting)).expect("sighted");
@@ -2155,7 +2155,7 @@ mod tests {
         let (t, e, _, t0) = thesis_series(0.5);
         let frame_s = 1.0 / 480.0;
         let sighting = HaltSighting {
-            t_phi: t0 + 40.0 * frame_s,
+            t_last: t0 + 40.0 * frame_s,
             ..visible_to_the_end(frame_s)
         };
         let free = fit_power_law(&t, &e, HaltTime::Free).expect("free fit");
@@ -2167,11 +2167,11 @@ mod tests {
     }
 
     /// A sighting whose motion is visible to the end (E_v = 0, so Δ = 0; no noise):
-    /// t0 − t_φ is uniform over a frame. The threshold, 10 μm, and ψ̇ there do not
+    /// t0 − t_last is uniform over a frame. The threshold, 10 μm, and ψ̇ there do not
     /// matter when Δ = 0.
     fn visible_to_the_end(frame_s: f64) -> HaltSighting {
         HaltSighting {
-            t_phi: 0.0,
+            t_last: 0.0,
             frame_s,
             visible_energy: 0.0,
             threshold_m: 1e-5,
@@ -2181,10 +2181,10 @@ mod tests {
         }
     }
 
-    /// With all motion visible, the sighting is close to t0 − t_φ uniform over a frame
-    /// (mean δt/2, variance δt²/12), with one frame² more for where t_φ falls: only a
+    /// With all motion visible, the sighting is close to t0 − t_last uniform over a frame
+    /// (mean δt/2, variance δt²/12), with one frame² more for where t_last falls: only a
     /// last frame that catches the rim at contact, where even a large peak reads
-    /// below the threshold, moves t_φ a frame earlier.
+    /// below the threshold, moves t_last a frame earlier.
     /// A threshold that hides the final peaks moves t0 later and makes it less
     /// certain, the more so the longer Δ is.
     #[test]

@@ -285,6 +285,10 @@ fn render(scene: &SceneSpec, dir: &Path) -> (std::path::PathBuf, GroundTruth) {
 ///   on every frame (§5; an edge's per-frame accuracy is in pixels, whatever the frame
 ///   size), and every true peak of at least 0.5 px in that window found (within a
 ///   frame), none spurious (§5).
+/// * t_φ within [`HALT_FRAMES`] = 2 frames of the true halt (§5). The fitted t0 is
+///   information: it comes from the heights of the last turns, which a small frame
+///   and a coarse codec read least well (up to 4.4 ms off here, against §5's 2 ms on
+///   the open footage's larger disks).
 /// * n (both fits) within ±0.02 (±0.03 when φ oscillates about stationary rolling)
 ///   and φ at the peaks within a median relative error of 2 % (§5), targets that §5
 ///   sets on footage whose disk spans x_r − x_l ≥ [`REFERENCE_DIAMETER_PX`] = 461 px
@@ -300,6 +304,9 @@ struct Tolerances {
 }
 
 const CAL_PX: f64 = 0.5;
+/// t_φ within 2 frames of the true halt (§5), whatever the frame size: it is placed by
+/// the laws of the motion (`analyse::law_halt`), the turns' timing needing no height.
+const HALT_FRAMES: f64 = 2.0;
 const Z_RIM_RMS_PX: f64 = 0.25;
 /// Smallest true peak that must be found [px] (§5).
 const DETECTABLE_PX: f64 = 0.5;
@@ -612,9 +619,15 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, Stri
         Some(d) => failures.push(format!("n (per frame) off by {d:+.3} (≤ {:.3})", tol.n)),
         None => failures.push("no per-frame fit".into()),
     }
-    // For information: the halts (§5: t_φ within 2 frames, fitted t0 within 2 ms).
+    // The halt t_φ, where the laws place it, within [`HALT_FRAMES`] (§5).
     let t_phi = e.series.halt.t_phi;
     let halt_frames = (t_phi - truth.halt_time) * FPS;
+    if halt_frames.is_nan() || halt_frames.abs() > HALT_FRAMES {
+        failures.push(format!(
+            "t_φ off by {halt_frames:+.1} frames (≤ {HALT_FRAMES})"
+        ));
+    }
+    // For information: the fitted t0 (§5: within 2 ms) and the turns' end.
     let t0_ms = 1e3 * (t_phi + e.peaks_fit.fit.t0 - truth.halt_time);
     let turns_end_ms = match &e.turn_timing {
         Some(Ok(t)) => Some(1e3 * (t_phi + t.t_end - truth.halt_time)),
@@ -789,11 +802,11 @@ fn a_face_thinner_than_its_blur_is_read_where_the_disk_leans() {
 
 #[test]
 #[ignore = "1 of 24 scenes misses a target (BENCHMARKS.md, \"Robustness scenes\", \
-            \"The zero from one fit of the window\"): s17, a light plate coded so that \
-            t_phi comes 7 frames early (crf 28, I and P pictures keyed every 140, the \
-            final peaks shaved by the codec): n peaks +0.049 against 0.032. Seed 7 misses \
-            s03 (B pictures after the halt read as motion: n peaks +0.046) and its own \
-            s17; run with --ignored"]
+            \"t_phi where the laws place the halt\"): s17, a light plate coded at crf 28 \
+            with I and P pictures keyed every 140, 146 bytes a frame, which holds and \
+            shaves the final peaks (n +0.005 from the same frames coded losslessly): n \
+            peaks +0.049 against 0.032. Seed 7 misses s03 (B pictures after the halt read \
+            as motion: n peaks +0.046) and its own s17; run with --ignored"]
 fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
     let scenes = draw_scenes();
     assert!(scenes.len() >= 24);

@@ -1510,7 +1510,7 @@ pub fn analyse_clip_keeping(
     // `bounded`: t_φ was bounded by the energy law ([`law_bound`]), which leaves the
     // halt seen no measurement of t0.
     let halt_for = |series: &StateSeries, bounded: bool| match halt_choice {
-        HaltChoice::Measured => HaltTime::Fixed(0.0),
+        HaltChoice::Measured => HaltTime::Fixed(series.halt.shifted_t[series.halt.index]),
         HaltChoice::Free => HaltTime::Free,
         HaltChoice::Combined if bounded => HaltTime::Free,
         HaltChoice::Combined => HaltTime::Sighted(halt_sighting(
@@ -1525,9 +1525,10 @@ pub fn analyse_clip_keeping(
     // is known only to within a few frames. Then the energy's fits.
     let clip_end = frames.last().map_or(0.0, |f| f.t_capture);
     let fit_span = |series: &StateSeries, bounded: bool| -> Result<Fits, AnalyseError> {
+        let (start, end) = series.peaks.window;
         let t_phi = series.halt.t_phi;
         for (span, start_s, end_s) in [
-            ("fit window", t_phi - window_s, t_phi),
+            ("fit window", t_phi + start, t_phi + end),
             ("rest tail", clip_end - rest_tail_s, clip_end),
         ] {
             if !frame_times.within_one_section(start_s, end_s) {
@@ -1574,27 +1575,47 @@ pub fn analyse_clip_keeping(
     };
     let (mut frames, mut series) = (frames, series);
     let mut fits = fit_span(&series, false)?;
+    // The signal stage again on the frames measured, with `config`: its series and
+    // fits, and its frames, whose heights it re-zeroes (the zero's fit moves within
+    // its standard error as its window does; the zero row follows it).
+    let signal_again = |frames: &[FrameRecord], config: &SignalConfig, bounded: bool| {
+        let mut frames = frames.to_vec();
+        let (series, zero) = signal_series(
+            &mut frames,
+            &known_flags,
+            two_view,
+            config,
+            rim_model(&scale, &params).as_ref(),
+            profile.as_ref(),
+            metres_per_px,
+        )
+        .ok()?;
+        let fits = fit_span(&series, bounded).ok()?;
+        Some((frames, series, zero, fits))
+    };
+    let mut zero_moved = |again: Option<ZeroFromMotion>| {
+        if let Some(again) = again {
+            rim_zero_row_px -= again.shift_m / metres_per_px;
+            zero = Some(match zero {
+                Some(z) => ZeroFromMotion {
+                    shift_m: z.shift_m + again.shift_m,
+                    ..again
+                },
+                None => again,
+            });
+        }
+    };
+    let mut config_again = signal_config(window_s, metres_per_px);
     // A halt seen well after the energy law's is a coded picture, not motion: the
     // rim is looked for again up to the law's halt ([`law_bound`]), and t0 is then
     // the fits' own.
     let mut bounded = false;
     if let Some(bound) = law_bound(&fits, 1.0 / fps.fps) {
-        let mut config = signal_config(window_s, metres_per_px);
+        let mut config = config_again.clone();
         config.motion_until = Some(series.halt.t_phi + bound);
-        let mut frames_again = frames.clone();
-        let again = signal_series(
-            &mut frames_again,
-            &known_flags,
-            two_view,
-            &config,
-            rim_model(&scale, &params).as_ref(),
-            profile.as_ref(),
-            metres_per_px,
-        )
-        .ok()
-        .filter(|a| a.0.halt.index < series.halt.index);
-        if let Some((again, zero_again)) = again
-            && let Ok(fits_again) = fit_span(&again, true)
+        if let Some((frames_again, again, zero_again, fits_again)) =
+            signal_again(&frames, &config, true)
+            && again.halt.index < series.halt.index
         {
             warnings.push(format!(
                 "the rim seemed to move until t = {:.4} s, {:.1} ± {:.1} ms after the halt of \
@@ -1609,18 +1630,26 @@ pub fn analyse_clip_keeping(
                 again.halt.t_phi,
             ));
             (frames, series, fits, bounded) = (frames_again, again, fits_again, true);
-            // The heights were re-zeroed already: what moves now is within the
-            // fit's standard error, but the zero row follows it.
-            if let Some(again) = zero_again {
-                rim_zero_row_px -= again.shift_m / metres_per_px;
-                zero = Some(match zero {
-                    Some(z) => ZeroFromMotion {
-                        shift_m: z.shift_m + again.shift_m,
-                        ..again
-                    },
-                    None => again,
-                });
+            zero_moved(zero_again);
+            config_again = config;
+        }
+    }
+    // t_φ where the motion's laws place the halt ([`law_halt`]), not where the last
+    // rise was seen: the same frames, peaks and fits on a clock that starts there.
+    if halt_choice != HaltChoice::Measured
+        && let Some(offset) = law_halt(&fits.peaks.fit, &series.peaks)
+    {
+        config_again.halt_at = Some(series.halt.t_phi + offset);
+        match signal_again(&frames, &config_again, bounded) {
+            Some((frames_again, again, zero_again, fits_again)) => {
+                (frames, series, fits) = (frames_again, again, fits_again);
+                zero_moved(zero_again);
             }
+            None => warnings.push(format!(
+                "the laws place the halt {:+.1} ms from the last motion seen, but the signal \
+                 stage or the fits failed on that clock: t_φ is the last motion seen",
+                1e3 * offset
+            )),
         }
     }
     let Fits {
@@ -1629,7 +1658,7 @@ pub fn analyse_clip_keeping(
         full_state: full_state_fit,
     } = fits;
     let halt = halt_for(&series, bounded);
-    let window = (-window_s, 0.0);
+    let window = series.peaks.window;
     let in_window = signal::flags_within(&series.flags, window.0, window.1);
     let skips_in_window = in_window.len();
     if skips_in_window > 0 {
@@ -1707,7 +1736,7 @@ pub fn analyse_clip_keeping(
     let precession = precession::precession_check(
         &series.states,
         &params,
-        (-window_s, 0.0),
+        series.peaks.window,
         signal_config(window_s, metres_per_px).state_window_periods,
     );
     if let Some(check) = precession.filter(|c| !c.agrees()) {
@@ -1722,7 +1751,7 @@ pub fn analyse_clip_keeping(
 
     // n from the turning points' times alone (crate::turn_timing): no height, scale or zero
     // enters it; reported beside the fits, never combined with them.
-    let turn_timing = turn_timing_fit(&series.peaks, window_s);
+    let turn_timing = turn_timing_fit(&series.peaks);
     if let Ok(timing) = &turn_timing
         && let Some(gap) = disjoint_intervals(timing.ci95_n, peaks_fit.fit.ci95_n)
     {
@@ -2029,11 +2058,12 @@ fn png(image: &image::RgbImage) -> Vec<u8> {
     diagnostics::png_bytes(image).unwrap_or_default()
 }
 
-/// The halt as the footage shows it: motion last seen at t_φ (t = 0 on the fit's
-/// clock), one frame `frame_s` apart, down to the least rise the halt detector sees
-/// above the heights' zero (its threshold above the rest level, which lies
-/// `rest_above_zero_m` above the zero the motion placed), a rim rise a peak of
-/// stationary rolling reaches at sin φ = z/(2R), over its rest noise.
+/// The halt as the footage shows it: motion last seen at the halt detector's last
+/// frame of motion (on the fit's clock, t_φ at 0), one frame `frame_s` apart, down to
+/// the least rise the halt detector sees above the heights' zero (its threshold above
+/// the rest level, which lies `rest_above_zero_m` above the zero the motion placed), a
+/// rim rise a peak of stationary rolling reaches at sin φ = z/(2R), over its rest
+/// noise.
 fn halt_sighting(
     params: &DiskParams,
     halt: &signal::Halt,
@@ -2041,7 +2071,7 @@ fn halt_sighting(
     frame_s: f64,
 ) -> HaltSighting {
     let seen = HaltSighting {
-        t_phi: 0.0,
+        t_last: halt.shifted_t[halt.index],
         frame_s,
         visible_energy: 0.0,
         threshold_m: halt.threshold,
@@ -2060,8 +2090,37 @@ fn halt_sighting(
     }
 }
 
+/// Where the motion's laws place the halt on the clock of `series` (t_φ at 0) \[s\]:
+/// the mean of the energy law's t0 fitted at the peaks (`peaks`, combined with the
+/// halt seen, [`HaltSighting`]) and the end T of the turns' timing law
+/// ([`turn_timing_fit`]), or t0 alone when the turns cannot be timed; `None` when
+/// neither is finite.
+///
+/// The halt detector's last frame of motion is a rule, a rise above the rest's noise,
+/// and comes early by the frames whose motion the footage does not show: the last
+/// rises fall below the threshold, and an encoder holds pictures whose change is
+/// below its quantiser (7 frames early on the robustness gate's s17, crf 28; on 8 of
+/// its 24 scenes more than 2 frames off, RMS 6.4 ms). The laws' halts follow every
+/// turn of the window: over those 24 scenes t0 is off by 2.0 ms RMS and T by 1.1; over
+/// the open footage and its five re-encodings (48 clips) by 0.54 and 0.61 frames, and
+/// their errors are independent enough that the mean is off by 1.1 ms and 0.36
+/// frames RMS (BENCHMARKS.md, "t_φ where the laws place the halt"). T needs no height
+/// and t0 no count of the turns, so a codec's shaved swings move one and not the
+/// other.
+fn law_halt(peaks: &PowerLawFit, series: &PeakSeries) -> Option<f64> {
+    let t0 = Some(peaks.t0).filter(|t| t.is_finite());
+    let turns_end = turn_timing_fit(series)
+        .ok()
+        .map(|f| f.t_end)
+        .filter(|t| t.is_finite());
+    match (t0, turns_end) {
+        (Some(t0), Some(end)) => Some(0.5 * (t0 + end)),
+        (t0, end) => t0.or(end),
+    }
+}
+
 /// The timing law of the turns fitted to the turning points of z_rim (peaks and the
-/// troughs between them, half a turn apart) in the last `window_s` before the halt, at
+/// troughs between them, half a turn apart) in the peaks' window (`series.window`), at
 /// their counted ψ ([`turn_timing::fit_turn_timing`]), up to the last peak the local
 /// fit located. A parabolic peak after it is the last rise at the halt or a turn the
 /// halt cuts short (the local fit spans 1.5 turns): its time marks where the motion
@@ -2069,7 +2128,7 @@ fn halt_sighting(
 /// peaks made the timing's n +0.046 and +0.058 on two clips; BENCHMARKS.md, *n from
 /// the turns' timing*). The troughs halve the timing's scatter over the peaks alone
 /// (the same BENCHMARKS section).
-fn turn_timing_fit(series: &PeakSeries, window_s: f64) -> Result<TurnTimingFit, String> {
+fn turn_timing_fit(series: &PeakSeries) -> Result<TurnTimingFit, String> {
     let last_crest = series
         .peaks
         .iter()
@@ -2079,7 +2138,7 @@ fn turn_timing_fit(series: &PeakSeries, window_s: f64) -> Result<TurnTimingFit, 
     let (t, psi): (Vec<f64>, Vec<f64>) = series
         .precession_half_turns
         .iter()
-        .filter(|s| s.t >= -window_s && s.t <= last_crest)
+        .filter(|s| s.t >= series.window.0 && s.t <= last_crest)
         .map(|s| (s.t, s.psi))
         .unzip();
     turn_timing::fit_turn_timing(&t, &psi).map_err(|e| e.to_string())
@@ -2448,7 +2507,7 @@ mod tests {
             })
             .collect();
         let halt = HaltTime::Sighted(HaltSighting {
-            t_phi: 0.0,
+            t_last: 0.0,
             frame_s,
             visible_energy: a_e * (0.3 * frame_s).powf(n),
             threshold_m: 2e-5,
@@ -2502,7 +2561,7 @@ mod tests {
                 .collect();
             turning.sort_by(|a, b| a.0.total_cmp(&b.0));
             PeakSeries {
-                window: (-0.5, 0.0),
+                window: (-0.6, 0.0),
                 precession: signal::precession(&crests, TAU),
                 precession_half_turns: signal::precession_half_turns(&turning),
                 peaks,
@@ -2516,11 +2575,10 @@ mod tests {
                     .collect(),
             }
         };
-        let fit = turn_timing_fit(&series(signal::ExtremumMethod::Parabolic), 0.6).expect("fit");
+        let fit = turn_timing_fit(&series(signal::ExtremumMethod::Parabolic)).expect("fit");
         assert_eq!(fit.points, 2 * turns - 1);
         assert!((fit.n - n).abs() < 1e-6, "n = {}", fit.n);
-        let as_crest =
-            turn_timing_fit(&series(signal::ExtremumMethod::LocalFit), 0.6).expect("fit");
+        let as_crest = turn_timing_fit(&series(signal::ExtremumMethod::LocalFit)).expect("fit");
         assert_eq!(as_crest.points, 2 * turns + 1);
         assert!((as_crest.n - n).abs() > 1e-3, "n = {}", as_crest.n);
     }

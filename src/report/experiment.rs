@@ -384,10 +384,43 @@ fn turn_timing_sentence(
     }
 }
 
-/// How the halt seen in the footage entered the peaks fit's t0 (times from t_φ).
+/// Where t_φ lies: placed by the laws (`analyse::law_halt`), or the last frame of
+/// motion seen.
+fn halt_sentence(e: &Experiment) -> String {
+    let halt = &e.series.halt;
+    let Some(seen) = e.frames.get(halt.index) else {
+        return String::new();
+    };
+    let threshold_px = halt.threshold / e.plan.metres_per_px;
+    if seen.t == 0.0 {
+        return format!(
+            "The halt t_φ is the last frame of motion seen, frame {} (a rise of more than \
+             {threshold_px:.2} px above the rest).",
+            seen.index
+        );
+    }
+    let turns_end = match &e.turn_timing {
+        Some(Ok(t)) => format!("{:+.2} ms", 1e3 * t.t_end),
+        _ => "not fitted".into(),
+    };
+    format!(
+        "The halt t_φ (t = 0) is where the laws of the motion place it: the mean of the energy \
+         law's t0 at the peaks and the end T of the turns' timing law, fitted before it was \
+         placed. On its clock t0 = {:+.2} ms and T = {turns_end}. The halt detector last saw the \
+         rim move at {:+.2} ms, frame {} (a rise of more than {threshold_px:.2} px above the \
+         rest): the final rises fall below that, and an encoder holds pictures whose change is \
+         below its quantiser.",
+        1e3 * e.peaks_fit.fit.t0,
+        1e3 * seen.t,
+        seen.index,
+    )
+}
+
+/// How the halt seen in the footage entered the peaks fit's t0 (times from t_φ, the
+/// sighting's from the last frame of motion seen).
 fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
     let seen = format!(
-        "The halt seen in the footage puts t0 at {:+.2} ± {:.2} ms after t_φ (one frame, and {:.2} ms \
+        "The halt seen in the footage puts t0 at {:+.2} ± {:.2} ms (after the last motion seen: one frame, and {:.2} ms \
          of motion below the least rise the halt detector sees, {:.1} μm above the heights' zero: \
          its threshold above the still disk's rest level, which lies {:+.1} μm above that zero); \
          the energy alone at {:+.2} ± {:.2} ms",
@@ -413,8 +446,9 @@ fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
     }
 }
 
-/// β̇ at t_φ and the energy eq. (3.6) keeps there, at φ = 0 with θ̇ = β̇ (eq. 3.22):
-/// C/2 β̇² + m/2 (R β̇)² \[J\].
+/// β̇ at the last frame of motion seen (t_φ, or the frames before it whose motion the
+/// footage no longer shows) and the energy eq. (3.6) keeps there, at φ = 0 with
+/// θ̇ = β̇ (eq. 3.22): C/2 β̇² + m/2 (R β̇)² \[J\].
 fn carried_spin_energy(e: &Experiment) -> Option<(f64, f64)> {
     let strip = e.series.strip.as_ref()?;
     let beta_dot = *strip.series.beta_dot.get(e.series.halt.index)?;
@@ -621,7 +655,7 @@ fn experiment_page(
         vec![
             "fit window".into(),
             format!(
-                "the {} s before the measured halt t_φ, to the last sample; t0: {:?}",
+                "the {} s up to the last frame of motion seen, the last sample; t0: {:?}",
                 plan.window_s, plan.halt
             ),
         ],
@@ -660,6 +694,7 @@ fn experiment_page(
                 e.peaks_fit.fit.ci95_n.0, e.peaks_fit.fit.ci95_n.1, e.peaks_fit.fit.points, plan.window_s,
                 1.96 * e.peaks_fit.fit.se_n_zero, plan.rim_zero_uncertainty_px, zero_source(plan)))
         }
+        p { (halt_sentence(e)) }
         @if let Some(s) = e.peaks_fit.fit.halt_sighting {
             p { (sighting_sentence(&s, e.peaks_fit.fit.t0)) }
         }
@@ -813,7 +848,7 @@ fn footage_section(e: &Experiment, overlay: &OverlayIndex, dir: &Path) -> maud::
             "The measurements on the frames from t − t_φ = {} s to {} s, {:.0}× slower than filmed \
              ({} frames at {} frames/s). Left: the side view; right: the centre band enlarged. \
              Blue: the measuring band; red: the plate line z_base; green: the measured rim edge; \
-             magenta: a detected peak; orange border: the halt frame t_φ; red border: a flagged \
+             magenta: a detected peak; orange border: the last frame of motion seen; red border: a flagged \
              frame (reason in the header){}. overlay.json maps each video frame to its clip frame.",
             overlay.span_s.0, overlay.span_s.1, overlay.slow_down, overlay.frames.len(), fps,
             if e.series.strip.is_some() { "; below: the plan view with the strip's mask (cyan) and its principal axis (yellow)" } else { "" })))

@@ -40,7 +40,8 @@ use serde::{Deserialize, Serialize};
 pub struct Halt {
     /// Index of the last frame with rim motion (in the caller's series).
     pub index: usize,
-    /// t_φ on the caller's time axis \[s\].
+    /// t_φ on the caller's time axis \[s\]: that frame's time, or where
+    /// [`SignalConfig::halt_at`] places the halt.
     pub t_phi: f64,
     /// Rest level of z_rim after the halt (median of the rest tail) \[m\].
     pub rest_level: f64,
@@ -144,7 +145,9 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    here: a descent is no rise).
 ///
 /// With [`SignalConfig::motion_until`] set, no frame after it is motion in steps 3
-/// and 4 (the energy law fitted to the clip has the disk flat by then).
+/// and 4 (the energy law fitted to the clip has the disk flat by then). With
+/// [`SignalConfig::halt_at`] set, t_φ is that time and the last frame of motion
+/// only marks where the rest tail begins.
 ///
 /// Errors: [`SignalError::RestTailTooShort`], [`SignalError::TailNotAtRest`],
 /// [`SignalError::TailOscillates`], [`SignalError::NoMotion`], or invalid input.
@@ -385,7 +388,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             break;
         }
     }
-    let t_phi = t[index];
+    let t_phi = config.halt_at.unwrap_or(t[index]);
     Ok(Halt {
         index,
         t_phi,

@@ -190,6 +190,11 @@ pub struct SignalConfig {
     /// law fitted to the clip has the disk flat by then (`analyse` sets it when the
     /// halt seen lies after the law's, [`halt::halt_time`]); `None`: no bound.
     pub motion_until: Option<f64>,
+    /// t_φ, the halt \[s, caller's axis\], where the motion's laws place it (`analyse`
+    /// sets it from the energy law's t0 and the turns' end, a second pass); `None`:
+    /// the last frame of motion seen ([`halt::halt_time`]). The detector's last frame
+    /// of motion, the rest tail and every window of the local fits stay as found.
+    pub halt_at: Option<f64>,
     /// F statistic above which a rim phase step is flagged. Frames more than three
     /// from a skip give F ≤ 0 (the stepped model fits them worse) on the dark, light
     /// and two-view
@@ -217,6 +222,7 @@ impl Default for SignalConfig {
             strip_step_floor: 1e-6,
             skip_min_snr: 20.0,
             motion_until: None,
+            halt_at: None,
             phase_step_statistic: 10.0,
         }
     }
@@ -258,6 +264,13 @@ impl SignalConfig {
                     expected: "a finite number ≥ 0",
                 });
             }
+        }
+        if let Some(value) = self.halt_at.filter(|t| !t.is_finite()) {
+            return Err(SignalError::InvalidConfig {
+                field: "halt_at",
+                value,
+                expected: "a finite time",
+            });
         }
         if self.smoothing_points == 0 {
             return Err(SignalError::InvalidConfig {
@@ -570,7 +583,8 @@ pub fn analyse(
             let settled_after = config
                 .strip_settled_after
                 .unwrap_or(t[t.len() - 1] - config.strip_settled_tail_s);
-            let stop = strip_stop_time(t, &series, halt.t_phi, settled_after)?;
+            // The strip stops after the rim's last motion seen, wherever t_φ lies.
+            let stop = strip_stop_time(t, &series, t[halt.index], settled_after)?;
             let rotation_after_flat = stop.t_beta - halt.t_phi;
             Some(StripAnalysis {
                 series,
@@ -605,9 +619,10 @@ pub fn analyse(
 }
 
 /// The peaks and states of `series` (from [`analyse`] of `t`, `z_rim`) again, with
-/// every rim height up to the halt moved up by `shift` \[m\]: a zero of z_rim that much
-/// lower, as an error of the edge at rest would make it. The halt, strip and flags
-/// stay. How the energy fits respond to it is the zero's share of their errors.
+/// every rim height up to the halt's last frame of motion moved up by `shift` \[m\]: a
+/// zero of z_rim that much lower, as an error of the edge at rest would make it. The
+/// halt, strip and flags stay. How the energy fits respond to it is the zero's share
+/// of their errors.
 pub fn with_zero_moved(
     t: &[f64],
     z_rim: &[f64],
@@ -619,8 +634,8 @@ pub fn with_zero_moved(
     check_series(t, z_rim, "z_rim")?;
     let z: Vec<f64> = z_rim
         .iter()
-        .zip(&series.halt.shifted_t)
-        .map(|(&z, &ts)| if ts <= 0.0 { z + shift } else { z })
+        .enumerate()
+        .map(|(i, &z)| if i <= series.halt.index { z + shift } else { z })
         .collect();
     let peaks = find_peaks(t, &z, &series.halt, model, config)?;
     let states = frame_states(t, &z, &series.halt, &peaks, model, config);

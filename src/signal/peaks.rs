@@ -74,7 +74,8 @@ pub struct PrecessionSample {
 /// Peaks in the analysis window before the halt, with φ and ψ.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PeakSeries {
-    /// Analysis window (start, end), halt at t = 0 \[s\].
+    /// Analysis window (start, end), halt at t = 0 \[s\]: the `window_s` up to the halt's
+    /// last frame of motion.
     pub window: (f64, f64),
     /// Peaks in the window, in time order.
     pub peaks: Vec<Peak>,
@@ -87,7 +88,9 @@ pub struct PeakSeries {
 }
 
 /// Finds the peaks of z_rim in the window of [`SignalConfig::window_s`] seconds
-/// before the halt, interpolates them between frames, and derives φ at each peak
+/// that ends at the halt's last frame of motion (t_φ, unless [`SignalConfig::halt_at`]
+/// places the halt elsewhere: the window stays where the motion was seen, as the
+/// energy fits' window ends at their last sample), interpolates them between frames, and derives φ at each peak
 /// (eq. 3.9) and ψ, ψ̇ (eq. 3.11 and central differences).
 ///
 /// Peaks are local maxima (a plateau counts once, at its middle) of z_rim − rest
@@ -114,7 +117,8 @@ pub fn find_peaks(
 ) -> Result<PeakSeries, SignalError> {
     super::check_series(t, z_rim, "z_rim")?;
     config.validate()?;
-    let window = (-config.window_s, 0.0);
+    let seen = halt.shifted_t[halt.index];
+    let window = (seen - config.window_s, seen);
     let (peaks, troughs) = extrema(t, z_rim, halt, model, config, window.0);
     if peaks.len() < 3 {
         return Err(SignalError::TooFewPeaks {

@@ -145,6 +145,72 @@ fn halt_is_found_within_a_frame() {
     assert!((halt.shifted_t[0] - (t[0] - halt.t_phi)).abs() < 1e-12);
 }
 
+/// `halt_at` moves the clock and nothing else: t_φ is that time and every time counts
+/// from it, while the last frame of motion seen, the rest tail, the window (which ends
+/// at that frame) and every peak and state stay as found (φ to rounding: the local
+/// fits run on times shifted by a non-representable amount).
+#[test]
+fn placing_the_halt_moves_only_the_clock() {
+    let (t, z, _) = clip(NOISE, 1);
+    let seen = analyse(&t, &z, None, &thesis_model(), &SignalConfig::default()).expect("seen");
+    let offset = 1.7 * FRAME;
+    let config = SignalConfig {
+        halt_at: Some(seen.halt.t_phi + offset),
+        ..SignalConfig::default()
+    };
+    let placed = analyse(&t, &z, None, &thesis_model(), &config).expect("placed");
+    assert_eq!(placed.halt.index, seen.halt.index);
+    assert_eq!(placed.halt.rest_level, seen.halt.rest_level);
+    assert_eq!(placed.halt.t_phi, seen.halt.t_phi + offset);
+    let moved = |a: f64, b: f64| (a - (b - offset)).abs() < 1e-12;
+    assert!(
+        placed
+            .halt
+            .shifted_t
+            .iter()
+            .zip(&seen.halt.shifted_t)
+            .all(|(&a, &b)| moved(a, b))
+    );
+    assert!(moved(placed.peaks.window.0, seen.peaks.window.0));
+    assert!(moved(placed.peaks.window.1, seen.peaks.window.1));
+    assert!(
+        moved(placed.peaks.window.1, 0.0),
+        "the window ends at the last motion seen"
+    );
+    assert_eq!(placed.peaks.peaks.len(), seen.peaks.peaks.len());
+    for (a, b) in placed.peaks.peaks.iter().zip(&seen.peaks.peaks) {
+        assert!(moved(a.t, b.t), "peak at {} against {}", a.t, b.t);
+        assert!(
+            (a.phi / b.phi - 1.0).abs() < 1e-9,
+            "φ {} against {}",
+            a.phi,
+            b.phi
+        );
+    }
+    assert_eq!(placed.states.len(), seen.states.len());
+    for (a, b) in placed.states.iter().zip(&seen.states) {
+        assert!(moved(a.t, b.t));
+        assert!(
+            (a.phi / b.phi - 1.0).abs() < 1e-9,
+            "φ {} against {}",
+            a.phi,
+            b.phi
+        );
+    }
+    // A halt placed at no finite time is a config error.
+    let nowhere = SignalConfig {
+        halt_at: Some(f64::NAN),
+        ..SignalConfig::default()
+    };
+    assert!(matches!(
+        analyse(&t, &z, None, &thesis_model(), &nowhere),
+        Err(SignalError::InvalidConfig {
+            field: "halt_at",
+            ..
+        })
+    ));
+}
+
 /// H.264 on a still disk: most frames are copies and a few refreshes read the edge
 /// far off (light-plate renders: 14 σ low, 6.5 σ high, 0.2 px). Readings below the
 /// rest are not motion, and the still disk's band keeps the high ones below the
@@ -1626,7 +1692,7 @@ fn halt_seen_on_synthetic_clips(rest_above_zero: f64, told: f64) -> HaltSeen {
         // The model's inputs as `analyse` gives them: the peak 2R sin φ reaches the
         // visible rise at φ_v, which φ = φ_a (τ/τ_a)^{1/2} reaches Δ before t0.
         let sighting = crate::energy::HaltSighting {
-            t_phi: 0.0,
+            t_last: 0.0,
             frame_s: FRAME,
             visible_energy: 0.0,
             threshold_m: halt.threshold,
