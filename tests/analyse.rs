@@ -111,6 +111,15 @@ fn dark_plate_clip_matches_its_ground_truth() {
     // t_φ where the laws place the halt (t0 and the turns' end): within a frame.
     let t_phi = e.series.halt.t_phi;
     assert!((t_phi - true_halt).abs() < HALT_PLACED_S, "t_φ {t_phi}");
+    // The placement is recorded on t_φ's clock: the last motion seen where the frames
+    // put it, t0 and T either side of t_φ by the same amount (t_φ is their mean), and
+    // a standard error the error lies within three of.
+    let placed = e.halt_placement.expect("t_φ placed by the laws");
+    assert!((placed.last_motion_seen_s - e.frames[e.series.halt.index].t).abs() < 1e-12);
+    let turns_end = placed.turns_end_s.expect("the turns timed");
+    assert!((placed.t0_s + turns_end).abs() < 1e-9, "{placed:?}");
+    let se = placed.se_s.expect("t_φ's standard error");
+    assert!((t_phi - true_halt).abs() < 3.0 * se, "t_φ {t_phi} ± {se}");
     // The fitted halts: within 6 ms. H.264 at OpenCV's fixed crf 23 reads the narrow
     // gaps of the last turns 0.1 px low (0.01 px on the same frames stored
     // losslessly, where the peaks' halt is within 2.5 ms: tests/power_law.rs), and

@@ -359,6 +359,35 @@ pub struct ZeroFromMotion {
     pub shift_m: f64,
 }
 
+/// Where the laws placed the halt t_φ ([`law_halt`]): the estimates it is the mean of,
+/// from the fits before it was placed, and the halt detector's last frame of motion,
+/// all on the clock that starts at t_φ \[s\].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct HaltPlacement {
+    /// The peaks fit's t0.
+    pub t0_s: f64,
+    /// The end T of the turns' timing law; `None` when the turns could not be timed
+    /// (t_φ is then t0).
+    pub turns_end_s: Option<f64>,
+    /// Standard error of t_φ: half the standard errors of t0 and T in quadrature (T's
+    /// from the timing law's jackknife), or t0's alone; `None` when t0's is unknown.
+    pub se_s: Option<f64>,
+    /// The halt detector's last frame of motion.
+    pub last_motion_seen_s: f64,
+}
+
+impl HaltPlacement {
+    /// The same placement on a clock that starts `offset` \[s\] later.
+    fn shifted(self, offset: f64) -> Self {
+        HaltPlacement {
+            t0_s: self.t0_s - offset,
+            turns_end_s: self.turns_end_s.map(|t| t - offset),
+            last_motion_seen_s: self.last_motion_seen_s - offset,
+            ..self
+        }
+    }
+}
+
 /// Why a clip could not be analysed. Every message names the clip; vision errors
 /// name the frame.
 #[derive(Debug, thiserror::Error)]
@@ -595,6 +624,11 @@ pub struct Experiment {
     /// or why it could not be fitted; `None` in results written before it was recorded.
     #[serde(default)]
     pub turn_timing: Option<Result<TurnTimingFit, String>>,
+    /// Where t_φ was placed by the laws ([`law_halt`]); `None` when it is the last
+    /// frame of motion seen (`halt = "measured"`, or the placement failed) and in
+    /// results written before it was recorded.
+    #[serde(default)]
+    pub halt_placement: Option<HaltPlacement>,
     pub warnings: Vec<String>,
     /// Diagnostic images (PNG): the calibration frame with its points, and the
     /// frame of the highest rim thresholded with the band and the edge found.
@@ -1636,14 +1670,16 @@ pub fn analyse_clip_keeping(
     }
     // t_φ where the motion's laws place the halt ([`law_halt`]), not where the last
     // rise was seen: the same frames, peaks and fits on a clock that starts there.
+    let mut halt_placement = None;
     if halt_choice != HaltChoice::Measured
-        && let Some(offset) = law_halt(&fits.peaks.fit, &series.peaks)
+        && let Some((offset, placement)) = law_halt(&fits.peaks.fit, &series)
     {
         config_again.halt_at = Some(series.halt.t_phi + offset);
         match signal_again(&frames, &config_again, bounded) {
             Some((frames_again, again, zero_again, fits_again)) => {
                 (frames, series, fits) = (frames_again, again, fits_again);
                 zero_moved(zero_again);
+                halt_placement = Some(placement.shifted(offset));
             }
             None => warnings.push(format!(
                 "the laws place the halt {:+.1} ms from the last motion seen, but the signal \
@@ -1830,6 +1866,7 @@ pub fn analyse_clip_keeping(
         skips_in_window,
         precession,
         turn_timing: Some(turn_timing),
+        halt_placement,
         warnings,
         diagnostics: Diagnostics {
             calibration_png,
@@ -2090,11 +2127,11 @@ fn halt_sighting(
     }
 }
 
-/// Where the motion's laws place the halt on the clock of `series` (t_φ at 0) \[s\]:
-/// the mean of the energy law's t0 fitted at the peaks (`peaks`, combined with the
-/// halt seen, [`HaltSighting`]) and the end T of the turns' timing law
-/// ([`turn_timing_fit`]), or t0 alone when the turns cannot be timed; `None` when
-/// neither is finite.
+/// Where the motion's laws place the halt on the clock of `series` (t_φ at 0) \[s\],
+/// and the [`HaltPlacement`] on that clock: the mean of the energy law's t0 fitted at
+/// the peaks (`peaks`, combined with the halt seen, [`HaltSighting`]) and the end T of
+/// the turns' timing law ([`turn_timing_fit`]), or t0 alone when the turns cannot be
+/// timed; `None` when t0 is not finite.
 ///
 /// The halt detector's last frame of motion is a rule, a rise above the rest's noise,
 /// and comes early by the frames whose motion the footage does not show: the last
@@ -2107,16 +2144,26 @@ fn halt_sighting(
 /// frames RMS (BENCHMARKS.md, "t_φ where the laws place the halt"). T needs no height
 /// and t0 no count of the turns, so a codec's shaved swings move one and not the
 /// other.
-fn law_halt(peaks: &PowerLawFit, series: &PeakSeries) -> Option<f64> {
-    let t0 = Some(peaks.t0).filter(|t| t.is_finite());
-    let turns_end = turn_timing_fit(series)
+fn law_halt(peaks: &PowerLawFit, series: &StateSeries) -> Option<(f64, HaltPlacement)> {
+    let t0 = Some(peaks.t0).filter(|t| t.is_finite())?;
+    let se_t0 = peaks.se_t0.filter(|se| se.is_finite());
+    let turns = turn_timing_fit(&series.peaks)
         .ok()
-        .map(|f| f.t_end)
-        .filter(|t| t.is_finite());
-    match (t0, turns_end) {
-        (Some(t0), Some(end)) => Some(0.5 * (t0 + end)),
-        (t0, end) => t0.or(end),
-    }
+        .filter(|f| f.t_end.is_finite() && f.se_t_end.is_finite());
+    let (halt, se_s) = match &turns {
+        Some(f) => (
+            0.5 * (t0 + f.t_end),
+            se_t0.map(|se| 0.5 * se.hypot(f.se_t_end)),
+        ),
+        None => (t0, se_t0),
+    };
+    let placement = HaltPlacement {
+        t0_s: t0,
+        turns_end_s: turns.map(|f| f.t_end),
+        se_s,
+        last_motion_seen_s: series.halt.shifted_t[series.halt.index],
+    };
+    Some((halt, placement))
 }
 
 /// The timing law of the turns fitted to the turning points of z_rim (peaks and the

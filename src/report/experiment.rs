@@ -392,26 +392,40 @@ fn halt_sentence(e: &Experiment) -> String {
         return String::new();
     };
     let threshold_px = halt.threshold / e.plan.metres_per_px;
-    if seen.t == 0.0 {
+    let Some(placed) = e.halt_placement else {
         return format!(
             "The halt t_φ is the last frame of motion seen, frame {} (a rise of more than \
              {threshold_px:.2} px above the rest).",
             seen.index
         );
-    }
-    let turns_end = match &e.turn_timing {
-        Some(Ok(t)) => format!("{:+.2} ms", 1e3 * t.t_end),
-        _ => "not fitted".into(),
+    };
+    let se = placed
+        .se_s
+        .map_or(String::new(), |se| format!(" ± {:.2} ms", 1e3 * se));
+    let from = match placed.turns_end_s {
+        Some(end) => format!(
+            "the mean of the energy law's t0 at the peaks and the end T of the turns' timing \
+             law, fitted before it was placed, which lie at {:+.2} and {:+.2} ms on its clock",
+            1e3 * placed.t0_s,
+            1e3 * end
+        ),
+        None => "the energy law's t0 at the peaks (the turns could not be timed)".into(),
+    };
+    let seen_s = placed.last_motion_seen_s;
+    let why = if seen_s < 0.0 {
+        "before it: the final rises fall below that, and an encoder holds pictures whose \
+         change is below its quantiser"
+    } else if placed.se_s.is_some_and(|se| seen_s > 2.0 * se) {
+        "after it by more than twice its standard error: a picture the encoder shows after \
+         the halt"
+    } else {
+        "after it, within twice its standard error"
     };
     format!(
-        "The halt t_φ (t = 0) is where the laws of the motion place it: the mean of the energy \
-         law's t0 at the peaks and the end T of the turns' timing law, fitted before it was \
-         placed. On its clock t0 = {:+.2} ms and T = {turns_end}. The halt detector last saw the \
-         rim move at {:+.2} ms, frame {} (a rise of more than {threshold_px:.2} px above the \
-         rest): the final rises fall below that, and an encoder holds pictures whose change is \
-         below its quantiser.",
-        1e3 * e.peaks_fit.fit.t0,
-        1e3 * seen.t,
+        "The halt t_φ (t = 0{se}) is where the laws of the motion place it: {from}. The halt \
+         detector last saw the rim move at {:+.2} ms, frame {} (a rise of more than \
+         {threshold_px:.2} px above the rest), {why}.",
+        1e3 * placed.last_motion_seen_s,
         seen.index,
     )
 }
@@ -420,10 +434,10 @@ fn halt_sentence(e: &Experiment) -> String {
 /// sighting's from the last frame of motion seen).
 fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
     let seen = format!(
-        "The halt seen in the footage puts t0 at {:+.2} ± {:.2} ms (after the last motion seen: one frame, and {:.2} ms \
-         of motion below the least rise the halt detector sees, {:.1} μm above the heights' zero: \
-         its threshold above the still disk's rest level, which lies {:+.1} μm above that zero); \
-         the energy alone at {:+.2} ± {:.2} ms",
+        "The halt seen in the footage puts t0 at {:+.2} ± {:.2} ms (after the last motion \
+         seen: one frame, and {:.2} ms of motion below the least rise the halt detector \
+         sees, {:.1} μm above the heights' zero: its threshold above the still disk's rest \
+         level, which lies {:+.1} μm above that zero); the energy alone at {:+.2} ± {:.2} ms",
         1e3 * s.t0_seen,
         1e3 * s.se_t0_seen,
         1e3 * s.unseen_s,
@@ -446,9 +460,9 @@ fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
     }
 }
 
-/// β̇ at the last frame of motion seen (t_φ, or the frames before it whose motion the
-/// footage no longer shows) and the energy eq. (3.6) keeps there, at φ = 0 with
-/// θ̇ = β̇ (eq. 3.22): C/2 β̇² + m/2 (R β̇)² \[J\].
+/// β̇ at the last frame of motion seen (at t_φ or a few frames from it) and the
+/// energy eq. (3.6) keeps there, at φ = 0 with θ̇ = β̇ (eq. 3.22):
+/// C/2 β̇² + m/2 (R β̇)² \[J\].
 fn carried_spin_energy(e: &Experiment) -> Option<(f64, f64)> {
     let strip = e.series.strip.as_ref()?;
     let beta_dot = *strip.series.beta_dot.get(e.series.halt.index)?;
