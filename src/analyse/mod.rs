@@ -1639,6 +1639,8 @@ pub fn analyse_clip_keeping(
             });
         }
     };
+    // The signal stage's config for the passes after the first: each keeps what the
+    // one before it set.
     let mut config_again = signal_config(window_s, metres_per_px);
     // A halt seen well after the energy law's is a coded picture, not motion: the
     // rim is looked for again up to the law's halt ([`law_bound`]), and t0 is then
@@ -1654,8 +1656,9 @@ pub fn analyse_clip_keeping(
             warnings.push(format!(
                 "the rim seemed to move until t = {:.4} s, {:.1} ± {:.1} ms after the halt of \
                  the energy law fitted to its peaks: a rise after t = {:.4} s (the law's t0 + \
-                 3σ + one frame) is taken for a coded picture, not motion, so t_φ moves {} \
-                 frame(s) earlier, to t = {:.4} s, and t0 is fitted free of the halt seen",
+                 3σ + one frame) is taken for a coded picture, not motion, so the last motion \
+                 seen moves {} frame(s) earlier, to t = {:.4} s, and t0 is fitted free of the \
+                 halt seen",
                 series.halt.t_phi,
                 -1e3 * fits.peaks.fit.t0,
                 1e3 * fits.peaks.fit.se_t0.unwrap_or(f64::NAN),
