@@ -108,7 +108,7 @@ fn dark_plate_clip_matches_its_ground_truth() {
         seen <= true_halt + 1e-9 && true_halt - seen < 2.5 / 480.0,
         "last motion seen at {seen}"
     );
-    // t_φ where the laws place the halt (t0 and the turns' end): within a frame.
+    // t_φ where the laws place the halt (t0 and the turns' end): within half a frame.
     let t_phi = e.series.halt.t_phi;
     assert!((t_phi - true_halt).abs() < HALT_PLACED_S, "t_φ {t_phi}");
     // The placement is recorded on t_φ's clock: the last motion seen where the frames

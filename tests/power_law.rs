@@ -99,7 +99,7 @@ fn power_law_exponent_and_halt_come_back_from_lossless_clips() {
             seen <= true_halt && true_halt - seen < 2.5 / 480.0,
             "n = {n}: last motion seen at {seen}"
         );
-        // t_φ where the laws place the halt (t0 and the turns' end): within a frame.
+        // t_φ where the laws place the halt (t0 and the turns' end): within half a frame.
         assert!(
             (t_phi - true_halt).abs() < HALT_PLACED_S,
             "n = {n}: t_φ {t_phi}"
