@@ -25,8 +25,9 @@
 //! printed (`+ c h sin² φ`, which the independent footage's renderer follows) makes
 //! it high, by +0.005 on that footage's true peaks (BENCHMARKS.md). A φ
 //! oscillating about stationary rolling, or slip, moves the turns' rate and so this
-//! estimate, not the heights'. It is reported, with its interval, never combined into
-//! the fits.
+//! estimate, not the heights'. n is reported, with its interval, never combined into
+//! the fits; T, the same halt as the energy law's t0, helps place t_φ and bounds a
+//! halt seen after it (`analyse::law_halt`, `analyse::law_bound`).
 //!
 //! The interval: the wider of the least-squares standard error, s² (JᵀJ)⁻¹ at the
 //! optimum, and a delete-a-block jackknife (the turning points of two turns left out

@@ -1541,7 +1541,7 @@ pub fn analyse_clip_keeping(
     // The rest level's height above the zero the motion placed (−c): the detector's
     // rises are above the rest, the energies' heights above the zero.
     let rest_above_zero_m = zero.map_or(0.0, |z| -z.zero.offset);
-    // `bounded`: t_φ was bounded by the energy law ([`law_bound`]), which leaves the
+    // `bounded`: t_φ was bounded by a law of the motion ([`law_bound`]), which leaves the
     // halt seen no measurement of t0.
     let halt_for = |series: &StateSeries, bounded: bool| match halt_choice {
         HaltChoice::Measured => HaltTime::Fixed(series.halt.shifted_t[series.halt.index]),
@@ -1642,27 +1642,28 @@ pub fn analyse_clip_keeping(
     // The signal stage's config for the passes after the first: each keeps what the
     // one before it set.
     let mut config_again = signal_config(window_s, metres_per_px);
-    // A halt seen well after the energy law's is a coded picture, not motion: the
-    // rim is looked for again up to the law's halt ([`law_bound`]), and t0 is then
-    // the fits' own.
+    // A halt seen well after a law of the motion's is a coded picture, not motion: the
+    // rim is looked for again up to the law's halt ([`law_bound`]), and t0 is then the
+    // fits' own.
     let mut bounded = false;
-    if let Some(bound) = law_bound(&fits, 1.0 / fps.fps) {
+    let turns = turn_timing_fit(&series.peaks).ok();
+    if let Some(bound) = law_bound(&fits, turns.as_ref(), 1.0 / fps.fps) {
         let mut config = config_again.clone();
-        config.motion_until = Some(series.halt.t_phi + bound);
+        config.motion_until = Some(series.halt.t_phi + bound.bound);
         if let Some((frames_again, again, zero_again, fits_again)) =
             signal_again(&frames, &config, true)
             && again.halt.index < series.halt.index
         {
             warnings.push(format!(
                 "the rim seemed to move until t = {:.4} s, {:.1} ± {:.1} ms after the halt of \
-                 the energy law fitted to its peaks: a rise after t = {:.4} s (the law's t0 + \
-                 3σ + one frame) is taken for a coded picture, not motion, so the last motion \
-                 seen moves {} frame(s) earlier, to t = {:.4} s, and t0 is fitted free of the \
-                 halt seen",
+                 {}: a rise after t = {:.4} s (that halt + 3σ + one frame) is taken for a \
+                 coded picture, not motion, so the last motion seen moves {} frame(s) \
+                 earlier, to t = {:.4} s, and t0 is fitted free of the halt seen",
                 series.halt.t_phi,
-                -1e3 * fits.peaks.fit.t0,
-                1e3 * fits.peaks.fit.se_t0.unwrap_or(f64::NAN),
-                series.halt.t_phi + bound,
+                -1e3 * bound.halt,
+                1e3 * bound.se,
+                bound.law,
+                series.halt.t_phi + bound.bound,
                 series.halt.index - again.halt.index,
                 again.halt.t_phi,
             ));
@@ -1789,7 +1790,7 @@ pub fn analyse_clip_keeping(
     }
 
     // n from the turning points' times alone (crate::turn_timing): no height, scale or zero
-    // enters it; reported beside the fits, never combined with them.
+    // enters its n, reported beside the fits, never combined with them.
     let turn_timing = turn_timing_fit(&series.peaks);
     if let Ok(timing) = &turn_timing
         && let Some(gap) = disjoint_intervals(timing.ci95_n, peaks_fit.fit.ci95_n)
@@ -2060,36 +2061,73 @@ struct Fits {
     full_state: Option<EnergyFit>,
 }
 
-/// The latest time at which the energy laws leave the rim any motion, on the fits'
-/// clock (t_φ = 0), when the halt seen lies after the law's: a fit's sighting of the
-/// halt (at the peaks or per frame) disagrees with its t0, late, by more than
-/// [`energy::SIGHTING_DISAGREEMENT`] standard deviations of their difference
-/// ([`HaltSighting`]). A disk whose energy E = A_e (t0 − t)^n (eq. 3.2) has gone to
-/// zero lies flat and does not rise again, so a rise seen after t0 is a coded picture:
-/// an encoder that shows earlier pictures again for a few frames after the halt, or
-/// settles on the still disk over many, read as motion (o05 of the open footage
-/// re-encoded at CRF 20: t_φ 9.5 frames late, a spurious peak). Either fit may see it
-/// alone: the spurious low peaks pull the peaks fit's free t0 onto the last of them
-/// (the same clip re-encoded by libx264 0.164.3095: peaks of 0.21 and 0.20 px at
-/// frames 623 and 625, the disk flat from 615.5; the peaks fit's t0 5.6 ms before the
-/// halt seen, within 3σ of 7.4 ms, while the per-frame fit's lay 21 ± 0.5 ms before
-/// it, 0.3 frames from the truth). The bound is the earliest over the fits that
-/// disagree of t0 + 3 σ_t0 + one frame `frame_s` (the last frame of motion falls up
-/// to a frame after t0, [`HaltSighting`]); `None` when the halt seen agrees, or the
-/// bound does not lie before t_φ. A halt seen *before* the law's is the motion's last
-/// part too small to see or hidden by its phase, which the sighting models: left
-/// alone.
-fn law_bound(fits: &Fits, frame_s: f64) -> Option<f64> {
-    let late = |s: &energy::SightingUse| {
-        s.t0_seen - s.t0_fitted > energy::SIGHTING_DISAGREEMENT * s.se_t0_seen.hypot(s.se_t0_fitted)
-    };
-    [Some(&fits.peaks), fits.frames.as_ref()]
+/// A bound on the motion from a law of it whose halt the halt seen lies well after
+/// ([`law_bound`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct LawBound {
+    /// The latest time at which the law leaves the rim any motion, on the fits' clock
+    /// (t_φ at 0) \[s\]: its halt + 3 σ + one frame.
+    bound: f64,
+    /// The law, as a warning names it.
+    law: &'static str,
+    /// Its halt \[s\] and that halt's standard error \[s\].
+    halt: f64,
+    se: f64,
+}
+
+/// The latest time at which the motion's laws leave the rim any motion, on the fits'
+/// clock (t_φ = 0), when the halt seen lies after a law's: a fit's sighting of the
+/// halt (at the peaks or per frame, [`HaltSighting`]) lies late, by more than
+/// [`energy::SIGHTING_DISAGREEMENT`] standard deviations of their difference, of that
+/// fit's t0 or of the end T of the turns' timing law (`turns`, [`turn_timing_fit`]).
+/// A disk whose energy E = A_e (t0 − t)^n (eq. 3.2) has gone to zero lies flat and
+/// does not rise again, and its turns, ψ̇ ∝ (T − t)^{−n/2}, end at T, so a rise seen
+/// after the halt is a coded picture: an encoder that shows earlier pictures again
+/// for a few frames after the halt, or settles on the still disk over many, read as
+/// motion (o05 of the open footage re-encoded at CRF 20: t_φ 9.5 frames late, a
+/// spurious peak). Either fit may see it alone: the spurious low peaks pull the peaks
+/// fit's free t0 onto the last of them (the same clip re-encoded by libx264
+/// 0.164.3095: peaks of 0.21 and 0.20 px at frames 623 and 625, the disk flat from
+/// 615.5; the peaks fit's t0 5.6 ms before the halt seen, within 3σ of 7.4 ms, while
+/// the per-frame fit's lay 21 ± 0.5 ms before it, 0.3 frames from the truth). The
+/// turns' law may see it where neither fit can: where the final peaks barely fix the
+/// energies' t0 (±13 ms on seed 7's robustness scene s03, crf 23), the halt seen
+/// decides the combined t0, and its coded pictures 4 frames after the true halt made
+/// n +0.046, while the turns ended 0.5 frames from the truth, ±1.2 ms. The bound is
+/// the earliest over the laws that disagree of their halt + 3 σ + one frame
+/// `frame_s` (the last frame of motion falls up to a frame after the halt,
+/// [`HaltSighting`]); `None` when the halt seen agrees, or the bound does not lie
+/// before t_φ. A halt seen *before* a law's is the motion's last part too small to
+/// see or hidden by its phase, which the sighting models: left alone.
+fn law_bound(fits: &Fits, turns: Option<&TurnTimingFit>, frame_s: f64) -> Option<LawBound> {
+    let sightings = [
+        Some(("the energy law fitted at the peaks", &fits.peaks)),
+        fits.frames
+            .as_ref()
+            .map(|f| ("the energy law fitted per frame", f)),
+    ];
+    sightings
         .into_iter()
         .flatten()
-        .filter_map(|f| f.fit.halt_sighting.filter(late))
-        .map(|s| s.t0_fitted + energy::SIGHTING_DISAGREEMENT * s.se_t0_fitted + frame_s)
-        .min_by(f64::total_cmp)
-        .filter(|&bound| bound < 0.0)
+        .filter_map(|(law, f)| f.fit.halt_sighting.map(|s| (law, s)))
+        .flat_map(|(law, s)| {
+            let fitted = (law, s.t0_fitted, s.se_t0_fitted);
+            let timed = turns.map(|f| ("the turns' timing law", f.t_end, f.se_t_end));
+            [Some(fitted), timed]
+                .into_iter()
+                .flatten()
+                .filter(move |&(_, halt, se)| {
+                    s.t0_seen - halt > energy::SIGHTING_DISAGREEMENT * s.se_t0_seen.hypot(se)
+                })
+        })
+        .map(|(law, halt, se)| LawBound {
+            bound: halt + energy::SIGHTING_DISAGREEMENT * se + frame_s,
+            law,
+            halt,
+            se,
+        })
+        .filter(|b| b.bound < 0.0 && b.se.is_finite() && b.se > 0.0)
+        .min_by(|a, b| a.bound.total_cmp(&b.bound))
 }
 
 /// PNG bytes of a diagnostic image; empty if encoding fails (the images are for
@@ -2647,7 +2685,7 @@ mod tests {
             frames: None,
             full_state: None,
         };
-        let bound = law_bound(&fits, frame_s).expect("a bound");
+        let bound = law_bound(&fits, None, frame_s).expect("a bound").bound;
         let t0 = fits.peaks.fit.t0;
         let se = fits.peaks.fit.se_t0.expect("t0 free");
         assert!((t0 + 0.020).abs() < 3.0 * se, "t0 {t0}");
@@ -2659,7 +2697,7 @@ mod tests {
                 frames: None,
                 full_state: None,
             };
-            assert_eq!(law_bound(&fits, frame_s), None, "t0 {t0}");
+            assert_eq!(law_bound(&fits, None, frame_s), None, "t0 {t0}");
         }
         // The peaks fit agreeing with the halt seen (spurious low peaks after the halt
         // pull its free t0 onto them) does not hide the per-frame fit's disagreement.
@@ -2670,7 +2708,44 @@ mod tests {
             frames: Some(frames),
             full_state: None,
         };
-        assert_eq!(law_bound(&fits, frame_s), Some(frames_t0));
+        assert_eq!(
+            law_bound(&fits, None, frame_s).map(|b| b.bound),
+            Some(frames_t0)
+        );
+    }
+
+    /// The turns' timing law bounds the halt seen where the energies barely fix t0:
+    /// a peaks fit whose t0 agrees with the halt seen (its own σ wide), and turns that
+    /// end 12 ± 1 ms before it, bound the motion at T + 3σ + one frame. Turns ending
+    /// where the halt is seen, no bound.
+    #[test]
+    fn a_halt_seen_after_the_turns_end_is_bounded_by_them() {
+        let frame_s = 1.0 / 480.0;
+        let turns = |t_end: f64| TurnTimingFit {
+            n: 0.55,
+            ci95_n: (0.54, 0.56),
+            se_n: 0.005,
+            se_n_least_squares: 0.005,
+            se_n_jackknife: 0.005,
+            t_end,
+            se_t_end: 0.001,
+            remaining_psi: 1.0,
+            c: 1e-3,
+            times: Vec::new(),
+            psi: Vec::new(),
+            points: 40,
+            residual_rms_s: 1e-4,
+        };
+        let fits = Fits {
+            peaks: sighted_peaks_fit(0.001, -0.002),
+            frames: None,
+            full_state: None,
+        };
+        assert_eq!(law_bound(&fits, None, frame_s), None);
+        let bound = law_bound(&fits, Some(&turns(-0.012)), frame_s).expect("a bound");
+        assert_eq!(bound.law, "the turns' timing law");
+        assert!((bound.bound - (-0.012 + 0.003 + frame_s)).abs() < 1e-12);
+        assert_eq!(law_bound(&fits, Some(&turns(-0.001)), frame_s), None);
     }
 
     #[test]

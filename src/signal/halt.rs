@@ -54,6 +54,10 @@ pub struct Halt {
     pub rest_frames: usize,
     /// Times shifted so that the halt is t = 0 (t − t_φ) \[s\], one per input frame.
     pub shifted_t: Vec<f64>,
+    /// Whether [`SignalConfig::motion_until`] cut the motion: without it a later
+    /// frame is motion, so the frames after the last one are no rest.
+    #[serde(default)]
+    pub motion_cut: bool,
 }
 
 /// Lags over which the rest tail is checked for oscillation.
@@ -145,7 +149,8 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 ///    here: a descent is no rise).
 ///
 /// With [`SignalConfig::motion_until`] set, no frame after it is motion in steps 3
-/// and 4 (the energy law fitted to the clip has the disk flat by then). With
+/// and 4 (a law of the motion fitted to the clip has the disk flat by then), and
+/// [`Halt::motion_cut`] says whether that moved the last frame of motion. With
 /// [`SignalConfig::halt_at`] set, t_φ is that time and the last frame of motion
 /// only marks where the rest tail begins.
 ///
@@ -389,6 +394,12 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         }
     }
     let t_phi = config.halt_at.unwrap_or(t[index]);
+    let unbounded = SignalConfig {
+        motion_until: None,
+        ..config.clone()
+    };
+    let motion_cut = config.motion_until.is_some()
+        && halt_time(t, z_rim, &unbounded).is_ok_and(|free| free.index > index);
     Ok(Halt {
         index,
         t_phi,
@@ -397,6 +408,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
         threshold,
         rest_frames: samples.iter().filter(|&&i| i > index).count(),
         shifted_t: t.iter().map(|&x| x - t_phi).collect(),
+        motion_cut,
     })
 }
 

@@ -186,9 +186,10 @@ pub struct SignalConfig {
     pub strip_step_floor: f64,
     /// The phase-step test runs where the peak height exceeds this many noise σ.
     pub skip_min_snr: f64,
-    /// Time [s, caller's axis] after which no rise of the rim is motion: the energy
-    /// law fitted to the clip has the disk flat by then (`analyse` sets it when the
-    /// halt seen lies after the law's, [`halt::halt_time`]); `None`: no bound.
+    /// Time [s, caller's axis] after which no rise of the rim is motion: a law of the
+    /// motion fitted to the clip (the energy law's t0, the turns' end T) has the disk
+    /// flat by then (`analyse` sets it when the halt seen lies after the law's,
+    /// [`halt::halt_time`]); `None`: no bound.
     pub motion_until: Option<f64>,
     /// t_φ, the halt \[s, caller's axis\], where the motion's laws place it (`analyse`
     /// sets it from the energy law's t0 and the turns' end, a second pass); `None`:

@@ -391,6 +391,26 @@ fn the_last_rise_at_the_halt_is_the_last_peak() {
     assert_eq!(halt.index, last);
     let series = find_peaks(&t, &held, &halt, &thesis_model(), &config).expect("peaks");
     assert_eq!(series.peaks.last().map(|p| p.index), Some(last - 3));
+    // The same rise where `motion_until` cuts the motion, coded pictures rising after
+    // it (as the energy law or the turns' end bound them, `analyse::law_bound`): the
+    // halt is there, but what follows is no rest to tell it from, so it is a peak
+    // only by its prominence.
+    let mut coded = small.clone();
+    for (k, reading) in coded[last + 2..last + 10].iter_mut().enumerate() {
+        *reading = level + halt.threshold * [2.0, 1.2, 1.6, 0.4][k % 4];
+    }
+    let bounded = SignalConfig {
+        motion_until: Some(t[last] + 0.5 * (t[last + 1] - t[last])),
+        ..config.clone()
+    };
+    let halt = halt_time(&t, &coded, &bounded).expect("halt");
+    assert_eq!(halt.index, last, "the cut rise is the last motion");
+    let series = find_peaks(&t, &coded, &halt, &thesis_model(), &bounded).expect("peaks");
+    assert!(series.peaks.iter().all(|p| p.index < last));
+    // The same bound where the rest follows the rise: a peak, as without it.
+    let halt = halt_time(&t, &small, &bounded).expect("halt");
+    let series = find_peaks(&t, &small, &halt, &thesis_model(), &bounded).expect("peaks");
+    assert_eq!(series.peaks.last().map(|p| p.index), Some(last));
     // The same rise below the motion threshold is rest: neither motion nor a peak.
     small[last] = level + 0.5 * halt.threshold;
     let halt = halt_time(&t, &small, &config).expect("halt");
