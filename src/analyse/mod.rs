@@ -1544,7 +1544,7 @@ pub fn analyse_clip_keeping(
     // `bounded`: t_φ was bounded by a law of the motion ([`law_bound`]), which leaves the
     // halt seen no measurement of t0.
     let halt_for = |series: &StateSeries, bounded: bool| match halt_choice {
-        HaltChoice::Measured => HaltTime::Fixed(series.halt.shifted_t[series.halt.index]),
+        HaltChoice::Measured => HaltTime::Fixed(series.halt.last_motion_seen()),
         HaltChoice::Free => HaltTime::Free,
         HaltChoice::Combined if bounded => HaltTime::Free,
         HaltChoice::Combined => HaltTime::Sighted(halt_sighting(
@@ -1646,7 +1646,7 @@ pub fn analyse_clip_keeping(
     // rim is looked for again up to the law's halt ([`law_bound`]), and t0 is then the
     // fits' own.
     let mut bounded = false;
-    let turns = turn_timing_fit(&series.peaks).ok();
+    let mut turns = turn_timing_fit(&series.peaks).ok();
     if let Some(bound) = law_bound(&fits, turns.as_ref(), 1.0 / fps.fps) {
         let mut config = config_again.clone();
         config.motion_until = Some(series.halt.t_phi + bound.bound);
@@ -1668,6 +1668,7 @@ pub fn analyse_clip_keeping(
                 again.halt.t_phi,
             ));
             (frames, series, fits, bounded) = (frames_again, again, fits_again, true);
+            turns = turn_timing_fit(&series.peaks).ok();
             zero_moved(zero_again);
             config_again = config;
         }
@@ -1676,7 +1677,7 @@ pub fn analyse_clip_keeping(
     // rise was seen: the same frames, peaks and fits on a clock that starts there.
     let mut halt_placement = None;
     if halt_choice != HaltChoice::Measured
-        && let Some((offset, placement)) = law_halt(&fits.peaks.fit, &series)
+        && let Some((offset, placement)) = law_halt(&fits.peaks.fit, turns.as_ref(), &series.halt)
     {
         config_again.halt_at = Some(series.halt.t_phi + offset);
         match signal_again(&frames, &config_again, bounded) {
@@ -2149,7 +2150,7 @@ fn halt_sighting(
     frame_s: f64,
 ) -> HaltSighting {
     let seen = HaltSighting {
-        t_last: halt.shifted_t[halt.index],
+        t_last: halt.last_motion_seen(),
         frame_s,
         visible_energy: 0.0,
         threshold_m: halt.threshold,
@@ -2171,8 +2172,8 @@ fn halt_sighting(
 /// Where the motion's laws place the halt on the clock of `series` (t_φ at 0) \[s\],
 /// and the [`HaltPlacement`] on that clock: the mean of the energy law's t0 fitted at
 /// the peaks (`peaks`, combined with the halt seen, [`HaltSighting`]) and the end T of
-/// the turns' timing law ([`turn_timing_fit`]), or t0 alone when the turns cannot be
-/// timed; `None` when t0 is not finite.
+/// the turns' timing law (`turns`, [`turn_timing_fit`] of the same series), or t0
+/// alone when the turns cannot be timed; `None` when t0 is not finite.
 ///
 /// The halt detector's last frame of motion is a rule, a rise above the rest's noise,
 /// and comes early by the frames whose motion the footage does not show: the last
@@ -2185,13 +2186,15 @@ fn halt_sighting(
 /// frames RMS (BENCHMARKS.md, "t_φ where the laws place the halt"). T needs no height
 /// and t0 no count of the turns, so a codec's shaved swings move one and not the
 /// other.
-fn law_halt(peaks: &PowerLawFit, series: &StateSeries) -> Option<(f64, HaltPlacement)> {
+fn law_halt(
+    peaks: &PowerLawFit,
+    turns: Option<&TurnTimingFit>,
+    halt: &signal::Halt,
+) -> Option<(f64, HaltPlacement)> {
     let t0 = Some(peaks.t0).filter(|t| t.is_finite())?;
     let se_t0 = peaks.se_t0.filter(|se| se.is_finite());
-    let turns = turn_timing_fit(&series.peaks)
-        .ok()
-        .filter(|f| f.t_end.is_finite() && f.se_t_end.is_finite());
-    let (halt, se_s) = match &turns {
+    let turns = turns.filter(|f| f.t_end.is_finite() && f.se_t_end.is_finite());
+    let (placed, se_s) = match &turns {
         Some(f) => (
             0.5 * (t0 + f.t_end),
             se_t0.map(|se| 0.5 * se.hypot(f.se_t_end)),
@@ -2202,9 +2205,9 @@ fn law_halt(peaks: &PowerLawFit, series: &StateSeries) -> Option<(f64, HaltPlace
         t0_s: t0,
         turns_end_s: turns.map(|f| f.t_end),
         se_s,
-        last_motion_seen_s: series.halt.shifted_t[series.halt.index],
+        last_motion_seen_s: halt.last_motion_seen(),
     };
-    Some((halt, placement))
+    Some((placed, placement))
 }
 
 /// The timing law of the turns fitted to the turning points of z_rim (peaks and the

@@ -60,6 +60,14 @@ pub struct Halt {
     pub motion_cut: bool,
 }
 
+impl Halt {
+    /// The time of the last frame of motion seen, on the clock that starts at t_φ \[s\]
+    /// (0 unless [`SignalConfig::halt_at`] placed t_φ elsewhere).
+    pub fn last_motion_seen(&self) -> f64 {
+        self.shifted_t[self.index]
+    }
+}
+
 /// Lags over which the rest tail is checked for oscillation.
 const MAX_LAG: usize = 24;
 /// Autocorrelation above which a tail oscillates instead of resting: white noise of

@@ -90,8 +90,8 @@ pub struct PeakSeries {
 /// Finds the peaks of z_rim in the window of [`SignalConfig::window_s`] seconds
 /// that ends at the halt's last frame of motion (t_φ, unless [`SignalConfig::halt_at`]
 /// places the halt elsewhere: the window stays where the motion was seen, as the
-/// energy fits' window ends at their last sample), interpolates them between frames, and derives φ at each peak
-/// (eq. 3.9) and ψ, ψ̇ (eq. 3.11 and central differences).
+/// energy fits' window ends at their last sample), interpolates them between frames,
+/// and derives φ at each peak (eq. 3.9) and ψ, ψ̇ (eq. 3.11 and central differences).
 ///
 /// Peaks are local maxima (a plateau counts once, at its middle) of z_rim − rest
 /// level whose prominence exceeds `prominence_sigmas` × the rest noise (and
@@ -117,7 +117,7 @@ pub fn find_peaks(
 ) -> Result<PeakSeries, SignalError> {
     super::check_series(t, z_rim, "z_rim")?;
     config.validate()?;
-    let seen = halt.shifted_t[halt.index];
+    let seen = halt.last_motion_seen();
     let window = (seen - config.window_s, seen);
     let (peaks, troughs) = extrema(t, z_rim, halt, model, config, window.0);
     if peaks.len() < 3 {
