@@ -644,6 +644,50 @@ fn a_thin_top_face_on_a_light_plate_gives_the_near_top_rim() {
     assert!(near - far > 3.0, "the top face is {} px tall", near - far);
 }
 
+/// A light plate much brighter than the disk's side (grey 227 against 141, a
+/// robustness draw's scene, seed 0's s21) seen from 0.39 m: the dark plate's
+/// threshold splits the disk's side where its shading crosses γ, 12 px inside each
+/// end, and that calibration implied a plausible camera (perspective factor 1.17
+/// against 1.10), so the plate was taken for dark and the disk 8 % narrow. Its ends
+/// show no edge; the light plate's calibration, whose ends do, is taken.
+#[test]
+fn a_light_plate_brighter_than_the_disk_is_detected_by_the_disk_ends() {
+    let (e, truth) = render_and_analyse(&[
+        "--n",
+        "0.54",
+        "--halt",
+        "0.5",
+        "--after-halt",
+        "0.1",
+        "--size",
+        "320x180",
+        "--plate",
+        "light",
+        "--plate-grey",
+        "227",
+        "--paper-grey",
+        "141",
+        "--camera-distance",
+        "0.39",
+        "--elevation",
+        "2.8",
+        "--blur",
+        "0.8",
+        "--noise",
+        "1.2",
+        "--seed",
+        "21",
+    ]);
+    assert!(e.plan.plate.starts_with("light"), "{}", e.plan.plate);
+    let cal = &e.plan.calibration.calibration;
+    // Columns: the truth's on pixel centres at integers, ours at half-integers.
+    for (x, name) in [(cal.x_l, "x_l"), (cal.x_r, "x_r")] {
+        let true_x = f(&truth["calibration"][name]) + 0.5;
+        assert!((x - true_x).abs() < 1.0, "{name} {x} px, truth {true_x}");
+    }
+    assert_near_top_rim(&e, &truth, 0.5);
+}
+
 /// The strip on the top face resting 82° from across the view (ψ_h + β0 = 1.43 rad),
 /// nearly pointing at the camera, on a light plate seen from 1.6° above: on the
 /// centre band it runs from the far top rim to 2 px above the near one, and its

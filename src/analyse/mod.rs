@@ -738,12 +738,24 @@ fn plate_name(plate: Plate) -> &'static str {
     }
 }
 
-/// Calibrates for the plate kind that describes the rest frames: each kind's
-/// calibration is tried, a dark plate's first, and the first that finds a disk
-/// at rest whose two scales imply a camera a side view can have (perspective
-/// factor within [`PERSPECTIVE_FACTOR_RANGE`]) is taken. A dark-plate calibration
-/// of a light plate finds a sliver of the plate or an unsteady blob; a
-/// light-plate calibration of a dark plate takes the reflection for part of the
+/// How many times more sharply a later plate kind's calibration must change across
+/// the disk's ends ([`vision::Calibration::end_step`]) than an earlier plausible
+/// one's to be taken instead: the same points step alike (a ratio near 1), while
+/// points inside the disk step by its shading alone, a small part of its contrast.
+const END_STEP_RATIO: f64 = 2.0;
+
+/// Calibrates for the plate kind that describes the rest frames. Each kind's
+/// calibration is tried, a dark plate's first. A calibration is plausible when it
+/// finds a disk at rest whose two scales imply a camera a side view can have
+/// (perspective factor within [`PERSPECTIVE_FACTOR_RANGE`]); of the plausible ones
+/// the first is taken, unless a later one's ends are edges where its ends are not:
+/// its points change more than [`END_STEP_RATIO`] times as sharply across x_l and
+/// x_r on the last rest frame ([`vision::Calibration::end_step`]).
+///
+/// A dark-plate calibration of a light plate finds a sliver of the plate, an
+/// unsteady blob, or (on a plate brighter than the disk's side) a run that stops
+/// inside the disk where its side's shading crosses γ, with a plausible camera;
+/// a light-plate calibration of a dark plate takes the reflection for part of the
 /// disk. With neither plausible, the first that calibrated at all is taken (its
 /// scale then falls back to the diameter, with a warning), else the dark
 /// plate's error is returned.
@@ -755,6 +767,8 @@ fn calibrate_detecting_plate(
     disk: &DiskParams,
 ) -> Result<(CalibrationReport, Plate, String), VisionError> {
     let (lo, hi) = PERSPECTIVE_FACTOR_RANGE;
+    let last = rest.last().ok_or(VisionError::NoFrames)?;
+    let mut taken: Option<(CalibrationReport, Plate, f64)> = None;
     let mut fallback = None;
     let mut tried = Vec::new();
     let mut errors = Vec::new();
@@ -767,18 +781,25 @@ fn calibrate_detecting_plate(
             Ok(report) => {
                 let cal = &report.calibration;
                 let factor = ScaleReport::new(cal, cal.z_base, disk).perspective_factor;
-                if (lo..=hi).contains(&factor) {
+                if !(lo..=hi).contains(&factor) {
                     tried.push(format!(
-                        "{}: perspective factor {factor:.3}",
+                        "{}: perspective factor {factor:.3}, outside {lo}–{hi}",
                         plate_name(plate)
                     ));
-                    return Ok((report, plate, tried.join("; ")));
+                    fallback.get_or_insert((report, plate));
+                    continue;
                 }
+                let step = cal.end_step(last);
                 tried.push(format!(
-                    "{}: perspective factor {factor:.3}, outside {lo}–{hi}",
+                    "{}: perspective factor {factor:.3}, step at the ends {step:.1}",
                     plate_name(plate)
                 ));
-                fallback.get_or_insert((report, plate));
+                if taken
+                    .as_ref()
+                    .is_none_or(|&(_, _, first)| step > END_STEP_RATIO * first)
+                {
+                    taken = Some((report, plate, step));
+                }
             }
             Err(e) => {
                 tried.push(format!("{}: {e}", plate_name(plate)));
@@ -786,7 +807,7 @@ fn calibrate_detecting_plate(
             }
         }
     }
-    match fallback {
+    match taken.map(|(report, plate, _)| (report, plate)).or(fallback) {
         Some((report, plate)) => Ok((report, plate, tried.join("; "))),
         // Every kind failed to calibrate. For the same reason (a disk not yet at rest,
         // say), that reason; for different ones, each kind's.

@@ -45,6 +45,10 @@ use super::top_rim::{CentreBand, near_top_rim, near_top_rim_across, thin_top_fac
 use crate::config::Plate;
 use crate::footage::FrameView;
 
+/// Columns each side of an end that [`Calibration::end_step`] compares: wider than
+/// an edge blurred by a pixel or two, a small part of any disk's width.
+const END_STEP_REACH_PX: usize = 4;
+
 /// Settings of the side-view stage (calibration and rim height).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -110,6 +114,45 @@ impl Calibration {
     /// the mirror-edge model fits on a dark plate; see `analyse::ScaleReport`).
     pub fn metres_per_px(&self, half_thickness_m: f64, bottom_rim_row: f64) -> f64 {
         2.0 * half_thickness_m / (bottom_rim_row - self.z_t)
+    }
+
+    /// How sharply `frame` changes across the disk's ends x_l and x_r: on each row of
+    /// the middle 60 % of the side (between z_t and z_base), the difference between
+    /// the mean intensity of the 4 columns just inside an end and of the 4 just
+    /// outside it (one column left out either side for the blur), its
+    /// magnitude averaged over the rows; the weaker end's, 0–255.
+    ///
+    /// A disk's end is an edge of one sign or the other on every row (against the
+    /// background above the plate's horizon and the plate below it), whichever is
+    /// brighter, so points at the ends show a step of the disk's contrast there.
+    /// Points inside the disk (a threshold's run that stopped at the side's shading)
+    /// show only the shading's slope. Columns outside the frame are left out; an
+    /// end with none on one side has no step.
+    pub fn end_step(&self, frame: &FrameView) -> f64 {
+        let reach = END_STEP_REACH_PX as f64;
+        let height = self.disk_height_px();
+        let y0 = (self.z_t + 0.2 * height).round().max(0.0) as usize;
+        let y1 = ((self.z_base - 0.2 * height).round() as usize).min(frame.height);
+        let columns = |from: f64| {
+            let x0 = from.round().clamp(0.0, frame.width as f64) as usize;
+            let x1 = (from + reach).round().clamp(0.0, frame.width as f64) as usize;
+            (x0 < x1).then_some((x0, x1))
+        };
+        let step = |inside: f64, outside: f64| match (columns(inside), columns(outside)) {
+            (Some((a0, a1)), Some((b0, b1))) if y0 < y1 => {
+                let sum: f64 = (y0..y1)
+                    .map(|y| {
+                        f64::from(row_band_mean(frame, y, a0, a1) - row_band_mean(frame, y, b0, b1))
+                            .abs()
+                    })
+                    .sum();
+                sum / (y1 - y0) as f64
+            }
+            _ => 0.0,
+        };
+        let left = step(self.x_l + 1.0, self.x_l - 1.0 - reach);
+        let right = step(self.x_r - 1.0 - reach, self.x_r + 1.0);
+        left.min(right)
     }
 
     /// Checks that the points describe a disk inside a `width × height` frame.
