@@ -1338,27 +1338,17 @@ pub fn analyse_clip_keeping(
             None => first_pass.into(),
         };
         // Duplicated and interpolated frames show no capture of their own: no rim
-        // height or strip angle from them reaches the fits.
+        // height or strip angle from them reaches the fits. Their readings are set
+        // aside until the halt is known (below).
         let repeated = repeats.repeated(REST_FRAMES);
         drop(repeats);
-        for r in &repeated {
-            frames[r.index].z_rim_px = None;
-            frames[r.index].beta_raw = None;
-        }
-        if !repeated.is_empty() {
-            let count = |kind| repeated.iter().filter(|r| r.kind == kind).count();
-            let list: Vec<String> = repeated
-                .iter()
-                .map(|r| frames[r.index].index.to_string())
-                .collect();
-            warnings.push(format!(
-                "{} duplicated and {} interpolated frame(s) (frames {}) show no capture of \
-             their own: left out of the fits",
-                count(footage::RepeatKind::Duplicated),
-                count(footage::RepeatKind::Interpolated),
-                list.join(", ")
-            ));
-        }
+        let set_aside: Vec<(Option<f64>, Option<f64>)> = repeated
+            .iter()
+            .map(|r| {
+                let record = &mut frames[r.index];
+                (record.z_rim_px.take(), record.beta_raw.take())
+            })
+            .collect();
         // The near top rim from the frames that lean towards the camera, unless the
         // config gives z_t (TopRimLeaning).
         let top_rim_leaning = lean_gauge
@@ -1439,6 +1429,27 @@ pub fn analyse_clip_keeping(
 
         // Signal.
         let signal_config = signal_config(window_s, metres_per_px);
+        let repeated = repeats_in_motion(
+            &mut frames,
+            repeated,
+            set_aside,
+            &signal_config,
+            metres_per_px,
+        );
+        if !repeated.is_empty() {
+            let count = |kind| repeated.iter().filter(|r| r.kind == kind).count();
+            let list: Vec<String> = repeated
+                .iter()
+                .map(|r| frames[r.index].index.to_string())
+                .collect();
+            warnings.push(format!(
+                "{} duplicated and {} interpolated frame(s) (frames {}) show no capture of \
+             their own: left out of the fits",
+                count(footage::RepeatKind::Duplicated),
+                count(footage::RepeatKind::Interpolated),
+                list.join(", ")
+            ));
+        }
         let profile = motion_profile(config.rim_zero(), &scale, &params);
         if config.rim_zero() == RimZeroChoice::Motion && profile.is_none() {
             warnings.push(
@@ -1963,6 +1974,38 @@ fn signal_series(
         record.t = *shifted;
     }
     Ok((series, zero))
+}
+
+/// The repeated frames (`repeated`, their readings taken out of `frames` and kept in
+/// `set_aside`: each one's z_rim in px and β) up to the last frame of motion the rim
+/// heights show ([`signal::halt_time`]); the readings of those after it go back.
+/// After the halt every frame repeats the one before it, so none can be told a
+/// repeat: a mark there is the codec's refresh of the still picture
+/// ([`footage::RepeatGauge`]). With no halt found, every mark stays.
+fn repeats_in_motion(
+    frames: &mut [FrameRecord],
+    mut repeated: Vec<footage::RepeatedFrame>,
+    set_aside: Vec<(Option<f64>, Option<f64>)>,
+    config: &SignalConfig,
+    metres_per_px: f64,
+) -> Vec<footage::RepeatedFrame> {
+    if repeated.is_empty() {
+        return repeated;
+    }
+    let (t, z) = rim_series(frames);
+    let Ok(halt) = signal::halt_time(&t, &z, config) else {
+        return repeated;
+    };
+    for (r, (z_rim_px, beta_raw)) in repeated.iter().zip(set_aside) {
+        if r.index > halt.index {
+            let record = &mut frames[r.index];
+            record.z_rim_px = z_rim_px;
+            record.z_rim_m = z_rim_px.map(|z| z * metres_per_px);
+            record.beta_raw = beta_raw;
+        }
+    }
+    repeated.retain(|r| r.index <= halt.index);
+    repeated
 }
 
 /// The flags known before the signal stage, at their positions in the frames (their
@@ -2628,6 +2671,63 @@ mod tests {
             rest_above_zero_m: 0.0,
         });
         fit_series("eq. 3.8 at peaks", samples, 0.5, halt, &[]).expect("fit")
+    }
+
+    /// A rim turning every 10 frames (480 fps, 0.1 mm/px) down to the halt at frame
+    /// 300, then still: a frame marked repeated in the motion stays out of the fits; one
+    /// marked 50 frames after the halt (a refresh of the still picture) gets its
+    /// reading back and is no repeat.
+    #[test]
+    fn only_frames_in_motion_are_repeats() {
+        let metres_per_px = 1e-4;
+        let mut frames: Vec<FrameRecord> = (0..420)
+            .map(|k| {
+                let x = k as f64;
+                let lift = if k < 300 {
+                    4.0 * (1.0 - x / 300.0) * (std::f64::consts::PI * x / 10.0).sin().abs()
+                } else {
+                    0.02 * (1.7 * x).sin()
+                };
+                FrameRecord {
+                    index: k,
+                    t_capture: x / 480.0,
+                    t: 0.0,
+                    container_time_s: None,
+                    picture_type: None,
+                    z_rim_px: Some(lift),
+                    z_rim_m: Some(lift * metres_per_px),
+                    beta_raw: None,
+                }
+            })
+            .collect();
+        let marked = |index| footage::RepeatedFrame {
+            index,
+            kind: footage::RepeatKind::Interpolated,
+            statistic: 0.1,
+            neighbours: 1.0,
+            noise: 0.1,
+        };
+        let repeated = vec![marked(150), marked(350)];
+        let set_aside: Vec<_> = repeated
+            .iter()
+            .map(|r| {
+                let record = &mut frames[r.index];
+                record.z_rim_m = None;
+                (record.z_rim_px.take(), None)
+            })
+            .collect();
+        let in_motion = repeats_in_motion(
+            &mut frames,
+            repeated,
+            set_aside,
+            &signal_config(0.5, metres_per_px),
+            metres_per_px,
+        );
+        assert_eq!(in_motion.iter().map(|r| r.index).collect::<Vec<_>>(), [150]);
+        assert_eq!(frames[150].z_rim_px, None);
+        let back = 0.02 * (1.7f64 * 350.0).sin();
+        assert_eq!(frames[350].z_rim_px, Some(back));
+        assert_eq!(frames[350].z_rim_m, Some(back * metres_per_px));
     }
 
     /// The turns' timing law takes the turning points up to the last peak the local fit
