@@ -463,6 +463,61 @@ fn a_turn_below_the_prominence_test_between_two_peaks_is_found() {
     );
 }
 
+/// The last turn read low by the codec, its crest clearing the motion threshold but
+/// not the prominence test, with the rim seen coming down a frame after it (so the
+/// halt's last frame is no crest): it is found where the turns before place it
+/// (seed 3's robustness scene s05). Below the threshold it is lost, and no other
+/// peak appears.
+#[test]
+fn a_final_turn_below_the_prominence_test_is_found() {
+    let (t, z, truth, config, halt) = clip_and_halt();
+    let found = |z: &[f64]| {
+        let halt = halt_time(&t, z, &config).expect("halt");
+        let peaks = find_peaks(&t, z, &halt, &thesis_model(), &config).expect("peaks");
+        (
+            halt.index,
+            peaks.peaks.iter().map(|p| p.index).collect::<Vec<_>>(),
+        )
+    };
+    let (_, all) = found(&z);
+    let k = *all.last().expect("peaks");
+    assert_eq!(k, halt.index, "the last true turn ends the motion");
+    let tp = truth
+        .peaks_after(halt.t_phi - 0.05)
+        .last()
+        .copied()
+        .expect("truth");
+    let half = PI / truth.psi_dot(tp);
+    let turn: Vec<usize> = (0..t.len()).filter(|&i| (t[i] - tp).abs() < half).collect();
+    // The last turn scaled down to `height` at its crest, and the frame after the
+    // crest (rest, before) halfway between the threshold and the crest: motion, but
+    // no crest.
+    let lowered = |height: f64| {
+        let mut low = z.clone();
+        let scale = height / (z[k] - halt.rest_level);
+        for &i in &turn {
+            low[i] = halt.rest_level + scale * (z[i] - halt.rest_level);
+        }
+        low[k + 1] = halt.rest_level + 0.5 * (halt.threshold + height);
+        low
+    };
+    let between = 0.5 * (halt.threshold + config.prominence_sigmas * halt.noise);
+    assert!(between > halt.threshold && between < config.prominence_sigmas * halt.noise);
+    let (last_motion, low) = found(&lowered(between));
+    assert_eq!(
+        last_motion,
+        k + 1,
+        "the rim is seen coming down after the crest"
+    );
+    assert_eq!(low, all, "the final turn read low is found");
+    let (_, below) = found(&lowered(0.8 * halt.threshold));
+    assert_eq!(
+        below,
+        all[..all.len() - 1],
+        "below the threshold it is lost, none added"
+    );
+}
+
 /// A lone excursion more than a rest span after the halt (an H.264 refresh frame on
 /// o08 of the open footage, 0.19 px at frame 639) is noise, and so is a lower one two
 /// frames after the last peak (0.13 px at frame 589, which set t_φ 2.8 frames late).
