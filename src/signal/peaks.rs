@@ -259,7 +259,16 @@ pub(crate) fn extrema(
         raw.push((k, p));
     }
     let sample_times: Vec<f64> = idx.iter().map(|&i| ts[i]).collect();
+    // A final turn the prominence test missed; not the rise `motion_until` cut the
+    // motion at, which the halt has not told from the coded rises after it (above).
+    let uncut: Vec<(usize, f64)> = maxima
+        .iter()
+        .copied()
+        .filter(|&(k, _)| !(halt.motion_cut && idx[k] == halt.index))
+        .collect();
+    let last_turn = final_turn(&raw, &uncut, &sample_times, &v, halt);
     raw = with_missed_turns(&raw, &maxima, &sample_times, &v, halt.threshold);
+    raw.extend(last_turn);
     // Motion samples only (through the halt) for the local fits.
     let fit_end = idx.partition_point(|&i| i <= halt.index);
     let mut peaks = Vec::with_capacity(raw.len());
@@ -491,7 +500,6 @@ fn with_missed_turns(
         }
     }
     out.extend(raw.last());
-    out.extend(final_turn(raw, maxima, t, v, threshold, &intervals));
     out
 }
 
@@ -500,8 +508,9 @@ fn with_missed_turns(
 /// the next crest (half a turn to one and a half after the last peak, the turn T the
 /// median of the last [`NEIGHBOUR_INTERVALS`] intervals) and the rim still moves (all
 /// of `maxima` lie up to the halt's last frame of motion), the highest local maximum
-/// above the motion `threshold` and below the last peak (the amplitude decays) is
-/// that turn's peak.
+/// above the halt's motion threshold and lower than the last peak by more than the
+/// noise σ is that turn's peak: the rim's amplitude decays, while a picture the
+/// encoder holds repeats a height (as for the halt's last rise, [`extrema`]).
 ///
 /// The rule that takes the halt's last rise as the last peak needs the last frame of
 /// motion to be the crest; where the rim is still seen coming down a frame after it,
@@ -514,17 +523,19 @@ fn final_turn(
     maxima: &[(usize, f64)],
     t: &[f64],
     v: &[f64],
-    threshold: f64,
-    intervals: &[f64],
+    halt: &Halt,
 ) -> Option<(usize, f64)> {
     let &(last, _) = raw.last()?;
+    let intervals: Vec<f64> = raw.windows(2).map(|w| t[w[1].0] - t[w[0].0]).collect();
     let latest = intervals.len().checked_sub(NEIGHBOUR_INTERVALS)?;
     let turn = super::median(&intervals[latest..]);
     let (from, to) = (t[last] + 0.5 * turn, t[last] + 1.5 * turn);
     maxima
         .iter()
         .copied()
-        .filter(|&(k, _)| t[k] > from && t[k] <= to && v[k] > threshold && v[k] < v[last])
+        .filter(|&(k, _)| {
+            t[k] > from && t[k] <= to && v[k] > halt.threshold && v[k] < v[last] - halt.noise
+        })
         .max_by(|a, b| v[a.0].total_cmp(&v[b.0]))
 }
 

@@ -419,6 +419,31 @@ fn the_last_rise_at_the_halt_is_the_last_peak() {
     assert!(series.peaks.iter().all(|p| p.index < last));
 }
 
+/// `z` with the true turn around the peak at `tp` (trough to trough) scaled about
+/// the rest `level` so that frame `k`, its crest, reads `height` above it.
+fn turn_scaled(
+    t: &[f64],
+    z: &[f64],
+    truth: &Truth,
+    tp: f64,
+    k: usize,
+    level: f64,
+    height: f64,
+) -> Vec<f64> {
+    let half = PI / truth.psi_dot(tp);
+    let scale = height / (z[k] - level);
+    z.iter()
+        .zip(t)
+        .map(|(&zi, &ti)| {
+            if (ti - tp).abs() < half {
+                level + scale * (zi - level)
+            } else {
+                zi
+            }
+        })
+        .collect()
+}
+
 /// A turn whose peak the codec reads low, between two peaks found at their full
 /// height, is found when it clears the motion threshold but not the prominence test
 /// (robustness scene s17: a turn read at 0.50 px over a 0.04 px trough, 5.2σ, truth
@@ -441,16 +466,7 @@ fn a_turn_below_the_prominence_test_between_two_peaks_is_found() {
     let tp = peaks[peaks.len() - 4];
     let k = t.partition_point(|&x| x < tp - 0.5 * FRAME);
     assert!(all.contains(&k), "the turn at frame {k} is a peak: {all:?}");
-    let half = PI / truth.psi_dot(tp);
-    let turn: Vec<usize> = (0..t.len()).filter(|&i| (t[i] - tp).abs() < half).collect();
-    let lowered = |height: f64| {
-        let mut low = z.clone();
-        let scale = height / (z[k] - halt.rest_level);
-        for &i in &turn {
-            low[i] = halt.rest_level + scale * (z[i] - halt.rest_level);
-        }
-        low
-    };
+    let lowered = |height: f64| turn_scaled(&t, &z, &truth, tp, k, halt.rest_level, height);
     let between = 0.5 * (halt.threshold + config.prominence_sigmas * halt.noise);
     assert!(between > halt.threshold && between < config.prominence_sigmas * halt.noise);
     assert_eq!(found(&lowered(between)), all, "a turn read low is found");
@@ -487,17 +503,11 @@ fn a_final_turn_below_the_prominence_test_is_found() {
         .last()
         .copied()
         .expect("truth");
-    let half = PI / truth.psi_dot(tp);
-    let turn: Vec<usize> = (0..t.len()).filter(|&i| (t[i] - tp).abs() < half).collect();
     // The last turn scaled down to `height` at its crest, and the frame after the
     // crest (rest, before) halfway between the threshold and the crest: motion, but
     // no crest.
     let lowered = |height: f64| {
-        let mut low = z.clone();
-        let scale = height / (z[k] - halt.rest_level);
-        for &i in &turn {
-            low[i] = halt.rest_level + scale * (z[i] - halt.rest_level);
-        }
+        let mut low = turn_scaled(&t, &z, &truth, tp, k, halt.rest_level, height);
         low[k + 1] = halt.rest_level + 0.5 * (halt.threshold + height);
         low
     };
