@@ -122,9 +122,10 @@ impl Calibration {
     /// outside it (one column left out either side for the blur), its
     /// magnitude averaged over the rows; the weaker end's, 0–255.
     ///
-    /// A disk's end is an edge of one sign or the other on every row (against the
-    /// background above the plate's horizon and the plate below it), whichever is
-    /// brighter, so points at the ends show a step of the disk's contrast there.
+    /// A disk's end is an edge on every row, of either sign: the disk against the
+    /// background above the plate's horizon and against the plate below it, each
+    /// brighter or darker than the disk. So points at the ends show a step of the
+    /// disk's contrast there.
     /// Points inside the disk (a threshold's run that stopped at the side's shading)
     /// show only the shading's slope. Columns outside the frame are left out; an
     /// end with none on one side has no step.
@@ -944,6 +945,37 @@ mod tests {
         );
         let x_centre = report.calibration.x_centre();
         assert!((x_centre - 0.5 * (s.x_l + s.x_r)).abs() < TOL);
+    }
+
+    /// A shaded disk's side (grey 100 at its ends, 160 in its middle) against a black
+    /// background above the plate's horizon and a plate brighter than it (227) below:
+    /// at the disk's ends every row steps by the disk's contrast, either way; points
+    /// 12 px inside the ends (where a threshold between the side's levels stops) show
+    /// only the shading's slope, under a quarter of that.
+    #[test]
+    fn the_disk_ends_step_where_points_inside_it_do_not() {
+        let (x_l, x_r, z_t, z_base) = (20.0, 100.0, 20.0, 45.0);
+        let mut c = Canvas::new(120, 60, grey(0.0));
+        c.shape((0.0, 30.0, 120.0, 60.0), 1, |_, _| true, grey(227.0));
+        c.paint((x_l, z_t, x_r, z_base), 4, |x, _| {
+            let shade = (std::f64::consts::PI * (x - x_l) / (x_r - x_l)).sin();
+            Some(grey(100.0 + 60.0 * shade))
+        });
+        let bytes = c.to_bgr(0);
+        let frame = c.view(&bytes, 0);
+        let at = |x_l: f64, x_r: f64| {
+            Calibration {
+                x_l,
+                x_r,
+                z_t,
+                z_base,
+            }
+            .end_step(&frame)
+        };
+        let ends = at(x_l, x_r);
+        let inside = at(x_l + 12.0, x_r - 12.0);
+        assert!(ends > 80.0, "step at the ends {ends}");
+        assert!(inside < 0.25 * ends, "inside {inside} against {ends}");
     }
 
     #[test]
