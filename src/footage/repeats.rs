@@ -104,6 +104,9 @@ pub struct RepeatGauge {
     steps: Vec<f64>,
     /// b_k per frame (NaN for the first and, until the next is seen, the last).
     blends: Vec<f64>,
+    /// The samples' ratios of the last comparison, kept so that each frame reuses
+    /// their buffer ([`scaled_difference`]).
+    ratios: Vec<f64>,
 }
 
 impl RepeatGauge {
@@ -116,7 +119,11 @@ impl RepeatGauge {
     pub fn push(&mut self, pixels: Vec<f32>) {
         let [older, last] = &self.previous;
         let step = if last.len() == pixels.len() && self.frames > 0 {
-            scaled_difference(&pixels, last.iter().map(|&b| f64::from(b)))
+            scaled_difference(
+                &pixels,
+                last.iter().map(|&b| f64::from(b)),
+                &mut self.ratios,
+            )
         } else {
             f64::NAN
         };
@@ -126,7 +133,7 @@ impl RepeatGauge {
                 .zip(&pixels)
                 .map(|(&a, &b)| 0.5 * (f64::from(a) + f64::from(b)));
             if let Some(b) = self.blends.last_mut() {
-                *b = scaled_difference(last, blend);
+                *b = scaled_difference(last, blend, &mut self.ratios);
             }
         }
         self.steps.push(step);
@@ -186,13 +193,20 @@ impl RepeatGauge {
 /// The mean |f − s g| over the samples [grey levels] of `frame` (f) and `compared` (g,
 /// the same samples), s the median of f/g over the samples where g exceeds
 /// [`LEAST_GREY`]: the light's gain divided out (module docs); 1 where none does.
-fn scaled_difference(frame: &[f32], compared: impl Iterator<Item = f64> + Clone) -> f64 {
-    let mut ratios: Vec<f64> = frame
-        .iter()
-        .zip(compared.clone())
-        .filter(|&(_, g)| g > LEAST_GREY)
-        .map(|(&f, g)| f64::from(f) / g)
-        .collect();
+/// `ratios` is a buffer for the ratios, overwritten.
+fn scaled_difference(
+    frame: &[f32],
+    compared: impl Iterator<Item = f64> + Clone,
+    ratios: &mut Vec<f64>,
+) -> f64 {
+    ratios.clear();
+    ratios.extend(
+        frame
+            .iter()
+            .zip(compared.clone())
+            .filter(|&(_, g)| g > LEAST_GREY)
+            .map(|(&f, g)| f64::from(f) / g),
+    );
     let scale = if ratios.is_empty() {
         1.0
     } else {
