@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::config::{ExperimentConfig, HaltChoice, Plate, RimZeroChoice};
-use crate::energy::{self, FitError, HaltSighting, HaltTime, PowerLawFit};
+use crate::energy::{self, FitError, HaltSighting, HaltTime, PowerLawFit, TurnsEnd};
 use crate::footage::{self, CaptureFps, FootageError, FrameSource, FrameTiming, FrameView};
 use crate::model::closed_form;
 use crate::model::params::DiskParams;
@@ -1579,12 +1579,17 @@ pub fn analyse_clip_keeping(
         HaltChoice::Measured => HaltTime::Fixed(series.halt.last_motion_seen()),
         HaltChoice::Free => HaltTime::Free,
         HaltChoice::Combined if bounded => HaltTime::Free,
-        HaltChoice::Combined => HaltTime::Sighted(halt_sighting(
-            &params,
-            &series.halt,
-            rest_above_zero_m,
-            1.0 / fps.fps,
-        )),
+        // The sighting is checked against the turns' end T of the same series.
+        HaltChoice::Combined => HaltTime::Sighted(HaltSighting {
+            turns_end: turn_timing_fit(&series.peaks)
+                .ok()
+                .filter(|f| f.t_end.is_finite() && f.se_t_end.is_finite())
+                .map(|f| TurnsEnd {
+                    t_end: f.t_end,
+                    se: f.se_t_end,
+                }),
+            ..halt_sighting(&params, &series.halt, rest_above_zero_m, 1.0 / fps.fps)
+        }),
     };
     // The fit window and the rest tail must each lie in one section of constant
     // frame interval (footage::timing): a slowed section's boundary inside them
@@ -1730,6 +1735,22 @@ pub fn analyse_clip_keeping(
         frames: frames_fit,
         full_state: full_state_fit,
     } = fits;
+    if let Some(seen) = peaks_fit
+        .fit
+        .halt_sighting
+        .filter(|s| s.disagrees_with_turns)
+        && let Some(turns) = seen.turns_end
+    {
+        warnings.push(format!(
+            "the halt seen puts t0 at {:+.1} ± {:.1} ms, the turns' end at {:+.1} ± {:.1} ms: \
+             more than 3σ apart, as when the encoder holds the last pictures; t0 is the \
+             energies' alone",
+            1e3 * seen.t0_seen,
+            1e3 * seen.se_t0_seen,
+            1e3 * turns.t_end,
+            1e3 * turns.se
+        ));
+    }
     let halt = halt_for(&series, bounded);
     let window = series.peaks.window;
     let in_window = signal::flags_within(&series.flags, window.0, window.1);
@@ -2221,6 +2242,7 @@ fn halt_sighting(
         noise_m: halt.noise,
         visible_precession: 0.0,
         rest_above_zero_m,
+        turns_end: None,
     };
     let phi = (seen.visible_rise() / (2.0 * params.radius))
         .clamp(0.0, 1.0)
@@ -2669,6 +2691,7 @@ mod tests {
             noise_m: 2e-6,
             visible_precession: 1400.0,
             rest_above_zero_m: 0.0,
+            turns_end: None,
         });
         fit_series("eq. 3.8 at peaks", samples, 0.5, halt, &[]).expect("fit")
     }

@@ -452,6 +452,14 @@ fn sighting_sentence(s: &SightingUse, t0: f64) -> String {
              held there.",
             1e3 * t0
         )
+    } else if let Some(turns) = s.turns_end.filter(|_| s.disagrees_with_turns) {
+        format!(
+            "{seen}. The turns' end T, from the times of the turns alone, puts it at {:+.2} ± \
+             {:.2} ms: the halt seen disagrees with it by more than 3 standard deviations \
+             (held pictures end the motion seen early), so t0 is the energy's alone.",
+            1e3 * turns.t_end,
+            1e3 * turns.se
+        )
     } else {
         format!(
             "{seen}. They disagree by more than 3 standard deviations, so t0 is the energy's \

@@ -1784,6 +1784,7 @@ fn halt_seen_on_synthetic_clips(rest_above_zero: f64, told: f64) -> HaltSeen {
             noise_m: halt.noise,
             visible_precession: 0.0,
             rest_above_zero_m: told,
+            turns_end: None,
         };
         let phi_v = (sighting.visible_rise() / (2.0 * R)).asin();
         let unseen = TAU_A * (phi_v / PHI_A).powi(2);
