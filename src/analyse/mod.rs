@@ -2184,7 +2184,9 @@ struct LawBound {
 /// `frame_s` (the last frame of motion falls up to a frame after the halt,
 /// [`HaltSighting`]); `None` when the halt seen agrees, or the bound does not lie
 /// before t_φ. A halt seen *before* a law's is the motion's last part too small to
-/// see or hidden by its phase, which the sighting models: left alone.
+/// see or hidden by its phase, which the sighting models, or held pictures, which it
+/// does not: no bound (the fits leave such a sighting out when it lies more than 3σ
+/// before T, `HaltSighting::fit`).
 fn law_bound(fits: &Fits, turns: Option<&TurnTimingFit>, frame_s: f64) -> Option<LawBound> {
     let sightings = [
         Some(("the energy law fitted at the peaks", &fits.peaks)),
