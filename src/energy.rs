@@ -2141,6 +2141,19 @@ mod tests {
         }
     }
 
+    /// Energies of the law n = 0.6, t0 = 0 that end 0.1 s before the halt, with 3 %
+    /// noise: their free t0 is uncertain by 16 ms. Times, energies and t0.
+    fn ending_early() -> (Vec<f64>, Vec<f64>, f64) {
+        let (a_e, n, t0) = (0.0063, 0.6, 0.0);
+        let t: Vec<f64> = (0..60).map(|k| -0.5 + 0.4 * k as f64 / 59.0).collect();
+        let mut rng = SplitMix64::new(31);
+        let e = t
+            .iter()
+            .map(|&ti| a_e * (t0 - ti).powf(n) * (1.0 + 0.03 * rng.gaussian()))
+            .collect();
+        (t, e, t0)
+    }
+
     /// A sighting far sharper than the energies' own t0 fixes t0, and the law is then
     /// the one fitted with t0 held there: the limit σ_seen → 0 of the profile
     /// combination. The energies end 0.1 s before the halt and carry 3 % noise, so
@@ -2150,14 +2163,8 @@ mod tests {
     /// leaves.
     #[test]
     fn a_sharp_sighting_gives_the_law_with_t0_held_at_it() {
-        let (a_e, n, t0) = (0.0063, 0.6, 0.0);
+        let (t, e, t0) = ending_early();
         let frame_s = 1e-4;
-        let t: Vec<f64> = (0..60).map(|k| -0.5 + 0.4 * k as f64 / 59.0).collect();
-        let mut rng = SplitMix64::new(31);
-        let e: Vec<f64> = t
-            .iter()
-            .map(|&ti| a_e * (t0 - ti).powf(n) * (1.0 + 0.03 * rng.gaussian()))
-            .collect();
         let free = fit_power_law(&t, &e, HaltTime::Free).expect("free fit");
         let se_free = free.se_t0.expect("free t0");
         assert!(se_free > 0.01, "the energies fix t0 to {se_free} s");
@@ -2215,14 +2222,8 @@ mod tests {
     /// fit is the free-t0 fit. With T where the sighting puts t0 it is combined.
     #[test]
     fn a_sighting_that_disagrees_with_the_turns_end_is_left_out() {
-        let (a_e, n, t0) = (0.0063, 0.6, 0.0);
+        let (t, e, t0) = ending_early();
         let frame_s = 1e-3;
-        let t: Vec<f64> = (0..60).map(|k| -0.5 + 0.4 * k as f64 / 59.0).collect();
-        let mut rng = SplitMix64::new(31);
-        let e: Vec<f64> = t
-            .iter()
-            .map(|&ti| a_e * (t0 - ti).powf(n) * (1.0 + 0.03 * rng.gaussian()))
-            .collect();
         let free = fit_power_law(&t, &e, HaltTime::Free).expect("free fit");
         let held_early = HaltSighting {
             t_last: t0 - 12.0 * frame_s,
