@@ -1050,9 +1050,9 @@ impl HaltSighting {
     /// ([`Self::turns_end`]) differ by as much: T, fitted to the times of every turn of
     /// the window, is a third measurement, and a sighting that two others do not both
     /// bear out is not used. Held pictures end the motion seen early: on the robustness
-    /// gate's seed 0 (s06, s15; crf 28 and 23) the sighting put t0 13–22 ms early
-    /// against T within 2.3 ms, and the combination followed it, n −0.061 (BENCHMARKS.md,
-    /// "The halt seen, checked against the turns' end").
+    /// gate's seed 0 (s06, s15; I and P pictures at crf 28) the sighting put t0 13–22
+    /// ms early against T within 2.3 ms, and the combination followed it, n −0.061 on
+    /// s06 (BENCHMARKS.md, "The halt seen, checked against the turns' end").
     fn fit(&self, t: &[f64], energy: &[f64], turns: &[f64]) -> Result<PowerLawFit, FitError> {
         let free = fit_free(t, energy, turns)?;
         let se_t0_free = free.se_t0.unwrap_or(f64::NAN);
