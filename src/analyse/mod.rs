@@ -1575,22 +1575,23 @@ pub fn analyse_clip_keeping(
     let rest_above_zero_m = zero.map_or(0.0, |z| -z.zero.offset);
     // `bounded`: t_φ was bounded by a law of the motion ([`law_bound`]), which leaves the
     // halt seen no measurement of t0.
-    let halt_for = |series: &StateSeries, bounded: bool| match halt_choice {
-        HaltChoice::Measured => HaltTime::Fixed(series.halt.last_motion_seen()),
-        HaltChoice::Free => HaltTime::Free,
-        HaltChoice::Combined if bounded => HaltTime::Free,
-        // The sighting is checked against the turns' end T of the same series.
-        HaltChoice::Combined => HaltTime::Sighted(HaltSighting {
-            turns_end: turn_timing_fit(&series.peaks)
-                .ok()
-                .filter(|f| f.t_end.is_finite() && f.se_t_end.is_finite())
-                .map(|f| TurnsEnd {
-                    t_end: f.t_end,
-                    se: f.se_t_end,
-                }),
-            ..halt_sighting(&params, &series.halt, rest_above_zero_m, 1.0 / fps.fps)
-        }),
-    };
+    // `turns`: the turns' timing law of `series`, whose end T checks the halt seen.
+    let halt_for =
+        |series: &StateSeries, bounded: bool, turns: Option<&TurnTimingFit>| match halt_choice {
+            HaltChoice::Measured => HaltTime::Fixed(series.halt.last_motion_seen()),
+            HaltChoice::Free => HaltTime::Free,
+            HaltChoice::Combined if bounded => HaltTime::Free,
+            // The sighting is checked against the turns' end T of the same series.
+            HaltChoice::Combined => HaltTime::Sighted(HaltSighting {
+                turns_end: turns
+                    .filter(|f| f.t_end.is_finite() && f.se_t_end.is_finite())
+                    .map(|f| TurnsEnd {
+                        t_end: f.t_end,
+                        se: f.se_t_end,
+                    }),
+                ..halt_sighting(&params, &series.halt, rest_above_zero_m, 1.0 / fps.fps)
+            }),
+        };
     // The fit window and the rest tail must each lie in one section of constant
     // frame interval (footage::timing): a slowed section's boundary inside them
     // is known only to within a few frames. Then the energy's fits.
@@ -1612,7 +1613,8 @@ pub fn analyse_clip_keeping(
                 });
             }
         }
-        let halt = halt_for(series, bounded);
+        let timing = turn_timing_fit(&series.peaks);
+        let halt = halt_for(series, bounded, timing.as_ref().ok());
         let peak_samples = peak_energies(&params, series);
         let peaks =
             fit_series("eq. 3.8 at peaks", peak_samples, window_s, halt, &[]).map_err(|error| {
@@ -1642,6 +1644,7 @@ pub fn analyse_clip_keeping(
             peaks,
             frames,
             full_state,
+            turns: timing,
         })
     };
     let (mut frames, mut series) = (frames, series);
@@ -1683,8 +1686,7 @@ pub fn analyse_clip_keeping(
     // rim is looked for again up to the law's halt ([`law_bound`]), and t0 is then the
     // fits' own.
     let mut bounded = false;
-    let mut turns = turn_timing_fit(&series.peaks).ok();
-    if let Some(bound) = law_bound(&fits, turns.as_ref(), 1.0 / fps.fps) {
+    if let Some(bound) = law_bound(&fits, fits.turns.as_ref().ok(), 1.0 / fps.fps) {
         let mut config = config_again.clone();
         config.motion_until = Some(series.halt.t_phi + bound.bound);
         if let Some((frames_again, again, zero_again, fits_again)) =
@@ -1705,7 +1707,6 @@ pub fn analyse_clip_keeping(
                 again.halt.t_phi,
             ));
             (frames, series, fits, bounded) = (frames_again, again, fits_again, true);
-            turns = turn_timing_fit(&series.peaks).ok();
             zero_moved(zero_again);
             config_again = config;
         }
@@ -1714,7 +1715,8 @@ pub fn analyse_clip_keeping(
     // rise was seen: the same frames, peaks and fits on a clock that starts there.
     let mut halt_placement = None;
     if halt_choice != HaltChoice::Measured
-        && let Some((offset, placement)) = law_halt(&fits.peaks.fit, turns.as_ref(), &series.halt)
+        && let Some((offset, placement)) =
+            law_halt(&fits.peaks.fit, fits.turns.as_ref().ok(), &series.halt)
     {
         config_again.halt_at = Some(series.halt.t_phi + offset);
         match signal_again(&frames, &config_again, bounded) {
@@ -1734,6 +1736,7 @@ pub fn analyse_clip_keeping(
         peaks: peaks_fit,
         frames: frames_fit,
         full_state: full_state_fit,
+        turns: turn_timing,
     } = fits;
     if let Some(seen) = peaks_fit
         .fit
@@ -1751,7 +1754,7 @@ pub fn analyse_clip_keeping(
             1e3 * turns.se
         ));
     }
-    let halt = halt_for(&series, bounded);
+    let halt = halt_for(&series, bounded, turn_timing.as_ref().ok());
     let window = series.peaks.window;
     let in_window = signal::flags_within(&series.flags, window.0, window.1);
     let skips_in_window = in_window.len();
@@ -1845,7 +1848,6 @@ pub fn analyse_clip_keeping(
 
     // n from the turning points' times alone (crate::turn_timing): no height, scale or zero
     // enters its n, reported beside the fits, never combined with them.
-    let turn_timing = turn_timing_fit(&series.peaks);
     if let Ok(timing) = &turn_timing
         && let Some(gap) = disjoint_intervals(timing.ci95_n, peaks_fit.fit.ci95_n)
     {
@@ -2140,11 +2142,13 @@ fn rim_series(frames: &[FrameRecord]) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// The energy's fits of one span: at the peaks, per frame, and per frame with the
-/// strip's θ̇ (two-view).
+/// strip's θ̇ (two-view); and the turns' timing law of the same series
+/// ([`turn_timing_fit`]), whose end checks the halt seen.
 struct Fits {
     peaks: EnergyFit,
     frames: Option<EnergyFit>,
     full_state: Option<EnergyFit>,
+    turns: Result<TurnTimingFit, String>,
 }
 
 /// A bound on the motion from a law of it whose halt the halt seen lies well after
@@ -2833,6 +2837,7 @@ mod tests {
             peaks: late,
             frames: None,
             full_state: None,
+            turns: Err("not timed".into()),
         };
         let bound = law_bound(&fits, None, frame_s).expect("a bound").bound;
         let t0 = fits.peaks.fit.t0;
@@ -2845,6 +2850,7 @@ mod tests {
                 peaks: sighted_peaks_fit(t0, -0.002),
                 frames: None,
                 full_state: None,
+                turns: Err("not timed".into()),
             };
             assert_eq!(law_bound(&fits, None, frame_s), None, "t0 {t0}");
         }
@@ -2856,6 +2862,7 @@ mod tests {
             peaks: sighted_peaks_fit(0.001, -0.002),
             frames: Some(frames),
             full_state: None,
+            turns: Err("not timed".into()),
         };
         assert_eq!(
             law_bound(&fits, None, frame_s).map(|b| b.bound),
@@ -2889,6 +2896,7 @@ mod tests {
             peaks: sighted_peaks_fit(0.001, -0.002),
             frames: None,
             full_state: None,
+            turns: Err("not timed".into()),
         };
         assert_eq!(law_bound(&fits, None, frame_s), None);
         let bound = law_bound(&fits, Some(&turns(-0.012)), frame_s).expect("a bound");
