@@ -807,8 +807,7 @@ fn a_face_thinner_than_its_blur_is_read_where_the_disk_leans() {
             shaves the final peaks (n +0.005 from the same frames coded losslessly): n \
             peaks +0.049 against 0.032. Seed 7 misses its own s17 (crf 28, held pictures: \
             26 of 27 peaks, n peaks +0.097); seeds 0, 3 and 11 miss 4, 4 and 5 \
-            (\"The halt seen, checked against the turns' end\"; seed 0 5 on a later VM, \
-            \"The gate on another VM\"); run with --ignored"]
+            (\"The halt seen, checked against the turns' end\"); run with --ignored"]
 fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
     let scenes = draw_scenes();
     assert!(scenes.len() >= 24);
