@@ -66,12 +66,15 @@ fn a_span_near_the_end_measures_as_the_whole_clip() {
     assert_eq!(whole.frames.len(), captured);
 
     // The halt: the same last frame of motion seen, and t_φ, where the laws fitted
-    // to the heights place the halt, within a tenth of a frame (measured 0.017
-    // frames: the heights differ by the rim models' spread, below).
+    // to the heights place the halt, within half a frame. The heights differ by
+    // the rim models' spread (below), learned from other frames: over this clip
+    // rendered at n = 0.45, 0.5, 0.55 and 0.6 the two t_φ differ by −0.03 … +0.17
+    // frames, and by −0.24 … +0.11 with libswscale's exact conversions
+    // (BENCHMARKS.md, "libswscale's rounding on every CPU").
     let seen = |e: &eulerdisk::analyse::Experiment| e.frames[e.series.halt.index].index;
     assert_eq!(seen(&span), seen(&whole));
     let (t_span, t_whole) = (span.series.halt.t_phi, whole.series.halt.t_phi);
-    assert!((t_span - t_whole).abs() < 0.1 / 480.0, "{t_span} {t_whole}");
+    assert!((t_span - t_whole).abs() < 0.5 / 480.0, "{t_span} {t_whole}");
     assert!(
         (t_span - halt).abs() < 2.0 / 480.0,
         "t_φ {t_span}, truth {halt}"
