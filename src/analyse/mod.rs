@@ -1563,7 +1563,7 @@ pub fn analyse_clip_keeping(
         metres_per_px,
         rest_tail_s,
         kept,
-        known_flags,
+        mut known_flags,
         top_rim_leaning,
         ..
     } = measured;
@@ -1652,11 +1652,14 @@ pub fn analyse_clip_keeping(
     // The signal stage again on the frames measured, with `config`: its series and
     // fits, and its frames, whose heights it re-zeroes (the zero's fit moves within
     // its standard error as its window does; the zero row follows it).
-    let signal_again = |frames: &[FrameRecord], config: &SignalConfig, bounded: bool| {
+    let signal_again = |frames: &[FrameRecord],
+                        known_flags: &[signal::FrameFlag],
+                        config: &SignalConfig,
+                        bounded: bool| {
         let mut frames = frames.to_vec();
         let (series, zero) = signal_series(
             &mut frames,
-            &known_flags,
+            known_flags,
             two_view,
             config,
             rim_model(&scale, &params).as_ref(),
@@ -1690,7 +1693,7 @@ pub fn analyse_clip_keeping(
         let mut config = config_again.clone();
         config.motion_until = Some(series.halt.t_phi + bound.bound);
         if let Some((frames_again, again, zero_again, fits_again)) =
-            signal_again(&frames, &config, true)
+            signal_again(&frames, &known_flags, &config, true)
             && again.halt.index < series.halt.index
         {
             warnings.push(format!(
@@ -1709,6 +1712,31 @@ pub fn analyse_clip_keeping(
             (frames, series, fits, bounded) = (frames_again, again, fits_again, true);
             zero_moved(zero_again);
             config_again = config;
+            let withdrawn = withdraw_hidden_drops(
+                &mut frames,
+                &mut known_flags,
+                &series.halt.shifted_t,
+                1.0 / fps.fps,
+            );
+            if !withdrawn.is_empty() {
+                let at: Vec<String> = withdrawn
+                    .iter()
+                    .map(|&i| frames[i].index.to_string())
+                    .collect();
+                warnings.push(format!(
+                    "the rim's phase step at frame(s) {} lies within its test's reach of the \
+                     halt the law places: the still pictures' step, not a frame missing, so \
+                     the capture times after it are no longer counted a frame later \
+                     (signal::missing_frames)",
+                    at.join(", ")
+                ));
+                if let Some((frames_again, again, zero_again, fits_again)) =
+                    signal_again(&frames, &known_flags, &config_again, true)
+                {
+                    (frames, series, fits) = (frames_again, again, fits_again);
+                    zero_moved(zero_again);
+                }
+            }
         }
     }
     // t_φ where the motion's laws place the halt ([`law_halt`]), not where the last
@@ -1719,7 +1747,7 @@ pub fn analyse_clip_keeping(
             law_halt(&fits.peaks.fit, fits.turns.as_ref().ok(), &series.halt)
     {
         config_again.halt_at = Some(series.halt.t_phi + offset);
-        match signal_again(&frames, &config_again, bounded) {
+        match signal_again(&frames, &known_flags, &config_again, bounded) {
             Some((frames_again, again, zero_again, fits_again)) => {
                 (frames, series, fits) = (frames_again, again, fits_again);
                 zero_moved(zero_again);
@@ -2086,6 +2114,43 @@ fn hidden_drops(
         record.t_capture += missing as f64 * period;
     }
     steps
+}
+
+/// The frames [`hidden_drops`] counted missing whose phase step no longer passes
+/// [`signal::missing_frames`] on the halt-shifted times `shifted_t` (positions in
+/// `frames`) of a halt placed earlier, by a law of the motion ([`law_bound`]): the
+/// first pass measured the step test's margin from a halt that still pictures made
+/// late. Each is taken out of `known_flags`, and the frames from it on lose the
+/// nominal `period` their capture time gained. Returns their positions.
+fn withdraw_hidden_drops(
+    frames: &mut [FrameRecord],
+    known_flags: &mut Vec<signal::FrameFlag>,
+    shifted_t: &[f64],
+    period: f64,
+) -> Vec<usize> {
+    let is_step =
+        |k: &signal::FrameFlag| matches!(k.reason, signal::SkipReason::RimPhaseStep { .. });
+    let hidden: Vec<signal::FrameFlag> = known_flags
+        .iter()
+        .filter(|k| is_step(k))
+        .map(|k| signal::FrameFlag {
+            t: shifted_t[k.index],
+            ..k.clone()
+        })
+        .collect();
+    let kept = signal::missing_frames(&hidden, period, &[]);
+    let withdrawn: Vec<usize> = hidden
+        .iter()
+        .filter(|h| kept.iter().all(|k| k.index != h.index))
+        .map(|h| h.index)
+        .collect();
+    for &w in &withdrawn {
+        for record in &mut frames[w..] {
+            record.t_capture -= period;
+        }
+    }
+    known_flags.retain(|k| !(is_step(k) && withdrawn.contains(&k.index)));
+    withdrawn
 }
 
 /// The rim's profile the peaks and the states are read with: the camera's
@@ -2704,6 +2769,63 @@ mod tests {
 
     /// A rim turning every 10 frames (480 fps, 0.1 mm/px) down to the halt at frame
     /// 300, then still: a frame marked repeated in the motion stays out of the fits; one
+    /// Two frames counted missing on a first pass (positions 100 and 380, so the
+    /// capture clock runs one period ahead from 100 and two from 380), and a
+    /// duplicated frame at 50. A law places the halt at position 390: the step at
+    /// 380, whose test spans 1.5 turns either side (9.4 frames at 1 rad a frame),
+    /// lies closer to it than two such spans (18.8 frames) and is withdrawn; the one
+    /// at 100 stays.
+    #[test]
+    fn a_drop_counted_on_still_pictures_is_withdrawn_at_the_laws_halt() {
+        let period = 1.0 / 480.0;
+        let true_t = |k: usize| k as f64 * period;
+        let drops_before = |k: usize| usize::from(k >= 100) + usize::from(k >= 380);
+        let mut frames: Vec<FrameRecord> = (0..420)
+            .map(|k| FrameRecord {
+                index: k,
+                t_capture: true_t(k) + drops_before(k) as f64 * period,
+                t: 0.0,
+                container_time_s: None,
+                picture_type: None,
+                z_rim_px: None,
+                z_rim_m: None,
+                beta_raw: None,
+            })
+            .collect();
+        let step = |index| signal::FrameFlag {
+            index,
+            t: 0.0,
+            reason: signal::SkipReason::RimPhaseStep {
+                phase_step: 1.0,
+                statistic: 100.0,
+            },
+        };
+        let duplicate = signal::FrameFlag {
+            index: 50,
+            t: 0.0,
+            reason: signal::SkipReason::DuplicatedFrame {
+                step: 0.1,
+                neighbours: 1.0,
+            },
+        };
+        let mut known = vec![duplicate.clone(), step(100), step(380)];
+        let halt = frames[390].t_capture;
+        let shifted: Vec<f64> = frames.iter().map(|f| f.t_capture - halt).collect();
+        let withdrawn = withdraw_hidden_drops(&mut frames, &mut known, &shifted, period);
+        assert_eq!(withdrawn, vec![380]);
+        assert_eq!(known, vec![duplicate, step(100)]);
+        for (k, f) in frames.iter().enumerate() {
+            let want = true_t(k) + usize::from(k >= 100) as f64 * period;
+            assert!(
+                (f.t_capture - want).abs() < 1e-12,
+                "frame {k}: {}",
+                f.t_capture
+            );
+        }
+        // Nothing is left to withdraw at that halt.
+        assert!(withdraw_hidden_drops(&mut frames, &mut known, &shifted, period).is_empty());
+    }
+
     /// marked 50 frames after the halt (a refresh of the still picture) gets its
     /// reading back and is no repeat.
     #[test]
