@@ -1712,29 +1712,39 @@ pub fn analyse_clip_keeping(
             (frames, series, fits, bounded) = (frames_again, again, fits_again, true);
             zero_moved(zero_again);
             config_again = config;
+            // The drops counted on the first pass's halt, checked against this one;
+            // kept only if the signal stage and the fits run on the clock without them.
+            let (mut frames_fixed, mut flags_fixed) = (frames.clone(), known_flags.clone());
+            let period = 1.0 / fps.fps;
             let withdrawn = withdraw_hidden_drops(
-                &mut frames,
-                &mut known_flags,
+                &mut frames_fixed,
+                &mut flags_fixed,
                 &series.halt.shifted_t,
-                1.0 / fps.fps,
+                period,
             );
             if !withdrawn.is_empty() {
-                let at: Vec<String> = withdrawn
-                    .iter()
-                    .map(|&i| frames[i].index.to_string())
-                    .collect();
-                warnings.push(format!(
-                    "the rim's phase step at frame(s) {} lies within its test's reach of the \
-                     halt the law places: the still pictures' step, not a frame missing, so \
-                     the capture times after it are no longer counted a frame later \
-                     (signal::missing_frames)",
-                    at.join(", ")
-                ));
+                // The law's halt on the clock without them: they all lie before it.
+                let mut config = config_again.clone();
+                config.motion_until = config
+                    .motion_until
+                    .map(|t| t - withdrawn.len() as f64 * period);
                 if let Some((frames_again, again, zero_again, fits_again)) =
-                    signal_again(&frames, &known_flags, &config_again, true)
+                    signal_again(&frames_fixed, &flags_fixed, &config, true)
                 {
+                    let at: Vec<String> = withdrawn
+                        .iter()
+                        .map(|&i| frames[i].index.to_string())
+                        .collect();
+                    warnings.push(format!(
+                        "the rim's phase step at frame(s) {} lies within its test's reach of \
+                         the halt the law places: the still pictures' step, not a frame \
+                         missing, so the capture times after it are no longer counted a frame \
+                         later (signal::missing_frames)",
+                        at.join(", ")
+                    ));
                     (frames, series, fits) = (frames_again, again, fits_again);
                     zero_moved(zero_again);
+                    (known_flags, config_again) = (flags_fixed, config);
                 }
             }
         }
