@@ -2119,11 +2119,19 @@ fn hidden_drops(
     };
     let repeated: Vec<usize> = repeated.iter().map(|r| r.index).collect();
     let steps = signal::missing_frames(&series.flags, period, &repeated);
-    for (i, record) in frames.iter_mut().enumerate() {
-        let missing = steps.iter().filter(|f| f.index <= i).count();
-        record.t_capture += missing as f64 * period;
-    }
+    let positions: Vec<usize> = steps.iter().map(|f| f.index).collect();
+    shift_capture_clock(frames, &positions, period);
     steps
+}
+
+/// Moves each frame's capture time by `by` \[s\] for every one of `positions` (in
+/// `frames`) at or before it: a frame missing before each, counted (`by` the nominal
+/// period) or withdrawn (minus it).
+fn shift_capture_clock(frames: &mut [FrameRecord], positions: &[usize], by: f64) {
+    for (i, record) in frames.iter_mut().enumerate() {
+        let count = positions.iter().filter(|&&p| p <= i).count();
+        record.t_capture += count as f64 * by;
+    }
 }
 
 /// The frames [`hidden_drops`] counted missing whose phase step no longer passes
@@ -2154,11 +2162,7 @@ fn withdraw_hidden_drops(
         .filter(|h| kept.iter().all(|k| k.index != h.index))
         .map(|h| h.index)
         .collect();
-    for &w in &withdrawn {
-        for record in &mut frames[w..] {
-            record.t_capture -= period;
-        }
-    }
+    shift_capture_clock(frames, &withdrawn, -period);
     known_flags.retain(|k| !(is_step(k) && withdrawn.contains(&k.index)));
     withdrawn
 }
@@ -2777,8 +2781,6 @@ mod tests {
         fit_series("eq. 3.8 at peaks", samples, 0.5, halt, &[]).expect("fit")
     }
 
-    /// A rim turning every 10 frames (480 fps, 0.1 mm/px) down to the halt at frame
-    /// 300, then still: a frame marked repeated in the motion stays out of the fits; one
     /// Two frames counted missing on a first pass (positions 100 and 380, so the
     /// capture clock runs one period ahead from 100 and two from 380), and a
     /// duplicated frame at 50. A law places the halt at position 390: the step at
@@ -2836,6 +2838,8 @@ mod tests {
         assert!(withdraw_hidden_drops(&mut frames, &mut known, &shifted, period).is_empty());
     }
 
+    /// A rim turning every 10 frames (480 fps, 0.1 mm/px) down to the halt at frame
+    /// 300, then still: a frame marked repeated in the motion stays out of the fits; one
     /// marked 50 frames after the halt (a refresh of the still picture) gets its
     /// reading back and is no repeat.
     #[test]
