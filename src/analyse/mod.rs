@@ -1866,6 +1866,21 @@ pub fn analyse_clip_keeping(
         )
     });
 
+    // A peak whose height no φ reads is left out of the peaks fit (peak_energies).
+    let unread: Vec<String> = (series.peaks.peaks.iter())
+        .filter(|p| !p.phi.is_finite())
+        .map(|p| format!("{:.4}", p.t))
+        .collect();
+    if !unread.is_empty() {
+        warnings.push(format!(
+            "{} of {} peaks left out of the peaks fit: their heights lie outside the \
+             rim model's range, so no φ reads them (t = {} s from the halt)",
+            unread.len(),
+            series.peaks.peaks.len(),
+            unread.join(", ")
+        ));
+    }
+
     // φ from the heights against φ from the precession rate (crate::precession): a
     // check of the scale and the zero that shares neither; reported, never applied.
     let precession = precession::precession_check(
@@ -2421,7 +2436,8 @@ fn disjoint_intervals(a: (f64, f64), b: (f64, f64)) -> Option<f64> {
 ///
 /// A difference across a timestamp gap counts one turn where the gap hid more (its
 /// peaks are missing): there the forward difference is used if it does not cross
-/// the gap, else the peak is left out.
+/// the gap, else the peak is left out. So is a peak whose height no φ reads (it lies
+/// outside the rim model's range, `RimModel::phi_from_peak`); the caller warns.
 fn peak_energies(params: &DiskParams, series: &StateSeries) -> Vec<EnergySample> {
     let precession = &series.peaks.precession;
     let peaks = &series.peaks.peaks;
@@ -2447,7 +2463,7 @@ fn peak_energies(params: &DiskParams, series: &StateSeries) -> Vec<EnergySample>
                 .filter(|_| k > 0 && k < last && clear(k - 1, k + 1));
             let forward = p.psi_dot_forward.filter(|_| k < last && clear(k, k + 1));
             let psi_dot = central.or(forward)?;
-            Some(EnergySample {
+            peak.phi.is_finite().then_some(EnergySample {
                 t: peak.t,
                 phi: peak.phi,
                 psi_dot,

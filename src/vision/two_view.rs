@@ -19,6 +19,8 @@
 //! of the strip as seen in the frame: a mirror or camera that flips the image
 //! flips the sign of β̇.
 
+use std::ops::Range;
+
 use serde::{Deserialize, Serialize};
 
 use super::VisionError;
@@ -58,15 +60,19 @@ pub fn split_views<'a>(
 ///
 /// Assumption: the two views are separated by a full-width band of dark,
 /// uniform rows (the mirror's edge or frame, a black divider), somewhere in the
-/// middle three quarters of the frame. Each row there is scored by its mean
-/// intensity plus its mean absolute deviation; the best row must score at most
-/// half the median row's and be dark (score ≤ 64 of 255). The middle row of the
-/// run of adjacent rows scoring at most 1.5 × best + 2 is returned.
+/// middle three quarters of the frame. Each row is scored by its mean intensity
+/// plus its mean absolute deviation; the best row of the middle three quarters
+/// must score at most half their median row's and be dark (score ≤ 64 of 255).
+/// Rows scoring at most 1.5 × best + 2 are dark; the divider is the longest run
+/// of them that has a view on either side: a run reaching the frame's first or
+/// last row is a margin (the black above a side view's disk, which a darker
+/// exposure or tone curve makes as black as the divider), not a divider. Its
+/// middle row is returned.
 ///
-/// Without a dark band (a light plate in both views, two camera images stacked),
-/// the views are still apart where no disk is: the plate below the side view's
-/// disk and shadow and above the plan view's disk, whose rows are uniform. The
-/// middle of the longest run of rows whose mean absolute deviation is at most
+/// Without a dark divider (a light plate in both views, two camera images
+/// stacked), the views are still apart where no disk is: the plate below the side
+/// view's disk and shadow and above the plan view's disk, whose rows are uniform.
+/// The middle of the longest run of rows whose mean absolute deviation is at most
 /// [`UNIFORM_FRACTION`] of the 90th percentile row's (rows across a disk) is
 /// returned, the run at least 1 % of the frame tall.
 ///
@@ -79,7 +85,7 @@ pub fn find_split_row(frame: &FrameView, index: usize) -> Result<usize, VisionEr
         return Err(VisionError::NoSplit { frame: index });
     }
     // (mean, mean absolute deviation) of each row's intensity.
-    let rows: Vec<(f32, f32)> = (lo..hi)
+    let rows: Vec<(f32, f32)> = (0..h)
         .map(|y| {
             let row = frame.row(y);
             let values = row
@@ -91,33 +97,51 @@ pub fn find_split_row(frame: &FrameView, index: usize) -> Result<usize, VisionEr
         })
         .collect();
     let scores: Vec<f32> = rows.iter().map(|(mean, dev)| mean + dev).collect();
-    let mut sorted = scores.clone();
+    let middle = &scores[lo..hi];
+    let mut sorted = middle.to_vec();
     sorted.sort_by(f32::total_cmp);
     let median = sorted[sorted.len() / 2];
-    let (best, best_score) = scores
-        .iter()
-        .copied()
-        .enumerate()
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .ok_or(VisionError::NoSplit { frame: index })?;
-    if best_score > 0.5 * median || best_score > 64.0 {
-        let deviations: Vec<f32> = rows.iter().map(|r| r.1).collect();
-        return uniform_band(&deviations, h)
-            .map(|middle| lo + middle)
-            .ok_or(VisionError::NoSplit { frame: index });
+    let best_score = sorted[0];
+    let divider = (best_score <= 0.5 * median && best_score <= 64.0)
+        .then(|| {
+            // Rows nearly as dark and uniform as the best one: the divider's, or a
+            // margin's.
+            let near = 1.5 * best_score + 2.0;
+            dark_runs(&scores, near)
+                .filter(|run| run.start > 0 && run.end < h)
+                .filter(|run| (lo..hi).contains(&((run.start + run.end - 1) / 2)))
+                .max_by_key(|run| run.len())
+        })
+        .flatten();
+    match divider {
+        Some(run) => Ok((run.start + run.end - 1) / 2),
+        None => {
+            let deviations: Vec<f32> = rows[lo..hi].iter().map(|r| r.1).collect();
+            uniform_band(&deviations, h)
+                .map(|middle| lo + middle)
+                .ok_or(VisionError::NoSplit { frame: index })
+        }
     }
-    // Rows nearly as dark and uniform as the best one belong to the divider.
-    let near = 1.5 * best_score + 2.0;
-    let first = (0..=best)
-        .rev()
-        .take_while(|&k| scores[k] <= near)
-        .last()
-        .unwrap_or(best);
-    let last = (best..scores.len())
-        .take_while(|&k| scores[k] <= near)
-        .last()
-        .unwrap_or(best);
-    Ok(lo + (first + last) / 2)
+}
+
+/// The maximal runs of rows whose score is at most `limit`, as row ranges.
+fn dark_runs(scores: &[f32], limit: f32) -> impl Iterator<Item = Range<usize>> + '_ {
+    let mut start = None;
+    scores
+        .iter()
+        .chain(std::iter::once(&f32::INFINITY))
+        .enumerate()
+        .filter_map(move |(k, &score)| match (score <= limit, start) {
+            (true, None) => {
+                start = Some(k);
+                None
+            }
+            (false, Some(s)) => {
+                start = None;
+                Some(s..k)
+            }
+            _ => None,
+        })
 }
 
 /// A row is uniform, for [`find_split_row`]'s band without a dark divider, when its
@@ -655,24 +679,27 @@ mod tests {
         assert!(!detect_two_view(&side.view(&side_bytes, 0), 0).two_view);
     }
 
-    #[test]
-    fn split_between_side_and_plan_views() {
-        // Portrait two-view frame: side view (rows 0..300), a black divider
-        // (rows 300..312), plan view (rows 312..612).
-        let side = SideScene::standard();
-        let (top, plan) = (
-            side.dark_plate(3.0, 0.55),
-            plan_view(0.7, (200.0, 150.0), 180.0, 12.0),
-        );
-        let w = 400;
+    /// A portrait two-view frame of 400 × 612 px: `side`'s view over a dark plate
+    /// (rows 0..300, its middle 400 columns: the disk is in them), a black divider
+    /// of level 4 (rows 300..312), a plan view (rows 312..612).
+    fn side_over_plan(side: &SideScene) -> Vec<u8> {
+        let top = side.dark_plate(3.0, 0.55);
+        let plan = plan_view(0.7, (200.0, 150.0), 180.0, 12.0);
         let mut bytes = Vec::new();
         let top_bytes = top.to_bgr(0);
         for r in 0..300 {
-            // The side view's middle 400 columns, rows 0..300 (the disk is in them).
             bytes.extend_from_slice(&top_bytes[r * 3 * top.w + 3 * 120..r * 3 * top.w + 3 * 520]);
         }
-        bytes.extend(std::iter::repeat_n(4u8, 12 * 3 * w));
+        bytes.extend(std::iter::repeat_n(4u8, 12 * 3 * 400));
         bytes.extend(plan.to_bgr(0));
+        bytes
+    }
+
+    #[test]
+    fn split_between_side_and_plan_views() {
+        let plan = plan_view(0.7, (200.0, 150.0), 180.0, 12.0);
+        let w = 400;
+        let bytes = side_over_plan(&SideScene::standard());
         let frame = FrameView {
             width: w,
             height: 612,
@@ -697,6 +724,30 @@ mod tests {
             Err(VisionError::NoSplit { frame: 9 })
         ));
         assert!(split_views(&frame, 0, 0).is_err());
+    }
+
+    /// A darker tone curve (`scripts/reencode-footage --eq gamma=0.7` on the open
+    /// footage's two-view clips) makes the black above the side view's disk as black
+    /// as the divider: that band reaches the frame's top row, a margin, and the
+    /// divider is still found below the side view.
+    #[test]
+    fn split_passes_over_a_margin_as_black_as_the_divider() {
+        let side = SideScene {
+            background: 4.0,
+            ..SideScene::standard()
+        };
+        let bytes = side_over_plan(&side);
+        let frame = FrameView {
+            width: 400,
+            height: 612,
+            stride: 3 * 400,
+            order: crate::footage::ChannelOrder::Bgr,
+            data: &bytes,
+        };
+        let split = find_split_row(&frame, 0).unwrap();
+        assert!((300..312).contains(&split), "split {split}");
+        let found = detect_two_view(&frame, 0);
+        assert!(found.two_view, "{}", found.evidence);
     }
 
     /// Two camera images stacked with no divider, a light plate in both (the side
