@@ -750,7 +750,13 @@ const END_STEP_RATIO: f64 = 2.0;
 /// (perspective factor within [`PERSPECTIVE_FACTOR_RANGE`]); of the plausible ones
 /// the first is taken, unless a later one's ends are edges where its ends are not:
 /// its points change more than [`END_STEP_RATIO`] times as sharply across x_l and
-/// x_r on the last rest frame ([`vision::Calibration::end_step`]).
+/// x_r on the last rest frame ([`vision::Calibration::end_step`]). Where neither
+/// kind's ends step that much more sharply (the two found the same disk), the
+/// plate under the disk decides ([`vision::Calibration::under_rim_light`]): darker
+/// there than beside the disk is a light plate's shadow, brighter a dark plate's
+/// mirror image. (o03 of the open footage under gamma 0.7: both kinds found the
+/// same disk, ends 49.8 and 50.4; the dark plate's reading of that light plate read
+/// n +0.022 and the heights 2.5 % low.)
 ///
 /// A dark-plate calibration of a light plate finds a sliver of the plate, an
 /// unsteady blob, or (on a plate brighter than the disk's side) a run that stops
@@ -794,10 +800,28 @@ fn calibrate_detecting_plate(
                     "{}: perspective factor {factor:.3}, step at the ends {step:.1}",
                     plate_name(plate)
                 ));
-                if taken
-                    .as_ref()
-                    .is_none_or(|&(_, _, first)| step > END_STEP_RATIO * first)
-                {
+                let take = match &taken {
+                    None => true,
+                    Some((first, _, first_step)) => {
+                        if step > END_STEP_RATIO * first_step {
+                            true
+                        } else if *first_step > END_STEP_RATIO * step {
+                            false
+                        } else {
+                            // The ends alike: what the plate shows under the disk
+                            // decides, a shadow the light plate.
+                            let under = first.calibration.under_rim_light(last);
+                            if let Some(light) = under {
+                                tried.push(format!(
+                                    "under the disk {light:+.1} of 255 against the plate beside it ({})",
+                                    if light < 0.0 { "a shadow" } else { "a mirror image" }
+                                ));
+                            }
+                            under.is_some_and(|light| light < 0.0)
+                        }
+                    }
+                };
+                if take {
                     taken = Some((report, plate, step));
                 }
             }

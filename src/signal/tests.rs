@@ -231,12 +231,24 @@ fn codec_refreshes_in_the_rest_tail_are_not_motion() {
     z[n - 40] += 6.5 * NOISE;
     let lone = halt_time(&t, &z, &SignalConfig::default()).expect("halt");
     assert_eq!(lone.index, halt.index);
-    // Rises in two separate frames of the tail (both in its first half, above the
-    // band) are two turns of a disk still moving: the tail is refused, and the error
-    // names the later rise.
+    // A second such frame is a second refresh: each one frame up with its
+    // neighbours at rest, an impulse no lifting rim makes (over a final turn of 10
+    // frames a crest's neighbours lie at cos 36° = 0.81 of it).
     z[n - 30] += 6.5 * NOISE;
+    let two = halt_time(&t, &z, &SignalConfig::default()).expect("halt");
+    assert_eq!(two.index, halt.index);
+    // The rim lifted twice over three frames of such a turn, both lifts in the first
+    // half of the tail: two turns of a disk still moving, the tail is refused, and the
+    // error names the later lift's last frame.
+    let (_, mut z, _) = clip(NOISE, 1);
+    for crest in [n - 40, n - 30] {
+        for k in -1i32..=1 {
+            let lift = 6.5 * NOISE * (std::f64::consts::TAU * f64::from(k) / 10.0).cos();
+            z[(crest as i32 + k) as usize] += lift;
+        }
+    }
     match halt_time(&t, &z, &SignalConfig::default()) {
-        Err(SignalError::TailNotAtRest { t_moving, .. }) => assert_eq!(t_moving, t[n - 30]),
+        Err(SignalError::TailNotAtRest { t_moving, .. }) => assert_eq!(t_moving, t[n - 29]),
         other => panic!("{other:?}"),
     }
 }
