@@ -461,14 +461,6 @@ pub fn frame_states(
             if t_c - half < st[0] - 0.5 * frame {
                 return None;
             }
-            // So is one cut short by the halt, after which the rim lies flat and no
-            // frame enters the fits (o02 of the open footage under gamma 0.7: the
-            // state 3.5 ms before the halt, its window's later half cut in two, read
-            // ψ̇ 3.7 times its neighbours' with standard errors under 10 %, its energy
-            // 27 times theirs, and the per-frame n −0.034).
-            if t_c + half > st[st.len() - 1] + 0.5 * frame {
-                return None;
-            }
             // At least eight samples (four parameters, four degrees of freedom).
             let (lo, hi) = local::widened(
                 st.partition_point(|&x| x < t_c - half),
