@@ -930,15 +930,10 @@ fn check_states(seed: u64) {
     let states = frame_states(&t, &z, &halt, &peaks, &model, &config);
     let last_peak = peaks.peaks.last().expect("peak").t + halt.t_phi;
     let psi_offset = 2.0 * PI * (truth.psi(last_peak) / (2.0 * PI)).round();
-    // The frames whose 1.5-turn window the halt cuts short have none (their fit is
-    // one-sided): those within half a window, over the last turn, of the last motion.
-    let turns = &peaks.peaks[peaks.peaks.len() - 2..];
-    let final_half = 0.5 * config.state_window_periods * (turns[1].t - turns[0].t);
     let in_window = (0..t.len())
         .filter(|&i| halt.shifted_t[i] >= -config.window_s && i <= halt.index)
-        .filter(|&i| halt.shifted_t[i] + final_half <= halt.shifted_t[halt.index])
         .count();
-    // Every other frame of the window has a state (the fits do not fail on clean data).
+    // Every frame of the window has a state (the fits do not fail on clean data).
     assert!(
         states.len() >= in_window - 2,
         "{} of {in_window}",
