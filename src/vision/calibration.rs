@@ -1332,8 +1332,12 @@ mod tests {
         let dark = s.dark_plate(0.0, 0.55);
         let light = s.light_plate(0.0, 4.0);
         let (dark_bytes, light_bytes) = (dark.to_bgr(0), light.to_bgr(0));
-        let mirror = cal.under_rim_light(&dark.view(&dark_bytes, 0)).expect("in frame");
-        let shadow = cal.under_rim_light(&light.view(&light_bytes, 0)).expect("in frame");
+        let mirror = cal
+            .under_rim_light(&dark.view(&dark_bytes, 0))
+            .expect("in frame");
+        let shadow = cal
+            .under_rim_light(&light.view(&light_bytes, 0))
+            .expect("in frame");
         assert!(mirror > 20.0, "{mirror}");
         assert!(shadow < -20.0, "{shadow}");
         // The disk at the frame's bottom edge leaves no rows under it.
