@@ -162,10 +162,11 @@ impl Calibration {
     /// the same row beside the disk (a quarter of its width beyond either end, 2 px
     /// clear of it), 0–255; of these the one of largest magnitude. A reflective
     /// plate shows the disk's mirror image there, brighter than the plate beside it
-    /// (positive: +38 to +66 on the open footage's dark plates); a matt plate the
-    /// disk's shadow, darker (negative: −63 and −64 on its light plates, whose
-    /// shadow is 13 rows deep and the lit plate below it 16 brighter than beside the
-    /// disk). `None` when the rows or the plate beside the disk lie outside the frame.
+    /// (positive: +44 to +72 on the open footage's dark plates, +33 to +60 under
+    /// gamma 0.7); a matt plate the disk's shadow, darker (negative: −65 on o03 under
+    /// gamma 0.7, whose shadow is 13 rows deep and the lit plate below it 16 brighter
+    /// than beside the disk). `None` when the rows or the plate beside the disk lie
+    /// outside the frame.
     pub fn under_rim_light(&self, frame: &FrameView) -> Option<f64> {
         let (width, height) = (self.x_r - self.x_l, self.disk_height_px());
         let y0 = (self.z_base + 1.0).ceil().max(0.0) as usize;
@@ -1378,6 +1379,15 @@ mod tests {
         let report = calibrate_at_rest(&views, 50, &config, None).expect("at rest");
         let still = calibrate_at_rest(&views[..3], 50, &config, None).expect("at rest");
         assert!((report.calibration.z_t - still.calibration.z_t).abs() < 0.05);
+        // The same frame with its top lifted too, the whole disk 0.7 px up: motion.
+        let lifted = s.light_plate(0.7, 4.0).to_bgr(0);
+        let mut views = views;
+        views[3] = canvas.view(&lifted, 0);
+        let err = calibrate_at_rest(&views, 50, &config, None).unwrap_err();
+        assert!(
+            matches!(err, VisionError::NotAtRest { frame: 53, .. }),
+            "{err}"
+        );
     }
 
     #[test]
