@@ -860,9 +860,11 @@ fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
             ..scene.clone()
         })
         .collect();
-    // Two scenes at a time: rendering is parallel, the analysis mostly not, so one
-    // scene at a time leaves a core idle for half the test's 3.5 minutes. Each scene's
-    // bytes and result are its own, whatever runs beside it (tests/determinism.rs).
+    // As many scenes at a time as rayon has threads (two on the CI's two cores):
+    // rendering is parallel, the analysis mostly not, so one scene at a time left a
+    // core idle for much of the test (216 s; 149 s so, BENCHMARKS.md, "Test suite").
+    // Each scene's bytes and result are its own, whatever runs beside it
+    // (tests/determinism.rs).
     let (gate, coarse): (Vec<_>, Vec<_>) = rayon::join(
         || scenes.par_iter().map(measure).collect(),
         || coarse_scenes.par_iter().map(measure).collect(),
