@@ -854,16 +854,18 @@ pub struct Comparison {
     pub trajectory: Trajectory,
 }
 
-/// A starting η for each model: Table 4.1's tuned values (reproduce.rs) for Euler's
-/// disk, 1.1e-5 for augmented contour (§4.7.1).
+/// A starting η for each model: Table 4.1's tuned values for Euler's disk
+/// ([`crate::model::tuning::TABLE_4_1`]), else the thesis's
+/// ([`ModelKind::thesis_eta`]: augmented contour, §4.7.1).
 fn eta_guess(kind: ModelKind) -> f64 {
     match kind {
-        ModelKind::AugmentedContour => 1.1e-5,
         ModelKind::ViscousRolling => 1e-3,
-        _ => crate::reproduce::TABLE_4_1
+        _ => crate::model::tuning::TABLE_4_1
             .iter()
             .find(|row| row.0 == kind)
-            .map_or(1e-4, |row| row.2),
+            .map(|row| row.2)
+            .or(kind.thesis_eta())
+            .unwrap_or(1e-4),
     }
 }
 

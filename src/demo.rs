@@ -18,13 +18,14 @@ use maud::html;
 use rayon::prelude::*;
 
 use crate::model::params::Preset;
+use crate::output::write_atomic;
 use crate::render::{
     DEFAULT_ENCODING, Plate, PostFlatSpin, PowerLaw, RenderError, RenderSpec, Renderer, Timing,
     power_law_motion, write_clip,
 };
+use crate::report::ReportError;
 use crate::report::html::{page, table, video_figure};
-use crate::report::{ReportError, write_atomic};
-use crate::study::StudyResults;
+use crate::summary::StudyResults;
 
 /// One demo clip: where it goes below the footage root and its true exponent.
 #[derive(Debug, Clone)]
@@ -195,5 +196,6 @@ pub fn write_demo_index(
     write_atomic(
         &out.join("index.html"),
         page("eulerdisk demo", body).as_bytes(),
-    )
+    )?;
+    Ok(())
 }

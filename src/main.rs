@@ -16,13 +16,13 @@ use eulerdisk::model::simulate::{
     InitialState, MAX_SAMPLES, RunSummary, SimulationSpec, simulate, simulate_streaming,
 };
 use eulerdisk::model::tuning::tune_eta;
+use eulerdisk::output::OutputLock;
 use eulerdisk::overlay::{OverlaySpec, write_model_overlay};
 use eulerdisk::render::{
     CaptureJitter, ClipEncoding, DEFAULT_CRF, Effects, HdrTransfer, Nutation, Plate, PostFlatSpin,
     PowerLaw, RenderSpec, Renderer, SampleStorage, Scenery, SlowedSection, Timing, add_nutation,
     power_law_motion, trajectory_motion, write_clip,
 };
-use eulerdisk::report::OutputLock;
 use eulerdisk::report::compare::{comparison_dir, write_comparison};
 use eulerdisk::report::experiment::write_experiment;
 use eulerdisk::report::simulation::{TrajectoryWriter, write_simulation};
@@ -621,7 +621,7 @@ fn run_analyse(
         .file_name()
         .map_or_else(|| "clip".into(), |s| s.to_string_lossy().into_owned());
     let out = out.unwrap_or_else(|| Path::new("out").join(&name));
-    eulerdisk::report::check_folder(&out)?;
+    eulerdisk::output::check_folder(&out)?;
     if !force && let Some(other) = eulerdisk::report::experiment::other_clip_in(&out, clip) {
         bail!(
             "{} holds the analysis of {}; refusing to replace it with {} \
@@ -647,7 +647,7 @@ fn run_analyse(
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    eulerdisk::report::write_folder(&out, |dir| {
+    eulerdisk::output::write_folder(&out, |dir| {
         write_experiment(dir, &experiment, overlay.as_ref())
     })?;
     let fit = &experiment.peaks_fit.fit;
@@ -715,10 +715,10 @@ fn run_study(args: &StudyArgs) -> Result<Status> {
     let Some(root) = &args.root else {
         bail!("give a footage folder, or --published");
     };
-    eulerdisk::report::check_folder(&args.out)?;
+    eulerdisk::output::check_folder(&args.out)?;
     let clips = study::discover(root, &args.out)?;
     let out = OutputLock::acquire(&args.out)?;
-    let analyser = analyse::StudyAnalyser {
+    let analyser = study::StudyAnalyser {
         root: root.clone(),
         overlay: (!args.no_overlay).then(OverlaySpec::default),
     };
@@ -796,7 +796,7 @@ fn run_study(args: &StudyArgs) -> Result<Status> {
 fn run_merge(shards: &[PathBuf], out: &Path, welch: bool) -> Result<Status> {
     let results = study::merge(shards)?;
     let _lock = OutputLock::acquire(out)?;
-    eulerdisk::report::write_json(&out.join(study::STUDY_FILE), &results)?;
+    eulerdisk::output::write_json(&out.join(study::STUDY_FILE), &results)?;
     write_study_report(out, &results, report_options(welch))?;
     println!(
         "merged {} shards: {} clips analysed, {} failed; report: {}",
@@ -908,11 +908,10 @@ fn run_render(args: &RenderArgs) -> Result<()> {
     }
     let params = args.preset.params();
     let motion = if args.simulate {
-        let eta = match (args.eta, args.model) {
+        let eta = match (args.eta, args.model.thesis_eta()) {
             (Some(eta), _) => eta,
-            (None, ModelKind::Contour) => 2.43e-4,
-            (None, ModelKind::AugmentedContour) => 1.1e-5,
-            (None, model) => bail!("give --eta for the `{model:?}` model"),
+            (None, Some(eta)) => eta,
+            (None, None) => bail!("give --eta for the `{:?}` model", args.model),
         };
         let dissipation = Dissipation::new(args.model);
         let mut spec = SimulationSpec::thesis_default(params, dissipation, eta);
@@ -1097,7 +1096,7 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
                     print(c);
                     let dir = comparison_dir(&args.experiment, r.model);
                     let overlay = if i == 0 && !args.no_overlay {
-                        eulerdisk::report::create_folder(&dir)?;
+                        eulerdisk::output::create_folder(&dir)?;
                         let overlay =
                             write_model_overlay(&dir, &experiment, c, &OverlaySpec::default())?;
                         print_edge_error(&overlay);
@@ -1122,7 +1121,7 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
     let comparison = compare::compare(&experiment, &args.experiment, &options)?;
     print(&comparison);
     let dir = comparison_dir(&args.experiment, options.model);
-    eulerdisk::report::create_folder(&dir)?;
+    eulerdisk::output::create_folder(&dir)?;
     let overlay = (!args.no_overlay)
         .then(|| write_model_overlay(&dir, &experiment, &comparison, &OverlaySpec::default()))
         .transpose()?;
@@ -1198,7 +1197,7 @@ fn run_demo(out: &Path) -> Result<()> {
     let compare_link = match compared {
         Ok(c) => {
             let dir = comparison_dir(&experiment_dir, model);
-            eulerdisk::report::create_folder(&dir)?;
+            eulerdisk::output::create_folder(&dir)?;
             let experiment = eulerdisk::compare::load_experiment(&experiment_dir)?;
             let overlay = write_model_overlay(&dir, &experiment, &c, &OverlaySpec::default())?;
             write_comparison(&dir, &c, Some(&overlay))?;

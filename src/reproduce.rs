@@ -18,8 +18,9 @@ use crate::model::dynamics::Mode;
 use crate::model::params::Preset;
 use crate::model::post_flat;
 use crate::model::simulate::{InitialState, SimulationSpec, Trajectory, simulate};
-use crate::model::tuning::tune_eta;
-use crate::report::{ReportError, write_atomic, write_csv, write_json};
+use crate::model::tuning::{TABLE_4_1, TABLE_4_1_TIME_TOLERANCE, tune_eta};
+use crate::output::{write_atomic, write_csv, write_json};
+use crate::report::ReportError;
 
 /// Relative difference above which a row is flagged.
 pub const FLAG_THRESHOLD: f64 = 0.05;
@@ -255,20 +256,21 @@ fn contour_rows() -> Vec<Row> {
         (
             "contour friction, η = 2.43e-4 (§4.7)",
             ModelKind::Contour,
-            2.43e-4,
             3.1e-5,
             -0.051,
         ),
         (
             "augmented contour, η = 1.1e-5 (§4.7.1)",
             ModelKind::AugmentedContour,
-            1.1e-5,
             4.65e-4,
             -0.14,
         ),
     ];
     let mut rows = Vec::new();
-    for (section, kind, eta, phi_end, psi_dot_end) in cases {
+    for (section, kind, phi_end, psi_dot_end) in cases {
+        let eta = kind
+            .thesis_eta()
+            .expect("the thesis gives η for contour friction");
         let mut spec = SimulationSpec::thesis_default(params, Dissipation::new(kind), eta);
         spec.t_end = 1.0;
         match simulate(&spec) {
@@ -304,25 +306,6 @@ fn contour_rows() -> Vec<Row> {
     }
     rows
 }
-
-/// The ten models of Table 4.1 with their end times (pivoting 0.7 s, §4.6) and the η
-/// at which the search for the tuned η starts (earlier tunings, rounded; a guess only
-/// saves bracketing runs, the search then tunes to [`TABLE_4_1_TIME_TOLERANCE`]).
-pub const TABLE_4_1: [(ModelKind, f64, f64); 10] = [
-    (ModelKind::ClassicalRolling, 0.5, 2.9e-2),
-    (ModelKind::Pivoting, 0.7, 1.2e-1),
-    (ModelKind::GeneralRolling, 0.5, 2.9e-2),
-    (ModelKind::Contour, 0.5, 2.3e-4),
-    (ModelKind::ConstantOffset, 0.5, 2.9e-2),
-    (ModelKind::CurvatureOffset, 0.5, 2.3e-4),
-    (ModelKind::Greenwood, 0.5, 2.9e-3),
-    (ModelKind::BreweHamrock, 0.5, 3.2e-3),
-    (ModelKind::Winkler, 0.5, 4.1e-3),
-    (ModelKind::Cylinder, 0.5, 2.2e-3),
-];
-
-/// Tolerance on the end time when tuning η for Table 4.1 \[s\].
-pub const TABLE_4_1_TIME_TOLERANCE: f64 = 1e-4;
 
 /// Stopping angle of the Table 4.1 runs \[rad\] (the thesis: 1e-10, §4.3.1). Models with
 /// n > 1 fall flat with ψ̇ growing without bound (ψ̇² ≈ 1/(aφ), eq. 4.40), so every

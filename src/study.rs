@@ -15,7 +15,7 @@
 //!
 //! One clip, one folder, by construction: the folder is the clip's path below the
 //! root *with* its extension, so `run1.mp4` and `run1.mov` never share one. A clip's
-//! folder is written whole ([`report::write_folder`]: staged, renamed into place,
+//! folder is written whole ([`output::write_folder`]: staged, renamed into place,
 //! under a lock), and holds `summary.json` with the clip's resume key (a hash of the
 //! clip's bytes, its resolved plan and the crate version): `--resume` reuses a
 //! clip whose key is unchanged and redoes the rest, including every clip that
@@ -35,8 +35,12 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::analyse;
 use crate::footage::{FRAME_EXTENSIONS, VIDEO_EXTENSIONS, natural_cmp};
-use crate::report::{self, ReportError};
+use crate::output::{self, OutputError};
+pub use crate::summary::{
+    ClipFailure, ClipMeta, ExperimentSummary, ShardRecord, StudyResults, summary,
+};
 
 /// File name of a clip's summary inside its experiment folder (written last).
 pub const SUMMARY_FILE: &str = "summary.json";
@@ -55,17 +59,7 @@ pub enum StudyError {
     #[error("{}: {reason}", path.display())]
     Merge { path: PathBuf, reason: String },
     #[error(transparent)]
-    Write(#[from] ReportError),
-}
-
-/// What a study knows about a clip besides its pixels.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ClipMeta {
-    pub disk: Option<String>,
-    pub material: Option<String>,
-    pub orientation: Option<String>,
-    pub run: Option<String>,
+    Write(#[from] OutputError),
 }
 
 /// One clip of a study.
@@ -303,26 +297,6 @@ fn meta_from_folders(relative: &str) -> ClipMeta {
     .with_orientation(folders)
 }
 
-impl ClipMeta {
-    /// `DISK/MATERIAL/ORIENTATION/RUN`: the third folder is the orientation.
-    fn with_orientation(self, folders: &[&str]) -> Self {
-        match folders {
-            [.., disk, material, orientation] if folders.len() >= 3 => ClipMeta {
-                disk: Some(disk.to_string()),
-                material: Some(material.to_string()),
-                orientation: Some(orientation.to_string()),
-                run: self.run,
-            },
-            _ => self,
-        }
-    }
-
-    /// The group a clip's exponent is pooled in: material, else "all".
-    pub fn material_or_all(&self) -> &str {
-        self.material.as_deref().unwrap_or("all")
-    }
-}
-
 fn read_manifest(root: &Path) -> Result<Option<(PathBuf, Vec<ManifestRow>)>, StudyError> {
     let toml_path = root.join("study.toml");
     let csv_path = root.join("study.csv");
@@ -393,76 +367,6 @@ impl Shard {
             .filter(|(i, _)| i % self.n == self.k - 1)
             .map(|(_, c)| c)
             .collect()
-    }
-}
-
-/// What the study keeps of one analysed clip (the experiment folder holds the rest).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ExperimentSummary {
-    pub clip: String,
-    pub meta: ClipMeta,
-    /// Hash of the clip's bytes, its resolved plan and the crate version.
-    pub resume_key: String,
-    /// Fitted exponent n of E = A_e (t0 − t)^n and its 95 % interval.
-    pub n: f64,
-    pub n_ci95: [f64; 2],
-    /// Fitted halt time t0 \[s\] relative to the measured halt.
-    pub t0_s: f64,
-    pub r_squared: f64,
-    pub points: usize,
-    /// Frames per second used, and where that number came from.
-    pub fps: f64,
-    pub fps_source: String,
-    /// The precession check: φ from the heights over φ from the precession rate at
-    /// the window's mean, − 1 ([`crate::precession::PrecessionCheck::agreement`]);
-    /// `None` when not made, and in summaries written before it was recorded.
-    #[serde(default)]
-    pub phi_vs_precession: Option<f64>,
-    /// n from the turns' timing alone and its 95 % interval
-    /// ([`crate::turn_timing::fit_turn_timing`]); `None` when not fitted, and in
-    /// summaries written before it was recorded.
-    #[serde(default)]
-    pub n_turn_timing: Option<(f64, [f64; 2])>,
-    /// Warnings and frame flags a reader should see beside the number.
-    pub warnings: Vec<String>,
-}
-
-/// A clip that failed, and why (the message names the file and, where relevant,
-/// the frame).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ClipFailure {
-    pub clip: String,
-    pub meta: ClipMeta,
-    pub reason: String,
-}
-
-/// The results of a study (or of one shard of it).
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-pub struct StudyResults {
-    pub experiments: Vec<ExperimentSummary>,
-    pub failures: Vec<ClipFailure>,
-    pub crate_version: String,
-    /// Set by a `--shard K/N` run: which share, and every clip it owns, so
-    /// [`merge`] can tell a complete set of shards from an incomplete one.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shard: Option<ShardRecord>,
-}
-
-/// What a shard's `study.json` records about the share it ran.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct ShardRecord {
-    pub k: usize,
-    pub n: usize,
-    /// The clips of this share (relative paths), each of which must appear among
-    /// its experiments or failures.
-    pub clips: Vec<String>,
-}
-
-impl StudyResults {
-    fn sort(&mut self) {
-        self.experiments
-            .sort_by(|a, b| natural_cmp(&a.clip, &b.clip));
-        self.failures.sort_by(|a, b| natural_cmp(&a.clip, &b.clip));
     }
 }
 
@@ -543,7 +447,7 @@ impl StudyRun {
 /// `study.json` cannot be written.
 pub fn run(
     clips: Vec<ClipEntry>,
-    out: &report::OutputLock,
+    out: &output::OutputLock,
     options: RunOptions,
     analyser: &dyn ClipAnalyser,
     events: &(dyn Fn(StudyEvent) + Sync),
@@ -599,7 +503,7 @@ pub fn run(
         lost_from_previous(&study_file, &results)
     };
     if kept_previous.is_none() {
-        report::write_json(&study_file, &results)?;
+        output::write_json(&study_file, &results)?;
     }
     Ok(StudyRun {
         results,
@@ -652,11 +556,11 @@ fn analyse_one(
             return Ok((previous, true));
         }
     }
-    let summary = report::write_folder(&dir, |staging| {
+    let summary = output::write_folder(&dir, |staging| {
         let summary = analyser
             .analyse(clip, staging, &key)
             .map_err(Failed::Clip)?;
-        report::write_json(&staging.join(SUMMARY_FILE), &summary)?;
+        output::write_json(&staging.join(SUMMARY_FILE), &summary)?;
         Ok::<_, Failed>(summary)
     })
     .map_err(|e| fail(e.to_string()))?;
@@ -669,7 +573,7 @@ enum Failed {
     #[error("{0}")]
     Clip(String),
     #[error(transparent)]
-    Write(#[from] ReportError),
+    Write(#[from] OutputError),
 }
 
 /// Combine the `study.json` of shard output folders into one [`StudyResults`],
@@ -768,6 +672,48 @@ pub fn merge(shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
     Ok(merged)
 }
 
+/// A study's per-clip work: configs inherited from the study root, one
+/// [`analyse::analyse_clip`] and [`write_experiment`](crate::report::experiment::write_experiment)
+/// per clip.
+pub struct StudyAnalyser {
+    pub root: PathBuf,
+    /// The overlays each clip gets (`None`: none).
+    pub overlay: Option<crate::overlay::OverlaySpec>,
+}
+
+impl ClipAnalyser for StudyAnalyser {
+    fn resume_key(&self, clip: &ClipEntry) -> Result<String, String> {
+        let config =
+            analyse::config_for(&self.root, &clip.path, None).map_err(|e| e.to_string())?;
+        analyse::resume_key(&clip.path, &config).map_err(|e| e.to_string())
+    }
+
+    fn analyse(
+        &self,
+        clip: &ClipEntry,
+        dir: &Path,
+        key: &str,
+    ) -> Result<ExperimentSummary, String> {
+        let config =
+            analyse::config_for(&self.root, &clip.path, None).map_err(|e| e.to_string())?;
+        let experiment = analyse::analyse_clip_keeping(
+            &clip.path,
+            &config,
+            analyse::Decoding::NearTheEnd,
+            self.overlay.as_ref(),
+            &|_, _| {},
+        )
+        .map_err(|e| e.to_string())?;
+        crate::report::experiment::write_experiment(dir, &experiment, self.overlay.as_ref())
+            .map_err(|e| e.to_string())?;
+        let mut meta = clip.meta.clone();
+        meta.material = meta.material.or(config.material.clone());
+        meta.disk = meta.disk.or(config.disk_name.clone());
+        meta.orientation = meta.orientation.or(config.orientation.clone());
+        Ok(summary(&experiment, &clip.relative, meta, key))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -776,8 +722,8 @@ mod tests {
 
     fn quiet(_: StudyEvent) {}
 
-    fn lock(dir: &Path) -> report::OutputLock {
-        report::OutputLock::acquire(dir).unwrap()
+    fn lock(dir: &Path) -> output::OutputLock {
+        output::OutputLock::acquire(dir).unwrap()
     }
 
     fn touch(root: &Path, rel: &str) {
@@ -969,7 +915,7 @@ mod tests {
         }
         let clips = discover(root.path(), Path::new("/o")).unwrap();
         let out_dir = tempfile::tempdir().unwrap();
-        let out = report::OutputLock::acquire(out_dir.path()).unwrap();
+        let out = output::OutputLock::acquire(out_dir.path()).unwrap();
         let fake = Fake::new();
         let full = run(clips.clone(), &out, RunOptions::default(), &fake, &quiet)
             .unwrap()
@@ -1002,7 +948,7 @@ mod tests {
                 shard: Some(Shard { k: k + 1, n: 2 }),
                 ..RunOptions::default()
             };
-            let lock = report::OutputLock::acquire(dir).unwrap();
+            let lock = output::OutputLock::acquire(dir).unwrap();
             run(clips.clone(), &lock, options, &fake, &quiet).unwrap();
         }
         assert_eq!(merge(&shard_dirs).unwrap(), again);
@@ -1143,7 +1089,7 @@ mod tests {
         let mut shard: StudyResults =
             serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
         shard.experiments.pop();
-        report::write_json(&path, &shard).unwrap();
+        output::write_json(&path, &shard).unwrap();
         let err = merge(&dirs).unwrap_err().to_string();
         assert!(err.contains("has no result for it"), "{err}");
 

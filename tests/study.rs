@@ -366,7 +366,7 @@ fn a_second_study_into_a_held_folder_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let root = dir.path().join("footage");
     footage_tree(&root);
-    let held = eulerdisk::report::OutputLock::acquire(&dir.path().join("out")).unwrap();
+    let held = eulerdisk::output::OutputLock::acquire(&dir.path().join("out")).unwrap();
     let out = eulerdisk(
         dir.path(),
         &["study", "footage", "-o", "out", "--shard", "1/2"],

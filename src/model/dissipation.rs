@@ -217,6 +217,17 @@ impl ModelKind {
         ModelKind::AugmentedContour,
     ];
 
+    /// The η the thesis gives for this model, when it gives one: 2.43e-4 for contour
+    /// friction (§4.7), 1.1e-5 for augmented contour friction (§4.7.1); the other
+    /// models' η are tuned to an end time (Table 4.1, [`super::tuning::TABLE_4_1`]).
+    pub fn thesis_eta(self) -> Option<f64> {
+        match self {
+            ModelKind::Contour => Some(2.43e-4),
+            ModelKind::AugmentedContour => Some(1.1e-5),
+            _ => None,
+        }
+    }
+
     /// For the offset models (eq. 4.62): the exponent `p_v` of `v ∝ φ^{p_v}` and
     /// `p_u` of `u ∝ φ^{p_u}` (None for models without a `u` term).
     ///

@@ -31,8 +31,8 @@ use super::canvas::{Canvas, Window, YuvCanvas, text_lines};
 use crate::analyse::{Experiment, ExperimentPlan};
 use crate::footage::Orientation;
 use crate::footage::{FrameSource, FrameView};
+use crate::output::{write_atomic, write_json};
 use crate::render::{ChromaFilter, H264Settings, H264Writer, RateControl, SampleStorage};
-use crate::report::{write_atomic, write_json};
 use crate::signal::FrameFlag;
 use crate::vision::{self, StripFinder};
 
@@ -424,11 +424,10 @@ pub fn write_measurement_overlays(
                 reason,
             }
         })?;
-        let bytes =
-            crate::report::diagnostics::png_bytes(&sheet).map_err(|e| OverlayError::Encode {
-                path: dir.join(LAST_TURNS_IMAGE),
-                reason: e.to_string(),
-            })?;
+        let bytes = crate::output::png_bytes(&sheet).map_err(|e| OverlayError::Encode {
+            path: dir.join(LAST_TURNS_IMAGE),
+            reason: e.to_string(),
+        })?;
         write_atomic(&dir.join(LAST_TURNS_IMAGE), &bytes)?;
         Some((
             LAST_TURNS_IMAGE.to_string(),

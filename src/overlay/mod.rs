@@ -44,7 +44,7 @@ pub use model::{
 pub use pose::CameraPose;
 
 use crate::footage::FootageError;
-use crate::report::ReportError;
+use crate::output::OutputError;
 
 /// Why an overlay could not be written; each names the clip or the file.
 #[derive(Debug, thiserror::Error)]
@@ -52,7 +52,7 @@ pub enum OverlayError {
     #[error(transparent)]
     Footage(#[from] FootageError),
     #[error(transparent)]
-    Report(#[from] ReportError),
+    Output(#[from] OutputError),
     #[error(
         "{}: no frame lies between t − t_φ = {from} s and {to} s, the overlay's span",
         clip.display()

@@ -35,11 +35,11 @@ use super::pose::CameraPose;
 use crate::analyse::Experiment;
 use crate::compare::Comparison;
 use crate::footage::FrameSource;
+use crate::output::{write_atomic, write_csv, write_through_temporary};
 use crate::render::H264Writer;
 use crate::render::motion::{DiskState, trajectory_motion};
 use crate::render::rim_edge_row;
 use crate::render::scene::{Camera, DiskShape, Pose};
-use crate::report::{write_atomic, write_csv};
 
 /// The video's name in the comparison folder.
 pub const MODEL_OVERLAY_VIDEO: &str = "model-overlay.mp4";
@@ -207,117 +207,116 @@ pub fn write_model_overlay(
     };
 
     let video = dir.join(MODEL_OVERLAY_VIDEO);
-    let partial = dir.join(format!(
-        ".{MODEL_OVERLAY_VIDEO}.partial-{}.mp4",
-        std::process::id()
-    ));
     let encode_err = |reason: String| OverlayError::Encode {
         path: video.clone(),
         reason,
     };
-    let mut writer = H264Writer::create(
-        &partial,
-        layout.width,
-        layout.height,
-        spec.playback_fps,
-        OVERLAY_H264,
-    )
-    .map_err(encode_err)?;
     let turns = last_turns(e, &peak_positions(e), spec.last_turns);
-    let mut planes = Default::default();
-    let mut tiles = Vec::new();
-    let mut rows = Vec::new();
     let name = format!("{:?} (η = {:.3e})", c.options.model, c.eta);
-    decode_positions(e, (first, last), &layout, |position, view| {
-        let record = &e.frames[position];
-        let mut image = layout.paint(view);
-        let footage_row = record.z_rim_px.map(|z| plan.rim_edge_row(z));
-        let model = model_image(record.t);
-        for (window, width) in [(&layout.side, 1.0), (&layout.band, 2.0)] {
-            if let Some(row) = footage_row {
-                window.row_line(
-                    &mut image,
-                    row + oy,
-                    (x_centre + ox - 4.0, x_centre + ox + 4.0),
-                    width,
-                    RIM,
-                );
-            }
-            if let Some(m) = &model {
-                for (a, b) in m.hull.iter().zip(m.hull.iter().cycle().skip(1)) {
-                    window.segment(
-                        &mut image,
-                        (a.0 + ox, a.1 + oy),
-                        (b.0 + ox, b.1 + oy),
-                        MODEL,
-                    );
-                }
-                if let Some(row) = m.edge_row {
+    // The video is encoded into a temporary file, renamed into place when complete.
+    let (tiles, rows) = write_through_temporary(&video, |partial| {
+        let mut writer = H264Writer::create(
+            partial,
+            layout.width,
+            layout.height,
+            spec.playback_fps,
+            OVERLAY_H264,
+        )
+        .map_err(encode_err)?;
+        let mut planes = Default::default();
+        let mut tiles = Vec::new();
+        let mut rows = Vec::new();
+        decode_positions(e, (first, last), &layout, |position, view| {
+            let record = &e.frames[position];
+            let mut image = layout.paint(view);
+            let footage_row = record.z_rim_px.map(|z| plan.rim_edge_row(z));
+            let model = model_image(record.t);
+            for (window, width) in [(&layout.side, 1.0), (&layout.band, 2.0)] {
+                if let Some(row) = footage_row {
                     window.row_line(
                         &mut image,
                         row + oy,
                         (x_centre + ox - 4.0, x_centre + ox + 4.0),
                         width,
-                        MODEL,
+                        RIM,
                     );
                 }
+                if let Some(m) = &model {
+                    for (a, b) in m.hull.iter().zip(m.hull.iter().cycle().skip(1)) {
+                        window.segment(
+                            &mut image,
+                            (a.0 + ox, a.1 + oy),
+                            (b.0 + ox, b.1 + oy),
+                            MODEL,
+                        );
+                    }
+                    if let Some(row) = m.edge_row {
+                        window.row_line(
+                            &mut image,
+                            row + oy,
+                            (x_centre + ox - 4.0, x_centre + ox + 4.0),
+                            width,
+                            MODEL,
+                        );
+                    }
+                }
             }
-        }
-        let error = footage_row.zip(model.as_ref().and_then(|m| m.edge_row));
-        if let Some((f, m)) = error {
-            rows.push(ErrorRow {
-                index: record.index,
-                t_s: record.t,
-                footage_edge_row_px: f,
-                model_edge_row_px: m,
-                error_px: m - f,
-                error_m: (m - f) * plan.metres_per_px,
-            });
-        }
-        let lines = [
-            (
-                format!(
-                    "frame {}  t − t_φ = {:+.1} ms   model: {name}",
-                    record.index,
-                    1e3 * record.t
-                ),
-                TEXT,
-            ),
-            (
-                match error {
-                    Some((f, m)) => format!(
-                        "rim edge: model − footage = {:+.2} px ({:+.3} mm)",
-                        m - f,
-                        1e3 * (m - f) * plan.metres_per_px
+            let error = footage_row.zip(model.as_ref().and_then(|m| m.edge_row));
+            if let Some((f, m)) = error {
+                rows.push(ErrorRow {
+                    index: record.index,
+                    t_s: record.t,
+                    footage_edge_row_px: f,
+                    model_edge_row_px: m,
+                    error_px: m - f,
+                    error_m: (m - f) * plan.metres_per_px,
+                });
+            }
+            let lines = [
+                (
+                    format!(
+                        "frame {}  t − t_φ = {:+.1} ms   model: {name}",
+                        record.index,
+                        1e3 * record.t
                     ),
-                    None => "rim edge: not on both".into(),
-                },
-                TEXT,
-            ),
-            (
-                "orange: the model's outline and rim edge · green: the footage's rim edge".into(),
-                Rgb([150, 150, 150]),
-            ),
-        ];
-        text_lines(&mut image, (8, 4), 14, &lines).map_err(draw_err(record.index))?;
-        if turns.contains(&position) {
-            tiles.push((image.clone(), model));
-        }
-        yuv420_of(&image, &mut planes);
-        let [y, u, v] = &planes;
-        writer.push_yuv420([y, u, v]).map_err(encode_err)?;
-        Ok(true)
+                    TEXT,
+                ),
+                (
+                    match error {
+                        Some((f, m)) => format!(
+                            "rim edge: model − footage = {:+.2} px ({:+.3} mm)",
+                            m - f,
+                            1e3 * (m - f) * plan.metres_per_px
+                        ),
+                        None => "rim edge: not on both".into(),
+                    },
+                    TEXT,
+                ),
+                (
+                    "orange: the model's outline and rim edge · green: the footage's rim edge"
+                        .into(),
+                    Rgb([150, 150, 150]),
+                ),
+            ];
+            text_lines(&mut image, (8, 4), 14, &lines).map_err(draw_err(record.index))?;
+            if turns.contains(&position) {
+                tiles.push((image.clone(), model));
+            }
+            yuv420_of(&image, &mut planes);
+            let [y, u, v] = &planes;
+            writer.push_yuv420([y, u, v]).map_err(encode_err)?;
+            Ok(true)
+        })?;
+        writer.finish().map_err(encode_err)?;
+        Ok::<_, OverlayError>((tiles, rows))
     })?;
-    writer.finish().map_err(encode_err)?;
-    std::fs::rename(&partial, &video).map_err(|err| encode_err(err.to_string()))?;
     write_csv(&dir.join(MODEL_OVERLAY_ERRORS), &rows)?;
 
     let last_turns = if tiles.is_empty() {
         None
     } else {
         let sheet = side_by_side(&tiles, &layout, (ox, oy)).map_err(draw_err(0))?;
-        let bytes = crate::report::diagnostics::png_bytes(&sheet)
-            .map_err(|err| encode_err(err.to_string()))?;
+        let bytes = crate::output::png_bytes(&sheet).map_err(|err| encode_err(err.to_string()))?;
         write_atomic(&dir.join(MODEL_LAST_TURNS_IMAGE), &bytes)?;
         Some(MODEL_LAST_TURNS_IMAGE.to_string())
     };

@@ -178,6 +178,9 @@ pub enum RenderError {
         /// Why.
         reason: String,
     },
+    /// A file that could not be written through its temporary file.
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
 }
 
 impl RenderError {

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 
 use super::{RenderError, Renderer, TICKS_PER_FRAME};
 use crate::footage::Orientation;
-use crate::report::write_json;
+use crate::output::{write_json, write_through_temporary};
 
 /// Container of a written clip.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -160,21 +160,9 @@ pub fn write_clip(
         .map(|s| s.to_string_lossy().into_owned())
         .ok_or_else(|| fail(path, "the output path has no file name".into()))?;
     let codec = match ClipFormat::for_path(path) {
-        ClipFormat::Mp4 => {
-            let tmp = dir.join(format!(".{name}.partial-{}.mp4", std::process::id()));
-            let result = write_mp4(renderer, &tmp, encoding);
-            match result {
-                Ok(codec) => {
-                    std::fs::rename(&tmp, path).map_err(|e| fail(path, e.to_string()))?;
-                    Some(codec)
-                }
-                Err(reason) => {
-                    // Best effort: a half-written temporary file is useless.
-                    let _ = std::fs::remove_file(&tmp);
-                    return Err(fail(path, reason));
-                }
-            }
-        }
+        ClipFormat::Mp4 => Some(write_through_temporary(path, |tmp| {
+            write_mp4(renderer, tmp, encoding).map_err(|reason| fail(path, reason))
+        })?),
         ClipFormat::PngFolder if renderer.truth().storage != SampleStorage::default() => {
             return Err(fail(
                 path,

@@ -20,11 +20,12 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Serialize;
 
+use super::ReportError;
 use super::html::{page, png_figure, svg_figure, table, video_figure};
-use super::{ReportError, write_atomic, write_csv, write_json};
 use crate::compare::{Comparison, EtaMethod, Ranked};
 use crate::model::dissipation::ModelKind;
 use crate::model::simulate::Sample;
+use crate::output::{write_atomic, write_csv, write_json};
 use crate::overlay::ModelOverlay;
 
 /// Colour of the measured series (green, as the thesis's figures).

@@ -20,11 +20,12 @@ use maud::html;
 use plotters::prelude::*;
 use serde::Serialize;
 
+use super::ReportError;
 use super::html::{page, png_figure, svg_figure, table, video_figure};
 use super::plot::{Panel, time_panels};
-use super::{ReportError, write_atomic, write_csv, write_json};
 use crate::analyse::{EnergyFit, Experiment, ExperimentPlan};
 use crate::energy::{self, SightingUse};
+use crate::output::{write_atomic, write_csv, write_json};
 use crate::overlay::{OverlayIndex, OverlaySpec, write_measurement_overlays};
 use crate::precession;
 use crate::turn_timing::TurnTimingFit;
@@ -309,7 +310,8 @@ pub fn write_experiment(
     write_atomic(
         &dir.join("index.html"),
         experiment_page(e, &energy_svg, timing_svg.as_deref(), dir, overlay.as_ref())?.as_bytes(),
-    )
+    )?;
+    Ok(())
 }
 
 fn fit_row(f: &EnergyFit) -> Vec<String> {

@@ -24,7 +24,6 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use image::ImageEncoder;
 use plotters::coord::Shift;
@@ -61,12 +60,8 @@ pub enum PlotError {
     #[error("drawing {} failed: {reason}", path.display())]
     Draw { path: PathBuf, reason: String },
     /// Creating the directory, writing the temporary file or renaming it failed.
-    #[error("writing {} failed: {source}", path.display())]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
 }
 
 /// Figure width in pixels (PNG) / user units (SVG).
@@ -159,10 +154,7 @@ pub fn time_panels(
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    std::fs::create_dir_all(&dir).map_err(|source| PlotError::Io {
-        path: svg_path.clone(),
-        source,
-    })?;
+    crate::output::create_folder(&dir)?;
 
     // SVG
     let mut svg = String::new();
@@ -177,7 +169,7 @@ pub fn time_panels(
             reason: e.to_string(),
         })?;
     }
-    write_atomic(&svg_path, svg.as_bytes())?;
+    crate::output::write_atomic(&svg_path, svg.as_bytes())?;
 
     // PNG
     let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
@@ -199,7 +191,7 @@ pub fn time_panels(
             path: png_path.clone(),
             reason: format!("PNG encoding: {e}"),
         })?;
-    write_atomic(&png_path, &png)?;
+    crate::output::write_atomic(&png_path, &png)?;
 
     Ok([svg_path, png_path])
 }
@@ -210,37 +202,6 @@ fn with_suffix(stem: &Path, ext: &str) -> PathBuf {
     s.push(".");
     s.push(ext);
     PathBuf::from(s)
-}
-
-/// Writes `bytes` to a temporary file next to `path`, then renames it over `path`.
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PlotError> {
-    use std::io::Write;
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let io_err = |source| PlotError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(
-        ".{name}.{}.{}.tmp",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        drop(f);
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(io_err(e));
-    }
-    Ok(())
 }
 
 /// Registers the embedded font with plotters once per process.

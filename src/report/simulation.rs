@@ -14,12 +14,13 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::ReportError;
 use super::plot::{Highlight, Panel, time_panels};
-use super::{ReportError, create_folder, io_error, write_json};
 use crate::model::dynamics::Mode;
 use crate::model::simulate::{
     EndReason, Phase, RunSummary, Sample, SimulationSpec, SolverStats, Trajectory,
 };
+use crate::output::{OutputError, create_folder, io_error, write_json};
 
 /// The JSON summary of one simulation.
 #[derive(Debug, Clone, Serialize)]
@@ -84,10 +85,10 @@ pub fn write_simulation(
         writer.push(sample)?;
     }
     let (Some(&start), Some(&end)) = (trajectory.samples.first(), trajectory.samples.last()) else {
-        return Err(ReportError::Serialise {
+        return Err(ReportError::from(OutputError::Serialise {
             path: dir.join("trajectory.csv"),
             reason: "a trajectory without samples".into(),
-        });
+        }));
     };
     let run = RunSummary {
         phases: trajectory.phases.clone(),
@@ -238,12 +239,12 @@ impl TrajectoryWriter {
     /// # Errors
     /// The CSV cannot be written (a full disk).
     pub fn push(&mut self, sample: &Sample) -> Result<(), ReportError> {
-        self.csv
-            .serialize(sample)
-            .map_err(|e| ReportError::Serialise {
+        self.csv.serialize(sample).map_err(|e| {
+            ReportError::from(OutputError::Serialise {
                 path: self.dir.join("trajectory.csv"),
                 reason: e.to_string(),
-            })?;
+            })
+        })?;
         self.envelope.push(sample.t, plotted(sample));
         Ok(())
     }
@@ -261,9 +262,11 @@ impl TrajectoryWriter {
     ) -> Result<Vec<PathBuf>, ReportError> {
         let TrajectoryWriter { dir, csv, envelope } = self;
         let csv_path = dir.join("trajectory.csv");
-        let failed = |reason: String| ReportError::Serialise {
-            path: csv_path.clone(),
-            reason,
+        let failed = |reason: String| {
+            ReportError::from(OutputError::Serialise {
+                path: csv_path.clone(),
+                reason,
+            })
         };
         let file = csv
             .into_inner()
@@ -271,9 +274,11 @@ impl TrajectoryWriter {
             .into_inner()
             .map_err(|e| failed(e.to_string()))?;
         file.as_file().sync_all().map_err(io_error(&csv_path))?;
-        file.persist(&csv_path).map_err(|e| ReportError::Io {
-            path: csv_path.clone(),
-            source: e.error,
+        file.persist(&csv_path).map_err(|e| {
+            ReportError::from(OutputError::Io {
+                path: csv_path.clone(),
+                source: e.error,
+            })
         })?;
         let json_path = dir.join("summary.json");
         write_json(&json_path, &SimulationSummary::new(spec, run))?;
@@ -335,9 +340,11 @@ fn draw_panel(
         &highlights,
         "slipping",
     )
-    .map_err(|e| ReportError::Serialise {
-        path: dir.join("panel"),
-        reason: e.to_string(),
+    .map_err(|e| {
+        ReportError::from(OutputError::Serialise {
+            path: dir.join("panel"),
+            reason: e.to_string(),
+        })
     })
 }
 

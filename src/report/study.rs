@@ -12,13 +12,14 @@ use std::path::Path;
 
 use maud::{Markup, html};
 
+use super::ReportError;
 use super::html::{page, svg_figure, table};
 use super::study_plots::{BoxPlot, BoxSeries, box_plot_svg, trend_plot_svg};
-use super::{ReportError, write_atomic};
+use crate::output::write_atomic;
 use crate::stats::{
     self, Correction, Group, MaterialProperty, PValueMatrix, THESIS_ALPHA, Trend, VarianceModel,
 };
-use crate::study::StudyResults;
+use crate::summary::StudyResults;
 
 /// Choices of the statistics in a study report.
 #[derive(Debug, Clone, Copy)]
@@ -42,7 +43,7 @@ impl Default for StudyReportOptions {
 /// first-seen order of the sorted results.
 fn groups_by(
     results: &StudyResults,
-    label: impl Fn(&crate::study::ExperimentSummary) -> String,
+    label: impl Fn(&crate::summary::ExperimentSummary) -> String,
 ) -> Vec<Group> {
     let mut order: Vec<String> = Vec::new();
     let mut values: BTreeMap<String, Vec<f64>> = BTreeMap::new();
@@ -403,7 +404,8 @@ pub fn write_study_report(
     write_atomic(
         &out.join("index.html"),
         page("eulerdisk study", body).as_bytes(),
-    )
+    )?;
+    Ok(())
 }
 
 /// Tables 3.2 and 3.3 and figs. 3.15–3.17 regenerated from the thesis's published
@@ -452,13 +454,14 @@ pub fn write_published_report(out: &Path, options: StudyReportOptions) -> Result
     write_atomic(
         &out.join("index.html"),
         page("Thesis Tables 3.2 and 3.3 from Appendix B", body).as_bytes(),
-    )
+    )?;
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::study::{ClipFailure, ClipMeta, ExperimentSummary};
+    use crate::summary::{ClipFailure, ClipMeta, ExperimentSummary};
 
     fn experiment(material: &str, run: usize, n: f64) -> ExperimentSummary {
         ExperimentSummary {

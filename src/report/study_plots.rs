@@ -17,7 +17,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::report::ReportError;
+use crate::output::OutputError;
 use crate::stats::{
     DiskSetup, ExponentRecord, MaterialProperties, StatsError, Summary, Trend, TrendPoints,
     material_groups, material_trends, summarise,
@@ -47,7 +47,7 @@ pub enum StudyPlotError {
     Stats(#[from] StatsError),
     /// Writing the file failed.
     #[error(transparent)]
-    Write(#[from] ReportError),
+    Write(#[from] OutputError),
 }
 
 /// Figure size in SVG user units.
@@ -423,7 +423,7 @@ pub fn figure_3_16(
 
 /// Writes an SVG string to `path` atomically.
 pub fn write_svg(path: &Path, svg: &str) -> Result<(), StudyPlotError> {
-    super::write_atomic(path, svg.as_bytes())?;
+    crate::output::write_atomic(path, svg.as_bytes())?;
     Ok(())
 }
 

@@ -95,16 +95,6 @@ pub fn threshold_image(
     image
 }
 
-/// PNG bytes of an image.
-///
-/// # Errors
-/// The encoder failed (out of memory).
-pub fn png_bytes(image: &RgbImage) -> Result<Vec<u8>, image::ImageError> {
-    let mut bytes = std::io::Cursor::new(Vec::new());
-    image.write_to(&mut bytes, image::ImageFormat::Png)?;
-    Ok(bytes.into_inner())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -123,7 +113,7 @@ mod tests {
         assert_eq!(*image.get_pixel(50, 50), RED, "z_base on the centre line");
         assert_eq!(*image.get_pixel(50, 40), YELLOW, "z_t on the centre line");
         assert_eq!(*image.get_pixel(20, 45), GREEN, "x_l");
-        let bytes = png_bytes(&image).unwrap();
+        let bytes = crate::output::png_bytes(&image).unwrap();
         assert_eq!(&bytes[1..4], b"PNG");
     }
 }

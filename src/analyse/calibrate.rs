@@ -1,0 +1,471 @@
+//! Calibrate (pass 1, thesis §3.2.4, §3.3.2): the last frames, where the disk lies at
+//! rest, give the layout (side view or two-view), the plate kind, the disk's ends
+//! x_l, x_r, its top z_t and bottom z_base, the threshold γ, and the gauges with
+//! which pass 2 reads every frame.
+
+use std::path::Path;
+
+use super::open::OpenedClip;
+use super::scale::PERSPECTIVE_FACTOR_RANGE;
+use super::views::{OwnedFrame, side_view};
+use super::{AnalyseError, REST_FRAMES, ScaleReport};
+use crate::config::{ExperimentConfig, Plate, VisionConfig};
+use crate::footage::FrameView;
+use crate::model::params::DiskParams;
+use crate::overlay::LayoutGeometry;
+use crate::vision::{
+    self, BandWindow, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge,
+    LeanGauge, RimGauge, RimHeight, SideViewConfig, ThresholdSource, VisionError,
+};
+
+/// What the rest frames fixed for the rest of the analysis.
+pub(super) struct RestCalibration {
+    pub(super) two_view: bool,
+    /// Side view or two-view, and whether the config said so or how it was detected.
+    pub(super) layout: String,
+    /// Two-view clips: the first row of the plan view \[px\] and whether the config gave it.
+    pub(super) split_row: Option<(usize, bool)>,
+    /// The config's region of interest [x, y, width, height] \[px\].
+    pub(super) roi: Option<[u32; 4]>,
+    pub(super) side_config: SideViewConfig,
+    /// The calibration points the config gives, if any.
+    pub(super) given: Option<CalibrationOverride>,
+    pub(super) calibration: CalibrationReport,
+    /// Dark or light plate, and whether the config said so or how it was detected.
+    pub(super) plate: String,
+    /// The top face's far rim at rest, for the camera's elevation (ScaleReport).
+    pub(super) silhouette_top: Option<f64>,
+    pub(super) gauges: Gauges,
+    pub(super) colour_thresholds: Option<(ColourThresholds, ThresholdSource)>,
+    /// Displayed frame size \[px\].
+    pub(super) width: usize,
+    pub(super) height: usize,
+    /// The last rest frame's side view, for the calibration diagnostic.
+    pub(super) rest_side: OwnedFrame,
+}
+
+/// How pass 2 reads each frame's side view.
+pub(super) struct Gauges {
+    /// The rim's edge on the centre line (vision::rim).
+    pub(super) rim: RimGauge,
+    /// The profile across the disk's top on the centre line, read in every frame for
+    /// the near top rim of the frames that lean towards the camera
+    /// (vision::near_top_rim_leaning).
+    pub(super) lean: Option<LeanGauge>,
+    /// Dark plate: rim heights below 2 px from the darkness of the gap (vision::gap).
+    pub(super) gap: Option<GapGauge>,
+    /// The rest frames' mean band window about their edge, and that edge's row: the
+    /// zero of the rim's edge model (vision::mirror_edge, vision::shadow_edge).
+    pub(super) rest_window: Option<(BandWindow, f64)>,
+}
+
+impl RestCalibration {
+    /// The first row of a two-view clip's plan view \[px\].
+    pub(super) fn split(&self) -> Option<usize> {
+        self.split_row.map(|(row, _)| row)
+    }
+
+    /// The overlay's geometry of the frame: calibration, view and band.
+    pub(super) fn layout_geometry(&self) -> LayoutGeometry {
+        let (roi, cal) = (self.roi, self.calibration.calibration);
+        LayoutGeometry {
+            calibration: cal,
+            origin: roi.map_or((0, 0), |[x, y, _, _]| (x as usize, y as usize)),
+            view: roi.map_or((self.width, self.height), |r| {
+                (r[2] as usize, r[3] as usize)
+            }),
+            split_row: self.split(),
+            band_half_width_px: self.side_config.half_width_px,
+            zero_row: cal.z_base,
+        }
+    }
+}
+
+/// Pass 1: reads the last [`REST_FRAMES`] frames of `opened` and calibrates on them.
+///
+/// # Errors
+/// The last frames cannot be read, or the rest frames do not calibrate (no disk,
+/// a disk not at rest, a band that does not fit on it).
+pub(super) fn calibrate(
+    clip: &Path,
+    opened: &mut OpenedClip,
+    config: &ExperimentConfig,
+    params: &DiskParams,
+) -> Result<RestCalibration, AnalyseError> {
+    let vision_err = |error| AnalyseError::Vision {
+        path: clip.to_path_buf(),
+        error,
+    };
+    let vision_config = config.vision.clone().unwrap_or_default();
+    let roi = vision_config.roi;
+    let rest = read_rest_frames(clip, opened)?;
+    let last = &rest[rest.len() - 1];
+    let last_view = side_view(&last.view(), roi, None, last.index)
+        .map_err(vision_err)?
+        .0;
+    let (two_view, layout) = detect_layout(config, &last_view, last.index);
+    let split_row = if two_view {
+        Some(match vision_config.split_row {
+            Some(row) => (row as usize, true),
+            None => (
+                vision::find_split_row(&last_view, last.index).map_err(vision_err)?,
+                false,
+            ),
+        })
+    } else {
+        None
+    };
+    let split = split_row.map(|(row, _)| row);
+    let mut side_config = SideViewConfig {
+        gamma: vision_config.gamma,
+        half_width_px: vision_config
+            .band_half_width_px
+            .map_or(SideViewConfig::default().half_width_px, |w| w as usize),
+        plate: config.plate.unwrap_or_default(),
+        ..SideViewConfig::default()
+    };
+    let given = config.calibration.map(|c| CalibrationOverride {
+        x_l: Some(c.x_l),
+        x_r: Some(c.x_r),
+        z_t: Some(c.z_t),
+        z_base: Some(c.z_base),
+    });
+    let mut rest_sides = Vec::new();
+    for frame in &rest {
+        rest_sides.push(
+            side_view(&frame.view(), roi, split, frame.index)
+                .map_err(vision_err)?
+                .0,
+        );
+    }
+    let first_index = rest[0].index;
+    let (calibration, plate) = calibrate_rest(
+        clip,
+        config,
+        &vision_config,
+        &rest_sides,
+        first_index,
+        &mut side_config,
+        given.as_ref(),
+        params,
+    )?;
+    let cal = calibration.calibration;
+    let silhouette_top = rest_sides
+        .last()
+        .and_then(|side| vision::silhouette_top(side, &cal));
+    let gauges = gauges(
+        &calibration,
+        &side_config,
+        &rest_sides,
+        first_index,
+        silhouette_top,
+    )
+    .map_err(vision_err)?;
+    let colour_thresholds = match split {
+        Some(row) => {
+            let (_, plan) = vision::split_views(&last_view, row, last.index).map_err(vision_err)?;
+            let thresholds =
+                vision::auto_colour_thresholds(&plan, last.index).map_err(vision_err)?;
+            Some((thresholds, ThresholdSource::Automatic))
+        }
+        None => None,
+    };
+    Ok(RestCalibration {
+        two_view,
+        layout,
+        split_row,
+        roi,
+        side_config,
+        given,
+        calibration,
+        plate,
+        silhouette_top,
+        gauges,
+        colour_thresholds,
+        width: last.width,
+        height: last.height,
+        // The calibration diagnostic shows the z_t used (the leaning frames' when read).
+        rest_side: OwnedFrame::copy(last.index, &rest_sides[rest_sides.len() - 1]),
+    })
+}
+
+/// The last [`REST_FRAMES`] frames of the clip, copied.
+///
+/// # Errors
+/// The seek fails, or fewer than two frames can be read there.
+fn read_rest_frames(clip: &Path, opened: &mut OpenedClip) -> Result<Vec<OwnedFrame>, AnalyseError> {
+    let (source, expected) = (&mut opened.source, opened.expected);
+    match &opened.index {
+        Some(index) if index.container_times_s.len() == expected => {
+            source.seek_frame(expected - REST_FRAMES, index)?
+        }
+        _ => source.seek(expected - REST_FRAMES)?,
+    }
+    let mut rest = Vec::new();
+    while let Some(frame) = source.next_frame()? {
+        rest.push(OwnedFrame::copy(frame.index, &frame.view));
+    }
+    if rest.len() < 2 {
+        return Err(AnalyseError::Clip {
+            path: clip.to_path_buf(),
+            reason: "cannot read the last frames (needed for the rest-frame calibration)".into(),
+        });
+    }
+    Ok(rest)
+}
+
+/// Side view or two-view: the config's `two_view`, else detected on the last frame.
+fn detect_layout(config: &ExperimentConfig, last_view: &FrameView, index: usize) -> (bool, String) {
+    match config.two_view {
+        Some(two_view) => (
+            two_view,
+            format!("{} (config `two_view`)", layout_name(two_view)),
+        ),
+        None => {
+            let detected = vision::detect_two_view(last_view, index);
+            (
+                detected.two_view,
+                format!(
+                    "{} (detected: {})",
+                    layout_name(detected.two_view),
+                    detected.evidence
+                ),
+            )
+        }
+    }
+}
+
+/// The rest frames' calibration for the config's plate kind, or for the kind
+/// detected ([`calibrate_detecting_plate`], which sets `side_config.plate`), and
+/// its description. A band named in the config must fit on the disk; otherwise the
+/// band grows with the disk (config::band_for_disk) and the rest frames are
+/// calibrated again on it.
+#[allow(clippy::too_many_arguments)]
+fn calibrate_rest(
+    clip: &Path,
+    config: &ExperimentConfig,
+    vision_config: &VisionConfig,
+    rest_sides: &[FrameView],
+    first_index: usize,
+    side_config: &mut SideViewConfig,
+    given: Option<&CalibrationOverride>,
+    params: &DiskParams,
+) -> Result<(CalibrationReport, String), AnalyseError> {
+    let vision_err = |error| AnalyseError::Vision {
+        path: clip.to_path_buf(),
+        error,
+    };
+    let (calibration, plate) = match config.plate {
+        Some(plate) => (
+            vision::calibrate_at_rest(rest_sides, first_index, side_config, given)
+                .map_err(vision_err)?,
+            format!("{} (config `plate`)", plate_name(plate)),
+        ),
+        None => {
+            let (report, kind, evidence) =
+                calibrate_detecting_plate(rest_sides, first_index, side_config, given, params)
+                    .map_err(vision_err)?;
+            side_config.plate = kind;
+            (
+                report,
+                format!("{} (detected: {evidence})", plate_name(kind)),
+            )
+        }
+    };
+    let disk_width = calibration.calibration.x_r - calibration.calibration.x_l;
+    let calibration = match vision_config.band_half_width_px {
+        Some(band) => {
+            crate::config::band_fits_disk(band, disk_width).map_err(|reason| {
+                AnalyseError::Clip {
+                    path: clip.to_path_buf(),
+                    reason,
+                }
+            })?;
+            calibration
+        }
+        None => {
+            let band = crate::config::band_for_disk(disk_width, side_config.half_width_px);
+            if band == side_config.half_width_px {
+                calibration
+            } else {
+                side_config.half_width_px = band;
+                vision::calibrate_at_rest(rest_sides, first_index, side_config, given)
+                    .map_err(vision_err)?
+            }
+        }
+    };
+    Ok((calibration, plate))
+}
+
+/// The gauges of pass 2 ([`Gauges`]). On a dark plate, rim heights below 2 px come
+/// from the darkness of the gap (vision::gap); then, on either plate, every height
+/// is re-measured with a model of the rim's edge learned from the clip
+/// (vision::mirror_edge on a dark plate, vision::shadow_edge on a light one),
+/// whose zero is the rest frames' band rows about their edge: pass 1's
+/// [`REST_FRAMES`] here, the whole rest tail's after pass 2
+/// ([`super::rim_heights`]).
+fn gauges(
+    calibration: &CalibrationReport,
+    side_config: &SideViewConfig,
+    rest_sides: &[FrameView],
+    first_index: usize,
+    silhouette_top: Option<f64>,
+) -> Result<Gauges, VisionError> {
+    let cal = calibration.calibration;
+    let side0 = &rest_sides[0];
+    let rim = RimGauge::new(
+        &cal,
+        &calibration.threshold,
+        side_config,
+        side0.width,
+        side0.height,
+    )?;
+    let lean = LeanGauge::new(&cal, silhouette_top, rim.band_columns(), side0.height);
+    let gap = match side_config.plate {
+        Plate::Dark => GapGauge::new(&cal, side_config, rest_sides)?,
+        Plate::Light => None,
+    };
+    let rest_window = {
+        let edge0 = match rim.measure(side0, first_index) {
+            Ok(RimHeight::Edge { edge_row, .. }) => edge_row,
+            _ => cal.z_base,
+        };
+        let columns = rim.band_columns();
+        let windows: Option<Vec<BandWindow>> = rest_sides
+            .iter()
+            .map(|f| BandWindow::read(f, &columns, edge0))
+            .collect();
+        windows
+            .and_then(|w| BandWindow::mean(&w))
+            .map(|w| (w, edge0))
+    };
+    Ok(Gauges {
+        rim,
+        lean,
+        gap,
+        rest_window,
+    })
+}
+
+pub(super) fn plate_name(plate: Plate) -> &'static str {
+    match plate {
+        Plate::Dark => "dark plate",
+        Plate::Light => "light plate",
+    }
+}
+
+/// How many times more sharply a later plate kind's calibration must change across
+/// the disk's ends ([`vision::Calibration::end_step`]) than an earlier plausible
+/// one's to be taken instead: the same points step alike (a ratio near 1), while
+/// points inside the disk step by its shading alone, a small part of its contrast.
+const END_STEP_RATIO: f64 = 2.0;
+
+/// Calibrates for the plate kind that describes the rest frames. Each kind's
+/// calibration is tried, a dark plate's first. A calibration is plausible when it
+/// finds a disk at rest whose two scales imply a camera a side view can have
+/// (perspective factor within [`PERSPECTIVE_FACTOR_RANGE`]); of the plausible ones
+/// the first is taken, unless a later one's ends are edges where its ends are not:
+/// its points change more than [`END_STEP_RATIO`] times as sharply across x_l and
+/// x_r on the last rest frame ([`vision::Calibration::end_step`]). Where neither
+/// kind's ends step that much more sharply (the two found the same disk), the
+/// plate under the disk decides ([`vision::Calibration::under_rim_light`]): darker
+/// there than beside the disk is a light plate's shadow, brighter a dark plate's
+/// mirror image. (o03 of the open footage under gamma 0.7: both kinds found the
+/// same disk, ends 49.8 and 50.4; the dark plate's reading of that light plate read
+/// n +0.022 and the heights 2.5 % low.)
+///
+/// A dark-plate calibration of a light plate finds a sliver of the plate, an
+/// unsteady blob, or (on a plate brighter than the disk's side) a run that stops
+/// inside the disk where its side's shading crosses γ, with a plausible camera;
+/// a light-plate calibration of a dark plate takes the reflection for part of the
+/// disk. With neither plausible, the first that calibrated at all is taken (its
+/// scale then falls back to the diameter, with a warning), else the dark
+/// plate's error is returned.
+fn calibrate_detecting_plate(
+    rest: &[FrameView],
+    first_index: usize,
+    side_config: &SideViewConfig,
+    given: Option<&CalibrationOverride>,
+    disk: &DiskParams,
+) -> Result<(CalibrationReport, Plate, String), VisionError> {
+    let (lo, hi) = PERSPECTIVE_FACTOR_RANGE;
+    let last = rest.last().ok_or(VisionError::NoFrames)?;
+    let mut taken: Option<(CalibrationReport, Plate, f64)> = None;
+    let mut fallback = None;
+    let mut tried = Vec::new();
+    let mut errors = Vec::new();
+    for plate in [Plate::Dark, Plate::Light] {
+        let config = SideViewConfig {
+            plate,
+            ..*side_config
+        };
+        match vision::calibrate_at_rest(rest, first_index, &config, given) {
+            Ok(report) => {
+                let cal = &report.calibration;
+                let factor = ScaleReport::new(cal, cal.z_base, disk).perspective_factor;
+                if !(lo..=hi).contains(&factor) {
+                    tried.push(format!(
+                        "{}: perspective factor {factor:.3}, outside {lo}–{hi}",
+                        plate_name(plate)
+                    ));
+                    fallback.get_or_insert((report, plate));
+                    continue;
+                }
+                let step = cal.end_step(last);
+                tried.push(format!(
+                    "{}: perspective factor {factor:.3}, step at the ends {step:.1}",
+                    plate_name(plate)
+                ));
+                let take = match &taken {
+                    None => true,
+                    Some((first, _, first_step)) => {
+                        if step > END_STEP_RATIO * first_step {
+                            true
+                        } else if *first_step > END_STEP_RATIO * step {
+                            false
+                        } else {
+                            // The ends alike: what the plate shows under the disk
+                            // decides, a shadow the light plate.
+                            let under = first.calibration.under_rim_light(last);
+                            if let Some(light) = under {
+                                tried.push(format!(
+                                    "under the disk {light:+.1} of 255 against the plate beside it ({})",
+                                    if light < 0.0 { "a shadow" } else { "a mirror image" }
+                                ));
+                            }
+                            under.is_some_and(|light| light < 0.0)
+                        }
+                    }
+                };
+                if take {
+                    taken = Some((report, plate, step));
+                }
+            }
+            Err(e) => {
+                tried.push(format!("{}: {e}", plate_name(plate)));
+                errors.push(e);
+            }
+        }
+    }
+    match taken.map(|(report, plate, _)| (report, plate)).or(fallback) {
+        Some((report, plate)) => Ok((report, plate, tried.join("; "))),
+        // Every kind failed to calibrate. For the same reason (a disk not yet at rest,
+        // say), that reason; for different ones, each kind's.
+        None => match &errors[..] {
+            [first, rest @ ..]
+                if rest
+                    .iter()
+                    .all(|e| std::mem::discriminant(e) == std::mem::discriminant(first)) =>
+            {
+                Err(first.clone())
+            }
+            _ => Err(VisionError::PlateNotRecognised {
+                tried: tried.join("; "),
+            }),
+        },
+    }
+}
+
+fn layout_name(two_view: bool) -> &'static str {
+    if two_view { "two-view" } else { "side view" }
+}

@@ -1,0 +1,270 @@
+//! After the fits: the zero of z_rim's share of n's interval, and the checks that
+//! are reported beside the fits, never applied to them (flagged frames in the
+//! window, states and peaks left out, the precession check, the turns' timing).
+
+use super::fits::{
+    Fits, STATIONARY_RATE_FACTOR, frame_energies, near_stationary_rolling, peak_energies,
+    with_zero_error,
+};
+use super::halt::Settled;
+use super::series::{MeasuredSpan, rim_model, rim_series, signal_config};
+use super::{EnergyFit, HaltPlacement};
+use crate::config::ExperimentConfig;
+use crate::model::params::DiskParams;
+use crate::precession::{self, PrecessionCheck};
+use crate::signal::{self, StateSeries};
+use crate::turn_timing::TurnTimingFit;
+use crate::vision::RimReading;
+
+/// The fits as reported, with the checks' findings among the span's warnings.
+pub(super) struct Fitted {
+    pub(super) span: MeasuredSpan,
+    pub(super) peaks_fit: EnergyFit,
+    pub(super) frames_fit: Option<EnergyFit>,
+    pub(super) full_state_fit: Option<EnergyFit>,
+    pub(super) turn_timing: Result<TurnTimingFit, String>,
+    pub(super) halt_placement: Option<HaltPlacement>,
+    pub(super) skips_in_window: usize,
+    pub(super) precession: Option<PrecessionCheck>,
+    /// 1σ uncertainty of the zero of z_rim \[px\], carried into n's intervals.
+    pub(super) zero_px: f64,
+}
+
+/// The settled fits with the zero's share of their intervals, and the checks'
+/// warnings, in the order a reader meets them: the halt seen, flagged frames,
+/// states and peaks left out, the precession, the turns' timing.
+pub(super) fn finish_fits(
+    config: &ExperimentConfig,
+    params: &DiskParams,
+    settled: Settled,
+) -> Fitted {
+    let Settled {
+        mut span,
+        fits,
+        bounded,
+        halt_placement,
+        plan,
+        ..
+    } = settled;
+    let Fits {
+        peaks: peaks_fit,
+        frames: frames_fit,
+        full_state: full_state_fit,
+        turns: turn_timing,
+    } = fits;
+    span.warnings.extend(halt_sighting_disagrees(&peaks_fit));
+    let halt = plan.halt(&span.series, bounded, turn_timing.as_ref().ok());
+    let skips = signal::flags_within(
+        &span.series.flags,
+        span.series.peaks.window.0,
+        span.series.peaks.window.1,
+    );
+    let skips_in_window = skips.len();
+    span.warnings.extend(flagged_in_window(&skips));
+
+    // The zero of z_rim (placed by the motion, or the edge at rest) is shared by every
+    // height, so an error in it moves n without a trace in the residuals: each fit is
+    // made again with the zero moved down and up by its uncertainty, and half the
+    // change of n enters n's interval.
+    let zero_px = config
+        .rim_zero_uncertainty_px()
+        .unwrap_or_else(|| match &span.zero {
+            Some(z) => RimReading::motion_zero_uncertainty_px(z.zero.se / span.metres_per_px),
+            None => span.reading.zero_uncertainty_px(),
+        });
+    let moved = zero_moved_series(&span, params, zero_px, plan.window_s);
+    let window_s = plan.window_s;
+    let peaks_fit = with_zero_error(
+        peaks_fit,
+        &moved,
+        |s| peak_energies(params, s),
+        window_s,
+        halt,
+    );
+    let frames_fit = frames_fit.map(|f| {
+        with_zero_error(
+            f,
+            &moved,
+            |s| frame_energies(params, s, None),
+            window_s,
+            halt,
+        )
+    });
+    let full_state_fit = full_state_fit.map(|f| {
+        with_zero_error(
+            f,
+            &moved,
+            |s| frame_energies(params, s, s.strip.as_ref()),
+            window_s,
+            halt,
+        )
+    });
+
+    span.warnings.extend(unsteady_states(&span.series, params));
+    span.warnings.extend(unread_peaks(&span.series));
+    // φ from the heights against φ from the precession rate (crate::precession): a
+    // check of the scale and the zero that shares neither; reported, never applied.
+    let precession = precession::precession_check(
+        &span.series.states,
+        params,
+        span.series.peaks.window,
+        signal_config(window_s, span.metres_per_px).state_window_periods,
+    );
+    span.warnings
+        .extend(precession_disagrees(precession.as_ref()));
+    span.warnings
+        .extend(timing_disagrees(&turn_timing, &peaks_fit));
+    Fitted {
+        span,
+        peaks_fit,
+        frames_fit,
+        full_state_fit,
+        turn_timing,
+        halt_placement,
+        skips_in_window,
+        precession,
+        zero_px,
+    }
+}
+
+/// The span's series with the zero of z_rim moved down and up by `zero_px`.
+fn zero_moved_series(
+    span: &MeasuredSpan,
+    params: &DiskParams,
+    zero_px: f64,
+    window_s: f64,
+) -> [Option<StateSeries>; 2] {
+    let model = rim_model(&span.scale, params);
+    let (t, z) = rim_series(&span.frames);
+    [-1.0, 1.0].map(|sign| {
+        signal::with_zero_moved(
+            &t,
+            &z,
+            &span.series,
+            sign * zero_px * span.metres_per_px,
+            model.as_ref(),
+            &signal_config(window_s, span.metres_per_px),
+        )
+        .ok()
+    })
+}
+
+/// The halt seen and the turns' end more than 3σ apart: t0 is the energies' alone.
+fn halt_sighting_disagrees(peaks_fit: &EnergyFit) -> Option<String> {
+    let seen = peaks_fit
+        .fit
+        .halt_sighting
+        .filter(|s| s.disagrees_with_turns)?;
+    let turns = seen.turns_end?;
+    Some(format!(
+        "the halt seen puts t0 at {:+.1} ± {:.1} ms, the turns' end at {:+.1} ± {:.1} ms: \
+         more than 3σ apart, as when the encoder holds the last pictures; t0 is the \
+         energies' alone",
+        1e3 * seen.t0_seen,
+        1e3 * seen.se_t0_seen,
+        1e3 * turns.t_end,
+        1e3 * turns.se
+    ))
+}
+
+/// Flagged frames (skips, jumps, repeats) inside the fit window, with the
+/// timestamp gaps among them.
+fn flagged_in_window(in_window: &[&signal::FrameFlag]) -> Option<String> {
+    if in_window.is_empty() {
+        return None;
+    }
+    let gaps: Vec<String> = in_window
+        .iter()
+        .filter_map(|f| match f.reason {
+            signal::SkipReason::TimestampGap { missing_frames, .. } => Some(format!(
+                "{missing_frames} frame(s) missing before t = {:.4} s",
+                f.t
+            )),
+            _ => None,
+        })
+        .collect();
+    let gaps = if gaps.is_empty() {
+        String::new()
+    } else {
+        format!(" (timestamp gaps: {})", gaps.join("; "))
+    };
+    Some(format!(
+        "{} flagged frame(s) (skips, jumps or repeated frames) inside the fit window{gaps}",
+        in_window.len()
+    ))
+}
+
+/// States far from stationary rolling, left out of the per-frame fits
+/// ([`frame_energies`]).
+fn unsteady_states(series: &StateSeries, params: &DiskParams) -> Option<String> {
+    let unsteady: Vec<String> = (series.states.iter())
+        .filter(|s| s.is_determined() && !near_stationary_rolling(params, s))
+        .map(|s| format!("{:.4}", s.t))
+        .collect();
+    (!unsteady.is_empty()).then(|| {
+        format!(
+            "{} per-frame state(s) left out of the per-frame fits: their precession rate lies \
+             more than {STATIONARY_RATE_FACTOR} times from stationary rolling's at their φ \
+             (eq. 4.40), which eq. 3.8 assumes (t = {} s from the halt)",
+            unsteady.len(),
+            unsteady.join(", ")
+        )
+    })
+}
+
+/// Peaks whose height no φ reads, left out of the peaks fit ([`peak_energies`]).
+fn unread_peaks(series: &StateSeries) -> Option<String> {
+    let unread: Vec<String> = (series.peaks.peaks.iter())
+        .filter(|p| !p.phi.is_finite())
+        .map(|p| format!("{:.4}", p.t))
+        .collect();
+    (!unread.is_empty()).then(|| {
+        format!(
+            "{} of {} peaks left out of the peaks fit: their heights lie outside the \
+             rim model's range, so no φ reads them (t = {} s from the halt)",
+            unread.len(),
+            series.peaks.peaks.len(),
+            unread.join(", ")
+        )
+    })
+}
+
+/// The heights' φ and the precession's disagree beyond [`precession::AGREEMENT`].
+fn precession_disagrees(check: Option<&PrecessionCheck>) -> Option<String> {
+    let check = check.filter(|c| !c.agrees())?;
+    Some(format!(
+        "the heights' φ and the precession's disagree by more than {:.0} %: {}. Check the \
+         scale (the near top rim z_t, the disk's R, H and inertia in the config) and the \
+         zero of z_rim",
+        100.0 * precession::AGREEMENT,
+        check.describe()
+    ))
+}
+
+/// n from the turning points' times alone (crate::turn_timing), where no height,
+/// scale or zero enters, against the peaks fit's: disjoint 95 % intervals.
+fn timing_disagrees(
+    turn_timing: &Result<TurnTimingFit, String>,
+    peaks_fit: &EnergyFit,
+) -> Option<String> {
+    let timing = turn_timing.as_ref().ok()?;
+    let gap = disjoint_intervals(timing.ci95_n, peaks_fit.fit.ci95_n)?;
+    Some(format!(
+        "n from the turns' timing alone, {:.3} ({:.3} … {:.3}), and from the energies at \
+         the peaks, {:.3} ({:.3} … {:.3}), have disjoint 95 % intervals ({gap:.3} apart): the \
+         heights' zero, a codec's smoothing of the swing, or rolling away from the \
+         stationary state (nutation, slip) moves one and not the other",
+        timing.n,
+        timing.ci95_n.0,
+        timing.ci95_n.1,
+        peaks_fit.fit.n,
+        peaks_fit.fit.ci95_n.0,
+        peaks_fit.fit.ci95_n.1,
+    ))
+}
+
+/// How far apart two intervals lie, `None` when they overlap.
+fn disjoint_intervals(a: (f64, f64), b: (f64, f64)) -> Option<f64> {
+    let gap = (a.0 - b.1).max(b.0 - a.1);
+    (gap > 0.0).then_some(gap)
+}

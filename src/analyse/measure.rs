@@ -1,0 +1,396 @@
+//! Measure (pass 2): every frame of a span, streamed, read with the rest frames'
+//! gauges: the rim height z_rim [px] on the centre line, the gap's darkness, the
+//! top face's profile, the band window about the edge, the strip angle β of a
+//! two-view clip, and the pixels that find repeated frames. Then, over the span:
+//! the heights re-measured with the rim's edge model ([`super::rim_heights`]), the
+//! repeated frames set aside, the near top rim, the scale (eq. 3.10) and the frame
+//! times on the capture clock.
+
+use std::path::Path;
+
+use super::calibrate::RestCalibration;
+use super::open::OpenedClip;
+use super::rim_heights::{self, RimHeights};
+use super::span::SpanPlan;
+use super::views::{OwnedFrame, side_view};
+use super::{AnalyseError, FrameRecord, REST_FRAMES, ScaleReport, TopRimLeaning};
+use crate::config::ExperimentConfig;
+use crate::footage::{self, CaptureFps, FrameTiming, FrameView, RepeatedFrame};
+use crate::model::params::DiskParams;
+use crate::overlay::{FrameKeeper, KeptFrames, OverlaySpec};
+use crate::vision::{self, BandWindow, GapSample, RimHeight, StripFinder};
+
+/// Every second pixel of every second row is compared with the neighbouring
+/// frames' to find duplicated and interpolated frames (footage::RepeatGauge).
+const REPEAT_SAMPLE_STEP: usize = 2;
+
+/// A frame's rim height \[px\] and its edge's row \[px\].
+type RimCrest = (f64, f64);
+
+/// What pass 2 read of a span, frame by frame.
+pub(super) struct FrameReadings {
+    /// One record per frame, its times still unset (NaN).
+    pub(super) frames: Vec<FrameRecord>,
+    /// The gap's darkness per frame (dark plate).
+    pub(super) gaps: Vec<GapSample>,
+    /// The top face's profile per frame (LeanGauge).
+    pub(super) profiles: Vec<Vec<f32>>,
+    /// The band window about each frame's edge (the rim's edge model).
+    pub(super) windows: Vec<Option<BandWindow>>,
+    pub(super) repeats: footage::RepeatGauge,
+    /// Frames in which no rim edge was found.
+    pub(super) no_edge: usize,
+    /// The frame with the highest rim: its height, edge row and side view, for the
+    /// threshold diagnostic.
+    pub(super) highest: Option<(f64, f64, OwnedFrame)>,
+    /// The overlay's pictures of the frames near the last motion.
+    pub(super) kept: Option<KeptFrames>,
+}
+
+/// A span measured, before the signal stage.
+pub(super) struct MeasuredFrames {
+    /// The frames, z_rim in px and m, capture times set.
+    pub(super) frames: Vec<FrameRecord>,
+    /// The capture rate after the frame times (their warnings).
+    pub(super) fps: CaptureFps,
+    pub(super) frame_times: FrameTiming,
+    pub(super) warnings: Vec<String>,
+    pub(super) highest: Option<(f64, f64, OwnedFrame)>,
+    pub(super) kept: Option<KeptFrames>,
+    pub(super) rim: RimHeights,
+    /// Duplicated and interpolated frames, and their readings (z_rim \[px\], β) set
+    /// aside until the halt is known.
+    pub(super) repeated: Vec<RepeatedFrame>,
+    pub(super) set_aside: Vec<(Option<f64>, Option<f64>)>,
+    pub(super) top_rim_leaning: Option<TopRimLeaning>,
+    pub(super) scale: ScaleReport,
+    pub(super) metres_per_px: f64,
+}
+
+/// Measures the frames of `opened` from `first` to the end ([`read_frames`]), then
+/// their heights, scale and times.
+///
+/// # Errors
+/// A frame cannot be read or measured, or no frame shows a rim edge.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn measure_frames(
+    clip: &Path,
+    opened: &mut OpenedClip,
+    rest: &RestCalibration,
+    plan_span: &SpanPlan,
+    first: usize,
+    config: &ExperimentConfig,
+    params: &DiskParams,
+    overlay: Option<&OverlaySpec>,
+    progress: &dyn Fn(usize, Option<usize>),
+) -> Result<MeasuredFrames, AnalyseError> {
+    let mut fps = opened.fps.clone();
+    let readings = read_frames(clip, opened, rest, plan_span, first, overlay, progress)?;
+    let FrameReadings {
+        mut frames,
+        gaps,
+        profiles,
+        windows,
+        repeats,
+        no_edge,
+        highest,
+        kept,
+    } = readings;
+    let mut warnings = Vec::new();
+    if let Some(gauge) = &rest.gauges.gap {
+        warnings.extend(rim_heights::resolve_gap(&mut frames, gauge, &gaps));
+    }
+    let rim = rim_heights::remeasure(&mut frames, &windows, rest, fps.fps);
+    // Duplicated and interpolated frames show no capture of their own: no rim
+    // height or strip angle from them reaches the fits. Their readings are set
+    // aside until the halt is known (the signal stage).
+    let repeated = repeats.repeated(REST_FRAMES);
+    drop(repeats);
+    let set_aside: Vec<(Option<f64>, Option<f64>)> = repeated
+        .iter()
+        .map(|r| {
+            let record = &mut frames[r.index];
+            (record.z_rim_px.take(), record.beta_raw.take())
+        })
+        .collect();
+    let top_rim_leaning = top_rim_leaning(&frames, &profiles, rest);
+    drop(profiles);
+    let scale = scale(rest, &rim, top_rim_leaning.as_ref(), config, params);
+    let metres_per_px = scale.metres_per_px();
+    if !scale.at_near_rim() {
+        warnings.push(format!("scale from the {}", scale.used));
+    }
+    for record in &mut frames {
+        record.z_rim_m = record.z_rim_px.map(|z| z * metres_per_px);
+    }
+    if no_edge == frames.len() {
+        return Err(AnalyseError::Clip {
+            path: clip.to_path_buf(),
+            reason: format!(
+                "no rim edge found on the centre line in any of the {} frames (γ = {:.1})",
+                frames.len(),
+                rest.calibration.threshold.gamma
+            ),
+        });
+    }
+    if no_edge > 0 {
+        warnings.push(format!(
+            "no rim edge found in {no_edge} of {} frames",
+            frames.len()
+        ));
+    }
+    let frame_times = set_capture_times(&mut frames, plan_span, first, &mut fps);
+    warnings.splice(0..0, fps.warnings.iter().cloned());
+    Ok(MeasuredFrames {
+        frames,
+        fps,
+        frame_times,
+        warnings,
+        highest,
+        kept,
+        rim,
+        repeated,
+        set_aside,
+        top_rim_leaning,
+        scale,
+        metres_per_px,
+    })
+}
+
+/// Pass 2's stream: the frames from `first` to the end, each read with the rest
+/// frames' gauges. A side view reads only the band of columns about the centre
+/// line, so only that band is converted to colour.
+///
+/// # Errors
+/// A frame cannot be decoded, is not numbered as the container's index lists it,
+/// or its side view cannot be cut.
+fn read_frames(
+    clip: &Path,
+    opened: &mut OpenedClip,
+    rest: &RestCalibration,
+    plan_span: &SpanPlan,
+    first: usize,
+    overlay: Option<&OverlaySpec>,
+    progress: &dyn Fn(usize, Option<usize>),
+) -> Result<FrameReadings, AnalyseError> {
+    let vision_err = |error| AnalyseError::Vision {
+        path: clip.to_path_buf(),
+        error,
+    };
+    let (roi, split) = (rest.roi, rest.split());
+    let source = &mut opened.source;
+    match &plan_span.index {
+        Some(index) if first > 0 => source.seek_frame(first, index)?,
+        _ => source.seek(0)?,
+    }
+    if split.is_none() {
+        let x = roi.map_or(0, |r| r[0] as usize);
+        let mut band = rest.gauges.rim.band_columns();
+        if let Some(gap) = &rest.gauges.gap {
+            let columns = gap.band_columns();
+            band = band.start.min(columns.start)..band.end.max(columns.end);
+        }
+        source.convert_only_columns(Some(x + band.start..x + band.end))?;
+    }
+    let mut strip_finder = rest
+        .colour_thresholds
+        .as_ref()
+        .map(|(t, s)| StripFinder::new(*t, *s));
+    let mut keeper = overlay
+        .and_then(|spec| FrameKeeper::new(&rest.layout_geometry(), spec, opened.fps.fps, source));
+    let span_frames = opened.expected - first;
+    let mut readings = FrameReadings::with_capacity(span_frames, rest);
+    while let Some(frame) = source.next_frame()? {
+        let index = frame.index;
+        if first > 0 {
+            plan_span.check_frame(clip, index, frame.container_time_s)?;
+        }
+        let (side, plan) = side_view(&frame.view, roi, split, index).map_err(vision_err)?;
+        let (z_rim_px, new_highest) = readings.read_side(&side, index, rest).map_err(vision_err)?;
+        let strip = match (&mut strip_finder, plan) {
+            (Some(finder), Some(plan)) => finder.measure(&plan, index).ok(),
+            _ => None,
+        };
+        readings.frames.push(FrameRecord {
+            index,
+            // Set from the container's timestamps once every frame is read.
+            t_capture: f64::NAN,
+            t: f64::NAN,
+            container_time_s: frame.container_time_s,
+            picture_type: frame.picture_type,
+            z_rim_px,
+            z_rim_m: None,
+            beta_raw: strip.map(|s| s.beta),
+        });
+        if index % 256 == 0 {
+            progress(index - first, Some(span_frames));
+        }
+        readings
+            .repeats
+            .push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
+        if let Some(keeper) = &mut keeper {
+            // The strip as measured, with its mask for the outline (made
+            // only for the frames kept).
+            let mark = || {
+                let finder = strip_finder.as_mut()?;
+                Some(crate::overlay::StripMark {
+                    strip: strip?,
+                    mask: finder.strip_mask(),
+                })
+            };
+            keeper.offer(readings.frames.len() - 1, z_rim_px, source, mark)?;
+        }
+        if let Some((z_rim_px, edge_row)) = new_highest {
+            // The diagnostic shows the whole side view: convert the other columns.
+            let whole = source.whole_frame()?;
+            let side = side_view(&whole, roi, split, index).map_err(vision_err)?.0;
+            readings.highest = Some((z_rim_px, edge_row, OwnedFrame::copy(index, &side)));
+        }
+    }
+    progress(readings.frames.len(), Some(span_frames));
+    readings.kept = keeper.and_then(FrameKeeper::finish);
+    Ok(readings)
+}
+
+impl FrameReadings {
+    /// Empty readings for `frames` frames, with room for the gauges `rest` has.
+    fn with_capacity(frames: usize, rest: &RestCalibration) -> Self {
+        let room = |used: bool| if used { frames } else { 0 };
+        let gauges = &rest.gauges;
+        FrameReadings {
+            frames: Vec::with_capacity(frames),
+            gaps: Vec::with_capacity(room(gauges.gap.is_some())),
+            profiles: Vec::with_capacity(room(gauges.lean.is_some())),
+            windows: Vec::with_capacity(room(gauges.rest_window.is_some())),
+            repeats: footage::RepeatGauge::new(),
+            no_edge: 0,
+            highest: None,
+            kept: None,
+        }
+    }
+
+    /// Reads one frame's side view with every gauge: returns its z_rim \[px\] (0 at
+    /// contact, `None` without an edge) and, when its rim is the highest so far, its
+    /// height and edge row.
+    fn read_side(
+        &mut self,
+        side: &FrameView,
+        index: usize,
+        rest: &RestCalibration,
+    ) -> Result<(Option<f64>, Option<RimCrest>), vision::VisionError> {
+        let gauges = &rest.gauges;
+        let z_base = rest.calibration.calibration.z_base;
+        let rim = gauges.rim.measure(side, index)?;
+        if gauges.rest_window.is_some() {
+            let edge0 = match rim {
+                RimHeight::Edge { edge_row, .. } => Some(edge_row),
+                RimHeight::Contact => Some(z_base),
+                RimHeight::NoEdge => None,
+            };
+            let columns = gauges.rim.band_columns();
+            self.windows
+                .push(edge0.and_then(|e| BandWindow::read(side, &columns, e)));
+        }
+        let mut new_highest = None;
+        let z_rim_px = match rim {
+            RimHeight::Edge { z_rim_px, edge_row } => {
+                if self.highest.as_ref().is_none_or(|(z, _, _)| z_rim_px > *z) {
+                    new_highest = Some((z_rim_px, edge_row));
+                }
+                Some(z_rim_px)
+            }
+            RimHeight::Contact => Some(0.0),
+            RimHeight::NoEdge => {
+                self.no_edge += 1;
+                None
+            }
+        };
+        if let Some(gauge) = &gauges.gap {
+            self.gaps.push(gauge.measure(side));
+        }
+        if let Some(gauge) = &gauges.lean {
+            self.profiles.push(gauge.read(side));
+        }
+        Ok((z_rim_px, new_highest))
+    }
+}
+
+/// The near top rim from the frames that lean towards the camera
+/// ([`TopRimLeaning`]), unless the config gives z_t.
+fn top_rim_leaning(
+    frames: &[FrameRecord],
+    profiles: &[Vec<f32>],
+    rest: &RestCalibration,
+) -> Option<TopRimLeaning> {
+    rest.gauges
+        .lean
+        .as_ref()
+        .filter(|_| rest.given.is_none_or(|g| g.z_t.is_none()))
+        .and_then(|gauge| {
+            let heights: Vec<Option<f64>> = frames.iter().map(|f| f.z_rim_px).collect();
+            let kinds: Vec<Option<char>> = frames.iter().map(|f| f.picture_type).collect();
+            vision::near_top_rim_leaning(gauge, profiles, &heights, &kinds)
+        })
+        .map(|reading| TopRimLeaning {
+            reading,
+            rest_z_t: rest.calibration.calibration.z_t,
+        })
+}
+
+/// The scale at the near rim (eq. 3.10), checked against the diameter's
+/// ([`ScaleReport`]), with the leaning frames' z_t when read. z_rim is converted
+/// to metres once, after every correction of z_rim in px. The principal point is
+/// the centre of the frame's side view (above the split in a two-view clip).
+fn scale(
+    rest: &RestCalibration,
+    rim: &RimHeights,
+    top_rim_leaning: Option<&TopRimLeaning>,
+    config: &ExperimentConfig,
+    params: &DiskParams,
+) -> ScaleReport {
+    let mut cal = rest.calibration.calibration;
+    if let Some(leaning) = top_rim_leaning {
+        cal.z_t = leaning.reading.z_t;
+    }
+    // No face 1.5 px above the rest frames' z_t (vision::silhouette_top): their
+    // z_t is then the silhouette's top, the far top rim, unless below the
+    // leaning frames' near rim.
+    let silhouette_top = rest
+        .silhouette_top
+        .or_else(|| top_rim_leaning.map(|l| l.rest_z_t.min(l.reading.z_t)));
+    let roi_top = rest.roi.map_or(0.0, |r| f64::from(r[1]));
+    let side_rows = rest
+        .split()
+        .map_or(rest.height as f64, |s| roi_top + s as f64);
+    ScaleReport::new(&cal, rim.bottom_rim_row, params)
+        .with_camera_distance(config.camera_distance_m)
+        .with_near_rim_elevation(&cal, silhouette_top, params)
+        .with_local_scale_at_near_rim(0.5 * side_rows - roi_top, params)
+}
+
+/// Sets each frame's capture time: the container's timestamps on the capture
+/// clock, else index / fps; a span's from the timestamps of the whole clip (its
+/// index), so that they count from the clip's first frame.
+fn set_capture_times(
+    frames: &mut [FrameRecord],
+    plan_span: &SpanPlan,
+    first: usize,
+    fps: &mut CaptureFps,
+) -> FrameTiming {
+    let (t, frame_times) = match &plan_span.index {
+        Some(index) if first > 0 => {
+            let stamps: Vec<Option<f64>> =
+                index.container_times_s.iter().copied().map(Some).collect();
+            let (mut t, timing) = footage::frame_times(&stamps, fps);
+            (t.split_off(first), timing)
+        }
+        _ => {
+            let stamps: Vec<Option<f64>> = frames.iter().map(|f| f.container_time_s).collect();
+            footage::frame_times(&stamps, fps)
+        }
+    };
+    for (record, &t) in frames.iter_mut().zip(&t) {
+        record.t_capture = t;
+    }
+    frame_times
+}
