@@ -86,6 +86,7 @@ use crate::model::simulate::{
     EndReason, InitialState, Sample, SimulationError, SimulationSpec, Trajectory, simulate,
 };
 use crate::model::tuning::{TuningError, tune_eta};
+use crate::numeric::minimise::Stop;
 
 /// Default time between the initial state and the halt \[s\] (eq. 4.43: 0.5 s).
 pub const DEFAULT_LEAD_S: f64 = 0.5;
@@ -904,49 +905,14 @@ impl Objective<'_> {
 }
 
 /// Golden-section search for a minimum of `f` over x, started at `x0` with step
-/// `step`, to an interval of `tolerance`. Returns (x, f(x)).
+/// `step` (bracketed downhill by at most 40 golden steps), to an interval of
+/// `tolerance`. Returns (x, f(x)), the lowest point evaluated of the last bracket.
 fn minimise_1d(mut f: impl FnMut(f64) -> f64, x0: f64, step: f64, tolerance: f64) -> (f64, f64) {
-    const GOLD: f64 = 1.618_033_988_749_895;
-    let (mut a, mut fa) = (x0, f(x0));
-    let (mut b, mut fb) = (x0 + step, f(x0 + step));
-    if fb > fa {
-        std::mem::swap(&mut a, &mut b);
-        std::mem::swap(&mut fa, &mut fb);
-    }
-    let mut c = b + GOLD * (b - a);
-    let mut fc = f(c);
-    let mut expansions = 0;
-    while fc < fb && expansions < 40 {
-        (a, fa, b, fb) = (b, fb, c, fc);
-        c = b + GOLD * (b - a);
-        fc = f(c);
-        expansions += 1;
-    }
-    // Minimum bracketed by a < b < c (or c < b < a), fb smallest.
-    let (mut lo, mut hi) = if a < c { (a, c) } else { (c, a) };
-    let _ = fa;
-    let r = GOLD - 1.0;
-    let mut x1 = hi - r * (hi - lo);
-    let mut x2 = lo + r * (hi - lo);
-    let (mut f1, mut f2) = (f(x1), f(x2));
-    while hi - lo > tolerance {
-        if f1 <= f2 {
-            hi = x2;
-            (x2, f2) = (x1, f1);
-            x1 = hi - r * (hi - lo);
-            f1 = f(x1);
-        } else {
-            lo = x1;
-            (x1, f1) = (x2, f2);
-            x2 = lo + r * (hi - lo);
-            f2 = f(x2);
-        }
-    }
-    let mut best = if f1 <= f2 { (x1, f1) } else { (x2, f2) };
-    if fb < best.1 {
-        best = (b, fb);
-    }
-    best
+    let [(a, _), b, (c, _)] = crate::numeric::bracket_minimum(&mut f, x0, step, 40);
+    let (lo, hi) = if a < c { (a, c) } else { (c, a) };
+    let search = crate::numeric::golden_section(f, lo, hi, Stop::Width(tolerance));
+    let best = search.best();
+    if b.1 < best.1 { b } else { best }
 }
 
 /// Nelder–Mead on two variables from `x0` with initial steps `steps`; stops when

@@ -87,6 +87,7 @@
 
 use crate::model::closed_form;
 use crate::model::params::DiskParams;
+use crate::numeric::minimise::{Stop, golden_section};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, StudentsT};
@@ -1213,25 +1214,11 @@ fn minimise(f: impl Fn(f64) -> f64, low: f64, high: f64) -> Option<f64> {
     let best = (0..SEARCH_GRID)
         .filter(|&i| values[i].is_finite())
         .min_by(|&i, &j| values[i].total_cmp(&values[j]))?;
-    let (mut a, mut b) = (
+    let (a, b) = (
         grid[best.saturating_sub(1)],
         grid[(best + 1).min(SEARCH_GRID - 1)],
     );
-    let ratio = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut c, mut d) = (b - ratio * (b - a), a + ratio * (b - a));
-    let (mut fc, mut fd) = (f(c), f(d));
-    for _ in 0..GOLDEN_STEPS {
-        if fc < fd {
-            (b, d, fd) = (d, c, fc);
-            c = b - ratio * (b - a);
-            fc = f(c);
-        } else {
-            (a, c, fc) = (c, d, fd);
-            d = a + ratio * (b - a);
-            fd = f(d);
-        }
-    }
-    let x = 0.5 * (a + b);
+    let x = golden_section(&f, a, b, Stop::Steps(GOLDEN_STEPS)).midpoint();
     Some(if f(x) <= values[best] { x } else { grid[best] })
 }
 

@@ -632,7 +632,7 @@ fn run_analyse(
         );
     }
     let bar = progress_bar(0, "frames");
-    let experiment = analyse::analyse_clip_keeping(
+    let (experiment, kept) = analyse::analyse_clip_keeping(
         clip,
         &config,
         decoding,
@@ -648,7 +648,7 @@ fn run_analyse(
         bar.finish_and_clear();
     }
     eulerdisk::output::write_folder(&out, |dir| {
-        write_experiment(dir, &experiment, overlay.as_ref())
+        write_experiment(dir, &experiment, overlay.as_ref(), kept.as_ref())
     })?;
     let fit = &experiment.peaks_fit.fit;
     for warning in &experiment.warnings {

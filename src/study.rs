@@ -696,7 +696,7 @@ impl ClipAnalyser for StudyAnalyser {
     ) -> Result<ExperimentSummary, String> {
         let config =
             analyse::config_for(&self.root, &clip.path, None).map_err(|e| e.to_string())?;
-        let experiment = analyse::analyse_clip_keeping(
+        let (experiment, kept) = analyse::analyse_clip_keeping(
             &clip.path,
             &config,
             analyse::Decoding::NearTheEnd,
@@ -704,8 +704,13 @@ impl ClipAnalyser for StudyAnalyser {
             &|_, _| {},
         )
         .map_err(|e| e.to_string())?;
-        crate::report::experiment::write_experiment(dir, &experiment, self.overlay.as_ref())
-            .map_err(|e| e.to_string())?;
+        crate::report::experiment::write_experiment(
+            dir,
+            &experiment,
+            self.overlay.as_ref(),
+            kept.as_ref(),
+        )
+        .map_err(|e| e.to_string())?;
         let mut meta = clip.meta.clone();
         meta.material = meta.material.or(config.material.clone());
         meta.disk = meta.disk.or(config.disk_name.clone());

@@ -43,7 +43,7 @@ use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, StudentsT};
 use thiserror::Error;
 
-use crate::lsq::levenberg_marquardt;
+use crate::numeric::lsq::levenberg_marquardt;
 
 /// Fewest turning points the timing law is fitted to: sixteen, eight turns, so that the
 /// jackknife has four blocks of two turns and each refit keeps twelve points for four

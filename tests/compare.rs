@@ -162,7 +162,7 @@ fn closed_loop(setup: &Setup) {
     let experiment_dir = dir.path().join("contour");
     let (analysed, truth) = closed_loop_experiment(dir.path(), setup);
     check_calibration(&analysed, &truth);
-    write_experiment(&experiment_dir, &analysed, None).expect("write experiment");
+    write_experiment(&experiment_dir, &analysed, None, None).expect("write experiment");
     // The CLI's path: result.json read back.
     let experiment = compare::load_experiment(&experiment_dir).expect("result.json round trip");
 

@@ -110,7 +110,7 @@ fn a_span_near_the_end_measures_as_the_whole_clip() {
     assert_eq!(duplicates(&whole), vec![4200], "{:?}", whole.series.flags);
     assert!(span.frames[4200 - decoded.first_frame].z_rim_px.is_none());
     let report = dir.path().join("report");
-    write_experiment(&report, &span, None).unwrap();
+    write_experiment(&report, &span, None, None).unwrap();
     let result: Value =
         serde_json::from_str(&std::fs::read_to_string(report.join("result.json")).unwrap())
             .unwrap();

@@ -107,7 +107,6 @@ pub(super) fn experiment(
             calibration_png,
             threshold_png,
         },
-        kept: span.kept,
     })
 }
 

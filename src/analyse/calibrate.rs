@@ -8,11 +8,10 @@ use std::path::Path;
 use super::open::OpenedClip;
 use super::scale::PERSPECTIVE_FACTOR_RANGE;
 use super::views::{OwnedFrame, side_view};
-use super::{AnalyseError, REST_FRAMES, ScaleReport};
+use super::{AnalyseError, LayoutGeometry, REST_FRAMES, ScaleReport};
 use crate::config::{ExperimentConfig, Plate, VisionConfig};
 use crate::footage::FrameView;
 use crate::model::params::DiskParams;
-use crate::overlay::LayoutGeometry;
 use crate::vision::{
     self, BandWindow, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge,
     LeanGauge, RimGauge, RimHeight, SideViewConfig, ThresholdSource, VisionError,

@@ -13,11 +13,13 @@ use super::open::OpenedClip;
 use super::rim_heights::{self, RimHeights};
 use super::span::SpanPlan;
 use super::views::{OwnedFrame, side_view};
-use super::{AnalyseError, FrameRecord, REST_FRAMES, ScaleReport, TopRimLeaning};
+use super::{
+    AnalyseError, FrameKeeping, FrameRecord, KeepFrames, REST_FRAMES, ScaleReport, StripMark,
+    TopRimLeaning,
+};
 use crate::config::ExperimentConfig;
 use crate::footage::{self, CaptureFps, FrameTiming, FrameView, RepeatedFrame};
 use crate::model::params::DiskParams;
-use crate::overlay::{FrameKeeper, KeptFrames, OverlaySpec};
 use crate::vision::{self, BandWindow, GapSample, RimHeight, StripFinder};
 
 /// Every second pixel of every second row is compared with the neighbouring
@@ -43,8 +45,6 @@ pub(super) struct FrameReadings {
     /// The frame with the highest rim: its height, edge row and side view, for the
     /// threshold diagnostic.
     pub(super) highest: Option<(f64, f64, OwnedFrame)>,
-    /// The overlay's pictures of the frames near the last motion.
-    pub(super) kept: Option<KeptFrames>,
 }
 
 /// A span measured, before the signal stage.
@@ -56,7 +56,6 @@ pub(super) struct MeasuredFrames {
     pub(super) frame_times: FrameTiming,
     pub(super) warnings: Vec<String>,
     pub(super) highest: Option<(f64, f64, OwnedFrame)>,
-    pub(super) kept: Option<KeptFrames>,
     pub(super) rim: RimHeights,
     /// Duplicated and interpolated frames, and their readings (z_rim \[px\], β) set
     /// aside until the halt is known.
@@ -68,12 +67,12 @@ pub(super) struct MeasuredFrames {
 }
 
 /// Measures the frames of `opened` from `first` to the end ([`read_frames`]), then
-/// their heights, scale and times.
+/// their heights, scale and times; returns them and what the span's keeper kept.
 ///
 /// # Errors
 /// A frame cannot be read or measured, or no frame shows a rim edge.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn measure_frames(
+pub(super) fn measure_frames<K: FrameKeeping>(
     clip: &Path,
     opened: &mut OpenedClip,
     rest: &RestCalibration,
@@ -81,11 +80,11 @@ pub(super) fn measure_frames(
     first: usize,
     config: &ExperimentConfig,
     params: &DiskParams,
-    overlay: Option<&OverlaySpec>,
+    keeping: Option<&K>,
     progress: &dyn Fn(usize, Option<usize>),
-) -> Result<MeasuredFrames, AnalyseError> {
+) -> Result<(MeasuredFrames, Option<K::Kept>), AnalyseError> {
     let mut fps = opened.fps.clone();
-    let readings = read_frames(clip, opened, rest, plan_span, first, overlay, progress)?;
+    let (readings, kept) = read_frames(clip, opened, rest, plan_span, first, keeping, progress)?;
     let FrameReadings {
         mut frames,
         gaps,
@@ -94,7 +93,6 @@ pub(super) fn measure_frames(
         repeats,
         no_edge,
         highest,
-        kept,
     } = readings;
     let mut warnings = Vec::new();
     if let Some(gauge) = &rest.gauges.gap {
@@ -141,38 +139,39 @@ pub(super) fn measure_frames(
     }
     let frame_times = set_capture_times(&mut frames, plan_span, first, &mut fps);
     warnings.splice(0..0, fps.warnings.iter().cloned());
-    Ok(MeasuredFrames {
+    let measured = MeasuredFrames {
         frames,
         fps,
         frame_times,
         warnings,
         highest,
-        kept,
         rim,
         repeated,
         set_aside,
         top_rim_leaning,
         scale,
         metres_per_px,
-    })
+    };
+    Ok((measured, kept))
 }
 
 /// Pass 2's stream: the frames from `first` to the end, each read with the rest
 /// frames' gauges. A side view reads only the band of columns about the centre
-/// line, so only that band is converted to colour.
+/// line, so only that band is converted to colour. Each frame is offered to the
+/// span's keeper, if `keeping` makes one.
 ///
 /// # Errors
 /// A frame cannot be decoded, is not numbered as the container's index lists it,
 /// or its side view cannot be cut.
-fn read_frames(
+fn read_frames<K: FrameKeeping>(
     clip: &Path,
     opened: &mut OpenedClip,
     rest: &RestCalibration,
     plan_span: &SpanPlan,
     first: usize,
-    overlay: Option<&OverlaySpec>,
+    keeping: Option<&K>,
     progress: &dyn Fn(usize, Option<usize>),
-) -> Result<FrameReadings, AnalyseError> {
+) -> Result<(FrameReadings, Option<K::Kept>), AnalyseError> {
     let vision_err = |error| AnalyseError::Vision {
         path: clip.to_path_buf(),
         error,
@@ -196,8 +195,8 @@ fn read_frames(
         .colour_thresholds
         .as_ref()
         .map(|(t, s)| StripFinder::new(*t, *s));
-    let mut keeper = overlay
-        .and_then(|spec| FrameKeeper::new(&rest.layout_geometry(), spec, opened.fps.fps, source));
+    let mut keeper =
+        keeping.and_then(|k| k.keeper(&rest.layout_geometry(), opened.fps.fps, source));
     let span_frames = opened.expected - first;
     let mut readings = FrameReadings::with_capacity(span_frames, rest);
     while let Some(frame) = source.next_frame()? {
@@ -233,7 +232,7 @@ fn read_frames(
             // only for the frames kept).
             let mark = || {
                 let finder = strip_finder.as_mut()?;
-                Some(crate::overlay::StripMark {
+                Some(StripMark {
                     strip: strip?,
                     mask: finder.strip_mask(),
                 })
@@ -248,8 +247,7 @@ fn read_frames(
         }
     }
     progress(readings.frames.len(), Some(span_frames));
-    readings.kept = keeper.and_then(FrameKeeper::finish);
-    Ok(readings)
+    Ok((readings, keeper.and_then(KeepFrames::finish)))
 }
 
 impl FrameReadings {
@@ -265,7 +263,6 @@ impl FrameReadings {
             repeats: footage::RepeatGauge::new(),
             no_edge: 0,
             highest: None,
-            kept: None,
         }
     }
 

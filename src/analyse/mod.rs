@@ -34,7 +34,6 @@ use std::path::{Path, PathBuf};
 use crate::config::ExperimentConfig;
 use crate::energy::FitError;
 use crate::footage::{self, FootageError};
-use crate::overlay::OverlaySpec;
 use crate::signal::SignalError;
 use crate::vision::VisionError;
 
@@ -44,6 +43,7 @@ mod checks;
 pub mod diagnostics;
 mod fits;
 mod halt;
+mod keep;
 mod measure;
 mod open;
 mod result;
@@ -53,6 +53,7 @@ mod series;
 mod span;
 mod views;
 
+pub use keep::{FrameKeeping, KeepFrames, KeepNothing, LayoutGeometry, StripMark};
 pub use result::{
     Diagnostics, EnergyFit, EnergySample, Experiment, ExperimentPlan, FrameRecord, HaltPlacement,
     TopRimLeaning, ZeroFromMotion,
@@ -126,12 +127,12 @@ pub fn analyse_clip_decoding(
     decoding: Decoding,
     progress: &dyn Fn(usize, Option<usize>),
 ) -> Result<Experiment, AnalyseError> {
-    analyse_clip_keeping(clip, config, decoding, None, progress)
+    analyse_clip_keeping::<KeepNothing>(clip, config, decoding, None, progress).map(|(e, _)| e)
 }
 
-/// [`analyse_clip_decoding`], keeping the pictures that the measurement overlay
-/// `overlay` will show while the frames are read ([`Experiment::kept`]), so that
-/// [`crate::overlay::write_measurement_overlays`] need not decode them again.
+/// [`analyse_clip_decoding`], offering every frame read to the keepers `keeping`
+/// makes (the measurement overlay keeps its pictures, so that it need not decode the
+/// clip again), and returning what the last span's keeper kept.
 ///
 /// The thesis's chain: open, calibrate on the rest frames, measure every frame and
 /// run the signal stage (on a span grown back as the fits need), fit the energy
@@ -140,29 +141,30 @@ pub fn analyse_clip_decoding(
 ///
 /// # Errors
 /// As [`analyse_clip`].
-pub fn analyse_clip_keeping(
+pub fn analyse_clip_keeping<K: FrameKeeping>(
     clip: &Path,
     config: &ExperimentConfig,
     decoding: Decoding,
-    overlay: Option<&OverlaySpec>,
+    keeping: Option<&K>,
     progress: &dyn Fn(usize, Option<usize>),
-) -> Result<Experiment, AnalyseError> {
+) -> Result<(Experiment, Option<K::Kept>), AnalyseError> {
     let params = config.disk_params();
     let mut opened = open::open_clip(clip, config)?;
     let rest = calibrate::calibrate(clip, &mut opened, config, &params)?;
-    let (measured, decoded) = span::measure_spans(
+    let (measured, decoded, kept) = span::measure_spans(
         clip,
         &mut opened,
         &rest,
         config,
         &params,
         decoding,
-        overlay,
+        keeping,
         progress,
     )?;
     let settled = halt::settle(clip, config, &params, &rest, measured)?;
     let fitted = checks::finish_fits(config, &params, settled);
-    assemble::experiment(clip, config, params, &opened, rest, decoded, fitted)
+    let experiment = assemble::experiment(clip, config, params, &opened, rest, decoded, fitted)?;
+    Ok((experiment, kept))
 }
 
 /// The config that applies to `clip`: the folder files from `root` down, the

@@ -10,7 +10,6 @@ use crate::config::{ExperimentConfig, HaltChoice};
 use crate::energy::PowerLawFit;
 use crate::footage::{self, CaptureFps, FrameTiming};
 use crate::model::params::DiskParams;
-use crate::overlay::KeptFrames;
 use crate::precession::PrecessionCheck;
 use crate::signal::{self, StateSeries};
 use crate::turn_timing::TurnTimingFit;
@@ -266,10 +265,6 @@ pub struct Experiment {
     /// frame of the highest rim thresholded with the band and the edge found.
     #[serde(skip)]
     pub diagnostics: Diagnostics,
-    /// The overlay's pictures kept while the clip was read
-    /// ([`analyse_clip_keeping`]), so that the overlay need not decode it again.
-    #[serde(skip)]
-    pub kept: Option<KeptFrames>,
 }
 
 /// PNG images for a person checking the image stage.

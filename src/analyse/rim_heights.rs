@@ -7,7 +7,7 @@ use super::FrameRecord;
 use super::REST_FRAMES;
 use super::calibrate::RestCalibration;
 use crate::config::Plate;
-use crate::signal::{self, SignalConfig};
+use crate::signal::SignalConfig;
 use crate::vision::{self, BandWindow, GapGauge, GapSample, RimReading};
 
 /// How the span's rim heights were read.
@@ -197,7 +197,7 @@ fn tail_median_shift(heights: &mut [Option<f64>], tail: usize) -> f64 {
     if rest.len() < REST_FRAMES {
         return 0.0;
     }
-    let shift = signal::median(&rest);
+    let shift = crate::numeric::median(&rest);
     for z in heights.iter_mut().flatten() {
         *z -= shift;
     }

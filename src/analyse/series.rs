@@ -11,7 +11,6 @@ use super::{AnalyseError, FrameRecord, ScaleReport, TopRimLeaning, ZeroFromMotio
 use crate::config::{ExperimentConfig, RimZeroChoice};
 use crate::footage::{self, CaptureFps, FrameTiming};
 use crate::model::params::DiskParams;
-use crate::overlay::KeptFrames;
 use crate::signal::{
     self, RimModel, SideViewRim, SignalConfig, SignalError, StateSeries, ThesisRim,
 };
@@ -38,8 +37,6 @@ pub(super) struct MeasuredSpan {
     pub(super) local_fit_periods: f64,
     /// The rest tail's length \[s\] (SignalConfig::rest_tail_s).
     pub(super) rest_tail_s: f64,
-    /// The overlay's pictures of the frames near the last motion.
-    pub(super) kept: Option<KeptFrames>,
     /// Flags found before the signal stage ([`known_flags`]), positions in `frames`.
     pub(super) known_flags: Vec<signal::FrameFlag>,
     /// The near top rim from the frames leaning towards the camera, when read.
@@ -110,7 +107,6 @@ pub(super) fn signal_stage(
         frame_times,
         mut warnings,
         highest,
-        kept,
         rim,
         repeated,
         set_aside,
@@ -180,7 +176,6 @@ pub(super) fn signal_stage(
         metres_per_px,
         local_fit_periods: signal_config.state_window_periods,
         rest_tail_s: signal_config.rest_tail_s,
-        kept,
         known_flags,
         top_rim_leaning,
     })

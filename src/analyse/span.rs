@@ -9,11 +9,10 @@ use serde::{Deserialize, Serialize};
 use super::calibrate::RestCalibration;
 use super::open::OpenedClip;
 use super::series::{self, MeasuredSpan};
-use super::{AnalyseError, SENSITIVITY_WINDOWS_S, measure};
+use super::{AnalyseError, FrameKeeping, SENSITIVITY_WINDOWS_S, measure};
 use crate::config::ExperimentConfig;
 use crate::footage;
 use crate::model::params::DiskParams;
-use crate::overlay::OverlaySpec;
 
 /// Clips up to this long [s, capture clock] are decoded whole: every clip the
 /// thesis and our renders analyse (under 5 s) gives the same result as before
@@ -279,28 +278,31 @@ impl SpanPlan {
 ///
 /// # Errors
 /// The last span's error: unreadable frames, no rim, the signal stage's.
+/// Returns the last span's, its decoding and what its keeper kept.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn measure_spans(
+pub(super) fn measure_spans<K: FrameKeeping>(
     clip: &Path,
     opened: &mut OpenedClip,
     rest: &RestCalibration,
     config: &ExperimentConfig,
     params: &DiskParams,
     decoding: Decoding,
-    overlay: Option<&OverlaySpec>,
+    keeping: Option<&K>,
     progress: &dyn Fn(usize, Option<usize>),
-) -> Result<(MeasuredSpan, DecodedSpan), AnalyseError> {
+) -> Result<(MeasuredSpan, DecodedSpan, Option<K::Kept>), AnalyseError> {
     let window_s = config.window_s();
     let plan = SpanPlan::new(opened.index.take(), decoding, opened.expected, &opened.fps);
     let mut first = plan.first_span();
     let mut attempts = 1;
-    let measured = loop {
+    let (measured, kept) = loop {
         let result = measure::measure_frames(
-            clip, opened, rest, &plan, first, config, params, overlay, progress,
+            clip, opened, rest, &plan, first, config, params, keeping, progress,
         )
-        .and_then(|frames| series::signal_stage(clip, frames, rest.two_view, config, params));
+        .and_then(|(frames, kept)| {
+            series::signal_stage(clip, frames, rest.two_view, config, params).map(|m| (m, kept))
+        });
         let earlier = match &result {
-            Ok(m) => plan.earlier_start(first, Some(m), window_s),
+            Ok((m, _)) => plan.earlier_start(first, Some(m), window_s),
             Err(AnalyseError::Signal { .. } | AnalyseError::Clip { .. }) => {
                 plan.earlier_start(first, None, window_s)
             }
@@ -315,5 +317,5 @@ pub(super) fn measure_spans(
         }
     };
     let decoded = plan.decoded(first, attempts, measured.frames.len());
-    Ok((measured, decoded))
+    Ok((measured, decoded, kept))
 }

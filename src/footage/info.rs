@@ -21,7 +21,7 @@ use super::colour::VideoSignal;
 use super::decoder::VideoDecoder;
 use super::orientation::Orientation;
 use super::timing::{TimeSection, time_sections};
-use crate::signal::{mad_sigma, median};
+use crate::numeric::{mad_sigma, median};
 
 /// Video containers that [`probe`] hands to OpenCV (lower case, no dot).
 pub const VIDEO_EXTENSIONS: &[&str] = &["mp4", "m4v", "mov", "avi", "mkv"];

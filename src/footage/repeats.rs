@@ -47,7 +47,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::signal::median;
+use crate::numeric::median;
 
 /// The neighbours' statistic must stand this many noise levels above the rest
 /// frames' for a frame to be judged (there is motion to miss).
@@ -210,8 +210,7 @@ fn scaled_difference(
     let scale = if ratios.is_empty() {
         1.0
     } else {
-        let middle = ratios.len() / 2;
-        *ratios.select_nth_unstable_by(middle, f64::total_cmp).1
+        crate::numeric::upper_median(ratios)
     };
     frame
         .iter()

@@ -45,7 +45,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::{CaptureFps, FpsSource};
-use crate::signal::{mad_sigma, median};
+use crate::numeric::{mad_sigma, median};
 
 /// A slow-down factor within this of 1 is a section stored at its capture rate:
 /// its timestamps are capture times as they stand (a phone's real-time clip

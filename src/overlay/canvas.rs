@@ -814,10 +814,12 @@ impl Glyph {
     }
 }
 
+pub static FONT_BYTES: &[u8] = include_bytes!("../../data/fonts/DejaVuSans.ttf");
+
 /// The embedded font (the report's, DejaVu Sans).
 fn font() -> Result<&'static FontRef<'static>, String> {
     static FONT: OnceLock<Option<FontRef<'static>>> = OnceLock::new();
-    FONT.get_or_init(|| FontRef::try_from_slice(crate::report::plot::FONT_BYTES).ok())
+    FONT.get_or_init(|| FontRef::try_from_slice(FONT_BYTES).ok())
         .as_ref()
         .ok_or_else(|| "the embedded font DejaVuSans.ttf could not be loaded".into())
 }

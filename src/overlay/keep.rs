@@ -39,7 +39,8 @@ use std::ops::Range;
 use image::{Rgb, RgbImage};
 
 use super::canvas::{U_OF_RGB, V_OF_RGB, Window, YuvCanvas, YuvPicture, means_2x2, yuv_of};
-use super::measured::{BACKGROUND, Layout, LayoutGeometry, OverlaySpec, StripMark};
+use super::measured::{BACKGROUND, Layout, OverlaySpec};
+use crate::analyse::{FrameKeeping, KeepFrames, LayoutGeometry, StripMark};
 use crate::footage::{ChannelOrder, FootageError, FrameSource, FrameView, VideoSignal, Yuv420};
 use crate::vision::Strip;
 
@@ -883,6 +884,24 @@ impl FrameKeeper {
             off: false,
         })
     }
+}
+
+/// The overlay's frames are kept for its spec.
+impl FrameKeeping for OverlaySpec {
+    type Keeper = FrameKeeper;
+    type Kept = KeptFrames;
+    fn keeper(
+        &self,
+        geometry: &LayoutGeometry,
+        fps: f64,
+        source: &FrameSource,
+    ) -> Option<FrameKeeper> {
+        FrameKeeper::new(geometry, self, fps, source)
+    }
+}
+
+impl KeepFrames for FrameKeeper {
+    type Kept = KeptFrames;
 
     /// Offers the frame last read from `source`, at `position` of the measured
     /// frames, with its raw rim height \[px\] (moving at [`MOVING_PX`] or more);
@@ -890,7 +909,7 @@ impl FrameKeeper {
     ///
     /// # Errors
     /// A frame folder's frame cannot be lent whole.
-    pub(crate) fn offer(
+    fn offer(
         &mut self,
         position: usize,
         z_rim_px: Option<f64>,
@@ -949,7 +968,7 @@ impl FrameKeeper {
     }
 
     /// The frames kept, `None` if none could be.
-    pub fn finish(self) -> Option<KeptFrames> {
+    fn finish(self) -> Option<KeptFrames> {
         (!self.off && !self.kept.frames.is_empty()).then_some(self.kept)
     }
 }
@@ -1098,9 +1117,9 @@ mod tests {
             .join(fixture);
         let config: ExperimentConfig = toml::from_str(config).unwrap();
         let spec = OverlaySpec::default();
-        let e =
+        let (e, kept) =
             analyse_clip_keeping(&clip, &config, Decoding::Whole, Some(&spec), &|_, _| {}).unwrap();
-        let kept = e.kept.as_ref().expect("frames kept");
+        let kept = kept.as_ref().expect("frames kept");
         let m = kept.matrix.as_ref().expect("YUV kept");
         let (span, layout) = super::super::measured::span_and_layout(&e, &spec);
         let (first, last) = (span[0], span[span.len() - 1]);

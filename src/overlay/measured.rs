@@ -28,7 +28,8 @@ use serde::Serialize;
 
 use super::OverlayError;
 use super::canvas::{Canvas, Window, YuvCanvas, text_lines};
-use crate::analyse::{Experiment, ExperimentPlan};
+use super::keep::KeptFrames;
+use crate::analyse::{Experiment, ExperimentPlan, LayoutGeometry, StripMark};
 use crate::footage::Orientation;
 use crate::footage::{FrameSource, FrameView};
 use crate::output::{write_atomic, write_json};
@@ -148,40 +149,6 @@ pub(crate) struct Layout {
     pub side: Window,
     pub band: Window,
     pub plan: Option<Window>,
-}
-
-/// What the windows of an overlay frame are placed by: known once the clip is
-/// calibrated, before its frames are measured (so that `analyse` can keep the
-/// windows' pixels while it reads them, [`super::keep`]).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct LayoutGeometry {
-    pub calibration: vision::Calibration,
-    /// The side view's pixel (0, 0) in the frame ([`ExperimentPlan::side_view_origin`]).
-    pub origin: (usize, usize),
-    /// The region of interest's size, else the frame's \[px\].
-    pub view: (usize, usize),
-    /// The row splitting the side view (above) from the plan view (two-view clips).
-    pub split_row: Option<usize>,
-    pub band_half_width_px: usize,
-    /// The side view's row where z_rim = 0 ([`ExperimentPlan::rim_edge_row`]).
-    pub zero_row: f64,
-}
-
-impl LayoutGeometry {
-    /// The geometry of an analysed clip.
-    pub fn of(plan: &ExperimentPlan) -> Self {
-        let roi = plan.config.vision.as_ref().and_then(|v| v.roi);
-        Self {
-            calibration: plan.calibration.calibration,
-            origin: plan.side_view_origin(),
-            view: roi.map_or((plan.width, plan.height), |r| {
-                (r[2] as usize, r[3] as usize)
-            }),
-            split_row: plan.split_row.map(|(row, _)| row),
-            band_half_width_px: plan.band_half_width_px,
-            zero_row: plan.rim_edge_row(0.0),
-        }
-    }
 }
 
 impl Layout {
@@ -338,6 +305,7 @@ pub fn write_measurement_overlays(
     dir: &Path,
     e: &Experiment,
     spec: &OverlaySpec,
+    kept: Option<&KeptFrames>,
 ) -> Result<OverlayIndex, OverlayError> {
     let plan = &e.plan;
     let clip = &plan.clip;
@@ -395,7 +363,7 @@ pub fn write_measurement_overlays(
         batch: Vec::with_capacity(BATCH),
         free: Vec::new(),
     };
-    let drawn = draw_span(e, &layout, spec, (start, first, last), video_out);
+    let drawn = draw_span(e, kept, &layout, spec, (start, first, last), video_out);
     let encoded = encoder
         .join()
         .unwrap_or_else(|_| Err("the encoder thread panicked".into()))
@@ -452,14 +420,6 @@ pub fn write_measurement_overlays(
 /// Frames shown in the video, and the contact sheet's tiles.
 type DrawnSpan = (Vec<OverlayFrame>, Vec<(OverlayFrame, RgbImage)>);
 
-/// The strip found in a plan view: the mask's outline and principal axis drawn.
-pub(crate) struct StripMark {
-    pub strip: vision::Strip,
-    /// The mask over the plan view from the window's corner, row-major, and its
-    /// width.
-    pub mask: Option<(Vec<bool>, usize)>,
-}
-
 /// The drawing side of the encoder's thread: batches of canvases to encode,
 /// and the canvases it encoded, to draw on again.
 struct VideoOut {
@@ -499,6 +459,7 @@ impl VideoOut {
 /// 4:2:0 samples), and keeps the contact sheet's (drawn in RGB).
 fn draw_span(
     e: &Experiment,
+    kept: Option<&KeptFrames>,
     layout: &Layout,
     spec: &OverlaySpec,
     (start, first, last): (usize, usize, usize),
@@ -547,7 +508,7 @@ fn draw_span(
         }
         Ok(true)
     };
-    if let Some(kept) = e.kept.as_ref()
+    if let Some(kept) = kept
         && let Some(frames) = kept.span((start, last), layout)
     {
         for frame in frames {
@@ -921,10 +882,11 @@ mod tests {
             let fixture = clip.file_name().unwrap().to_string_lossy().into_owned();
             let config: ExperimentConfig = toml::from_str(config).unwrap();
             let spec = OverlaySpec::default();
-            let e = analyse_clip_keeping(&clip, &config, Decoding::Whole, Some(&spec), &|_, _| {})
-                .unwrap();
+            let (e, kept) =
+                analyse_clip_keeping(&clip, &config, Decoding::Whole, Some(&spec), &|_, _| {})
+                    .unwrap();
             let (span, layout) = span_and_layout(&e, &spec);
-            let kept = e.kept.as_ref().expect("frames kept");
+            let kept = kept.as_ref().expect("frames kept");
             assert_eq!(kept.recodes(), fixture == "full-range.mp4", "{fixture}");
             let frames = kept
                 .span((span[0], span[span.len() - 1]), &layout)

@@ -30,13 +30,12 @@ mod pose;
 
 use std::path::PathBuf;
 
-pub use canvas::Window;
+pub use canvas::{FONT_BYTES, Window};
 pub use keep::{FrameKeeper, KeptFrames, MOVING_PX};
 pub use measured::{
     LAST_TURNS_IMAGE, OVERLAY_H264, OVERLAY_INDEX, OVERLAY_VIDEO, OverlayFrame, OverlayIndex,
     OverlaySpec, write_measurement_overlays,
 };
-pub(crate) use measured::{LayoutGeometry, StripMark};
 pub use model::{
     EdgeError, MODEL_LAST_TURNS_IMAGE, MODEL_OVERLAY_ERRORS, MODEL_OVERLAY_VIDEO, ModelOverlay,
     write_model_overlay,

@@ -1345,26 +1345,11 @@ fn bisect(inside: &dyn Fn(f64) -> bool, mut above: f64, mut below: f64) -> f64 {
     0.5 * (above + below)
 }
 
-/// Maximum of a unimodal `f` on [lo, hi] by golden-section search (to 1e-15 of the
-/// interval): its argument.
-fn golden_max(f: &dyn Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut a, mut b) = (hi - g * (hi - lo), lo + g * (hi - lo));
-    let (mut fa, mut fb) = (f(a), f(b));
-    for _ in 0..80 {
-        if fa < fb {
-            lo = a;
-            (a, fa) = (b, fb);
-            b = lo + g * (hi - lo);
-            fb = f(b);
-        } else {
-            hi = b;
-            (b, fb) = (a, fa);
-            a = hi - g * (hi - lo);
-            fa = f(a);
-        }
-    }
-    0.5 * (lo + hi)
+/// Maximum of a unimodal `f` on [lo, hi] by golden-section search (80 steps: to
+/// 1e-15 of the interval): its argument.
+fn golden_max(f: &dyn Fn(f64) -> f64, lo: f64, hi: f64) -> f64 {
+    crate::numeric::golden_section(|x| -f(x), lo, hi, crate::numeric::minimise::Stop::Steps(80))
+        .midpoint()
 }
 
 /// The rest frame's calibration points and the camera's scales through the pinhole

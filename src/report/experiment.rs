@@ -26,7 +26,7 @@ use super::plot::{Panel, time_panels};
 use crate::analyse::{EnergyFit, Experiment, ExperimentPlan};
 use crate::energy::{self, SightingUse};
 use crate::output::{write_atomic, write_csv, write_json};
-use crate::overlay::{OverlayIndex, OverlaySpec, write_measurement_overlays};
+use crate::overlay::{KeptFrames, OverlayIndex, OverlaySpec, write_measurement_overlays};
 use crate::precession;
 use crate::turn_timing::TurnTimingFit;
 
@@ -104,7 +104,8 @@ pub fn other_clip_in(dir: &Path, clip: &Path) -> Option<PathBuf> {
 }
 
 /// Writes every output of an experiment into `dir`, with the overlays of `overlay`
-/// (`None`: none).
+/// (`None`: none), drawn on the frames `kept` while it was analysed where they
+/// cover them (else decoded again).
 ///
 /// # Errors
 /// A file cannot be written, a plot cannot be drawn, or the overlays cannot be
@@ -113,6 +114,7 @@ pub fn write_experiment(
     dir: &Path,
     experiment: &Experiment,
     overlay: Option<&OverlaySpec>,
+    kept: Option<&KeptFrames>,
 ) -> Result<(), ReportError> {
     let e = experiment;
     let strip = e.series.strip.as_ref().map(|s| &s.series);
@@ -304,7 +306,7 @@ pub fn write_experiment(
         _ => None,
     };
     let overlay = overlay
-        .map(|spec| write_measurement_overlays(dir, e, spec))
+        .map(|spec| write_measurement_overlays(dir, e, spec, kept))
         .transpose()?;
 
     write_atomic(

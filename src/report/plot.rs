@@ -81,7 +81,6 @@ const PANEL_GAP: u32 = 10;
 const PLOT_COLUMNS: usize = (WIDTH - Y_LABEL_W - LEFT_MARGIN - RIGHT_MARGIN) as usize;
 
 const FONT_FAMILY: &str = "sans-serif";
-pub(crate) static FONT_BYTES: &[u8] = include_bytes!("../../data/fonts/DejaVuSans.ttf");
 
 /// Curve colour outside highlights.
 const BASE_COLOR: RGBColor = RGBColor(0, 0, 255);
@@ -210,9 +209,10 @@ pub(crate) fn ensure_font() -> Result<(), String> {
     let ok = *REGISTERED.get_or_init(|| {
         // Also register the other generic families so nothing falls through to a
         // "font unavailable" error if a style names them.
-        [FONT_FAMILY, "serif", "monospace"]
-            .iter()
-            .all(|fam| plotters::style::register_font(fam, FontStyle::Normal, FONT_BYTES).is_ok())
+        [FONT_FAMILY, "serif", "monospace"].iter().all(|fam| {
+            plotters::style::register_font(fam, FontStyle::Normal, crate::overlay::FONT_BYTES)
+                .is_ok()
+        })
     });
     if ok {
         Ok(())

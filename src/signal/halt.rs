@@ -32,7 +32,8 @@
 //! still disk, the frames where the encoder refreshes the picture read the edge up to
 //! 0.2 px low (14 σ of the copied frames around them) on the light-plate fixture.
 
-use super::{SignalConfig, SignalError, finite_samples, mad_sigma, median};
+use super::{SignalConfig, SignalError, finite_samples};
+use crate::numeric::{mad_sigma, median};
 use serde::{Deserialize, Serialize};
 
 /// The halt of the rim motion, t_φ, and the noise it was measured against.

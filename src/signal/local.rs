@@ -9,7 +9,7 @@
 //! cannot tell the sense of precession).
 
 use super::RimModel;
-use crate::lsq::levenberg_marquardt;
+use crate::numeric::lsq::levenberg_marquardt;
 use std::f64::consts::PI;
 
 /// Starting values of a local fit.

@@ -690,24 +690,3 @@ fn finite_samples(t: &[f64], values: &[f64]) -> Vec<usize> {
         .filter(|&i| values[i].is_finite())
         .collect()
 }
-
-/// Median of a non-empty slice (NaN for an empty one).
-pub(crate) fn median(values: &[f64]) -> f64 {
-    if values.is_empty() {
-        return f64::NAN;
-    }
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
-/// 1.4826 × the median absolute deviation from `level`: σ for Gaussian noise.
-pub(crate) fn mad_sigma(values: &[f64], level: f64) -> f64 {
-    let deviations: Vec<f64> = values.iter().map(|x| (x - level).abs()).collect();
-    1.4826 * median(&deviations)
-}

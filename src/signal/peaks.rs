@@ -187,7 +187,7 @@ fn counted(times: &[f64], step: f64, steps: impl Fn(usize, f64) -> f64) -> Vec<P
                 .filter(|&i| i != j)
                 .map(|i| intervals[i])
                 .collect();
-            let period = super::median(&around);
+            let period = crate::numeric::median(&around);
             let ratio = if around.len() >= 2 && period.is_finite() && period > 0.0 {
                 intervals[j] / period
             } else {
@@ -376,7 +376,7 @@ pub(crate) fn nominal_period(t: &[f64]) -> f64 {
     if dt.is_empty() {
         f64::NAN
     } else {
-        super::median(&dt)
+        crate::numeric::median(&dt)
     }
 }
 
@@ -481,7 +481,7 @@ fn with_missed_turns(
         if around.len() < NEIGHBOUR_INTERVALS {
             continue;
         }
-        let turn = super::median(&around);
+        let turn = crate::numeric::median(&around);
         let (start, gap) = (t[pair[0].0], intervals[g]);
         let turns = (gap / turn).round() as usize;
         if turns < 2 {
@@ -528,7 +528,7 @@ fn final_turn(
     let &(last, _) = raw.last()?;
     let intervals: Vec<f64> = raw.windows(2).map(|w| t[w[1].0] - t[w[0].0]).collect();
     let latest = intervals.len().checked_sub(NEIGHBOUR_INTERVALS)?;
-    let turn = super::median(&intervals[latest..]);
+    let turn = crate::numeric::median(&intervals[latest..]);
     let (from, to) = (t[last] + 0.5 * turn, t[last] + 1.5 * turn);
     maxima
         .iter()

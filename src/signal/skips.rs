@@ -6,7 +6,8 @@
 
 use super::local::{LocalInit, PhaseTrack, Terms, fit_local};
 use super::peaks::nominal_period;
-use super::{Halt, RimModel, SignalConfig, finite_samples, mad_sigma, samples_to_the_halt};
+use super::{Halt, RimModel, SignalConfig, finite_samples, samples_to_the_halt};
+use crate::numeric::mad_sigma;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;

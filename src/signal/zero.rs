@@ -47,7 +47,7 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 use super::{RimModel, StateSeries, samples_to_the_halt};
-use crate::lsq::levenberg_marquardt;
+use crate::numeric::lsq::levenberg_marquardt;
 
 /// Turns between φ's knots: φ changes by a few per cent a turn near the halt, so a
 /// straight line over two turns leaves it within a fraction of that.

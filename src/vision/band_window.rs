@@ -7,7 +7,7 @@ use std::ops::Range;
 
 use super::profile::row_band_mean;
 use crate::footage::FrameView;
-use crate::signal::median;
+use crate::numeric::median;
 
 /// Rows recorded per frame above the first-pass edge (the disk's level is read on
 /// the top [`LEVEL_ROWS`] of them).

@@ -168,8 +168,7 @@ impl GapGauge {
         if per_px.len() < 3 {
             return None;
         }
-        per_px.sort_by(f64::total_cmp);
-        let darkness = per_px[per_px.len() / 2];
+        let darkness = crate::numeric::upper_median(&mut per_px);
         if darkness.is_nan() || darkness <= 0.0 {
             return None;
         }

@@ -45,8 +45,8 @@ use super::Calibration;
 use super::calibration::REACH;
 use super::profile::{blurred_step_coverage as coverage, row_band_mean};
 use crate::footage::FrameView;
-use crate::lsq::levenberg_marquardt;
-use crate::signal::{mad_sigma, median};
+use crate::numeric::lsq::levenberg_marquardt;
+use crate::numeric::{mad_sigma, median};
 
 /// Largest tilt towards the camera the profile makes room for \[rad\]: the far top
 /// rim rises by up to this fraction of the disk's diameter above its rest row.

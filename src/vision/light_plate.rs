@@ -31,7 +31,7 @@ use super::components::Component;
 use super::profile::{area_edge, column_band_mean, row_band_mean};
 use super::top_rim::{CentreBand, near_top_rim, near_top_rim_across, thin_top_face};
 use crate::footage::FrameView;
-use crate::signal::{mad_sigma, median};
+use crate::numeric::{mad_sigma, median};
 
 /// Least departure from the side's level that ends it, 0–255 intensity, and as a
 /// fraction of that level: above codec noise and the side's shading.
@@ -247,8 +247,7 @@ fn sub_pixel_end(frame: &FrameView, x: usize, y0: usize, y1: usize) -> Option<f6
     if ends.is_empty() {
         return None;
     }
-    ends.sort_by(f64::total_cmp);
-    Some(ends[ends.len() / 2])
+    Some(crate::numeric::upper_median(&mut ends))
 }
 
 /// The rim threshold on a light plate: halfway between the side's median level

@@ -82,7 +82,8 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use super::band_window::{BandWindow, ROWS_ABOVE, ROWS_BELOW};
-use super::profile::{golden_section, steps};
+use super::profile::steps;
+use crate::numeric::minimise::{Stop, golden_section};
 
 /// Width of the template's bins \[px\].
 pub const BIN_PX: f64 = 0.1;
@@ -401,8 +402,9 @@ impl MirrorEdgeModel {
             total,
             (best.1 - 0.25).max(MIN_PLATE_OFFSET_PX),
             best.1 + 0.25,
-            0.01,
-        );
+            Stop::Width(0.01),
+        )
+        .midpoint();
         c.is_finite().then_some(c)
     }
 
@@ -435,7 +437,13 @@ impl MirrorEdgeModel {
         if k == 0 {
             return None;
         }
-        let sigma = golden_section(total, grid[k - 1], grid[(k + 1).min(grid.len() - 1)], 0.05);
+        let sigma = golden_section(
+            total,
+            grid[k - 1],
+            grid[(k + 1).min(grid.len() - 1)],
+            Stop::Width(0.05),
+        )
+        .midpoint();
         // The plate's own share of σ, √(σ² − w²) with w D's own width (the camera's
         // blur of a sharp rim), must be resolved, at least w: below it the sharp
         // model, whose mirror image is D reflected with the camera's blur exact, is
@@ -625,7 +633,7 @@ fn edge_fit(
             best = (ssr, e);
         }
     }
-    let e = golden_section(cost, best.1 - step, best.1 + step, 1e-4);
+    let e = golden_section(cost, best.1 - step, best.1 + step, Stop::Width(1e-4)).midpoint();
     (e, cost(e))
 }
 

@@ -92,30 +92,6 @@ pub(super) fn steps((start, end, step): (f64, f64, f64)) -> impl Iterator<Item =
     (0..=n).map(move |k| start + k as f64 * step)
 }
 
-/// The minimiser of a unimodal `f` on [a, b], to `tol`.
-pub(super) fn golden_section(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> f64 {
-    let r = 0.5 * (5f64.sqrt() - 1.0);
-    let mut c = b - r * (b - a);
-    let mut d = a + r * (b - a);
-    let (mut fc, mut fd) = (f(c), f(d));
-    while b - a > tol {
-        if fc < fd {
-            b = d;
-            d = c;
-            fd = fc;
-            c = b - r * (b - a);
-            fc = f(c);
-        } else {
-            a = c;
-            c = d;
-            fc = fd;
-            d = a + r * (b - a);
-            fd = f(d);
-        }
-    }
-    0.5 * (a + b)
-}
-
 /// The fraction of row k (covering [k, k + 1)) below a step at e blurred by a
 /// Gaussian σ, c_k(e) = ∫_k^{k+1} Φ((u − e)/σ) du = σ [I(a) − I(b)] with
 /// I(x) = x Φ(x) + φ(x), a = (k + 1 − e)/σ, b = (k − e)/σ; with its derivatives in e

@@ -54,7 +54,8 @@
 use rayon::prelude::*;
 
 use super::band_window::{BandWindow, LEVEL_ROWS, ROWS_ABOVE};
-use super::profile::{golden_section, steps};
+use super::profile::steps;
+use crate::numeric::minimise::{Stop, golden_section};
 
 /// Lift past which the rows just under the edge show the shadow \[px\]: the
 /// rounded band and the blur (≈ 3 rows) no longer reach the plate.
@@ -149,7 +150,7 @@ impl<'a> Step<'a> {
                 best = (c, e);
             }
         }
-        golden_section(cost, best.1 - 0.05, best.1 + 0.05, 1e-4)
+        golden_section(cost, best.1 - 0.05, best.1 + 0.05, Stop::Width(1e-4)).midpoint()
     }
 
     /// The blur σ \[px\] best fitted, with the edge, to the two rows either side of
@@ -164,7 +165,13 @@ impl<'a> Step<'a> {
                 best = (c, sigma);
             }
         }
-        golden_section(cost, (best.1 - 0.1).max(0.0), best.1 + 0.1, 1e-3)
+        golden_section(
+            cost,
+            (best.1 - 0.1).max(0.0),
+            best.1 + 0.1,
+            Stop::Width(1e-3),
+        )
+        .midpoint()
     }
 }
 
@@ -220,7 +227,7 @@ pub fn remeasure(
     if ratios.len() < MIN_OPEN_FRAMES {
         return Err("too few frames lift the rim off its shadow to measure the shadow's level");
     }
-    let shadow_ratio = crate::signal::median(&ratios);
+    let shadow_ratio = crate::numeric::median(&ratios);
     if !(0.0..0.9).contains(&shadow_ratio) {
         return Err("the shadow under the lifted rim is not darker than the disk's side");
     }
@@ -233,7 +240,7 @@ pub fn remeasure(
     }
     let mut model = ShadowEdgeModel {
         shadow_ratio,
-        blur_px: crate::signal::median(&blurs),
+        blur_px: crate::numeric::median(&blurs),
         rest_edge: f64::NAN,
         kept_first_pass: 0,
     };

@@ -27,6 +27,7 @@ use nalgebra::{Matrix3, Vector3};
 use super::calibration::REACH;
 use super::profile::{area_edge, blurred_step_coverage, row_band_mean};
 use crate::footage::FrameView;
+use crate::numeric::median;
 
 /// Farthest band from the centre line, as a fraction of the disk's half-width a.
 /// There the near top rim lies b (1 − √(1 − 0.4²)) = 0.083 b above its lowest point
@@ -215,16 +216,11 @@ pub(super) fn near_top_rim(
 /// a strip crosses near the rim read its edge, all on the face's side of the rim,
 /// and would pull a plain median towards it.
 fn robust_median(mut v: Vec<f64>) -> f64 {
-    let median = |v: &mut [f64]| {
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        0.5 * (v[(n - 1) / 2] + v[n / 2])
-    };
-    let m = median(&mut v);
-    let mut deviations: Vec<f64> = v.iter().map(|x| (x - m).abs()).collect();
-    let cut = 3.0 * 1.4826 * median(&mut deviations);
+    let m = median(&v);
+    let deviations: Vec<f64> = v.iter().map(|x| (x - m).abs()).collect();
+    let cut = 3.0 * 1.4826 * median(&deviations);
     v.retain(|x| (x - m).abs() <= cut);
-    median(&mut v)
+    median(&v)
 }
 
 /// The near top rim on a top face too thin for [`near_top_rim`]'s plateaus (a camera
