@@ -104,13 +104,7 @@ pub(super) fn calibrate(
         .0;
     let (two_view, layout) = detect_layout(config, &last_view, last.index);
     let split_row = if two_view {
-        Some(match vision_config.split_row {
-            Some(row) => (row as usize, true),
-            None => (
-                vision::find_split_row(&last_view, last.index).map_err(vision_err)?,
-                false,
-            ),
-        })
+        Some(split_row(&vision_config, &last_view, last.index).map_err(vision_err)?)
     } else {
         None
     };
@@ -161,12 +155,7 @@ pub(super) fn calibrate(
     )
     .map_err(vision_err)?;
     let colour_thresholds = match split {
-        Some(row) => {
-            let (_, plan) = vision::split_views(&last_view, row, last.index).map_err(vision_err)?;
-            let thresholds =
-                vision::auto_colour_thresholds(&plan, last.index).map_err(vision_err)?;
-            Some((thresholds, ThresholdSource::Automatic))
-        }
+        Some(row) => Some(colour_thresholds(&last_view, row, last.index).map_err(vision_err)?),
         None => None,
     };
     Ok(RestCalibration {
@@ -232,6 +221,31 @@ fn detect_layout(config: &ExperimentConfig, last_view: &FrameView, index: usize)
             )
         }
     }
+}
+
+/// A two-view clip's first row of the plan view \[px\]: the config's `split_row`, else
+/// found on the last frame; and whether the config gave it.
+fn split_row(
+    vision_config: &VisionConfig,
+    last_view: &FrameView,
+    index: usize,
+) -> Result<(usize, bool), VisionError> {
+    Ok(match vision_config.split_row {
+        Some(row) => (row as usize, true),
+        None => (vision::find_split_row(last_view, index)?, false),
+    })
+}
+
+/// The strip's colour thresholds, found on the plan view of the last frame (below
+/// the split `row`).
+fn colour_thresholds(
+    last_view: &FrameView,
+    row: usize,
+    index: usize,
+) -> Result<(ColourThresholds, ThresholdSource), VisionError> {
+    let (_, plan) = vision::split_views(last_view, row, index)?;
+    let thresholds = vision::auto_colour_thresholds(&plan, index)?;
+    Ok((thresholds, ThresholdSource::Automatic))
 }
 
 /// The rest frames' calibration for the config's plate kind, or for the kind

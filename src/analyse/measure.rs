@@ -183,13 +183,7 @@ fn read_frames<K: FrameKeeping>(
         _ => source.seek(0)?,
     }
     if split.is_none() {
-        let x = roi.map_or(0, |r| r[0] as usize);
-        let mut band = rest.gauges.rim.band_columns();
-        if let Some(gap) = &rest.gauges.gap {
-            let columns = gap.band_columns();
-            band = band.start.min(columns.start)..band.end.max(columns.end);
-        }
-        source.convert_only_columns(Some(x + band.start..x + band.end))?;
+        source.convert_only_columns(Some(band_columns(rest)))?;
     }
     let mut strip_finder = rest
         .colour_thresholds
@@ -248,6 +242,18 @@ fn read_frames<K: FrameKeeping>(
     }
     progress(readings.frames.len(), Some(span_frames));
     Ok((readings, keeper.and_then(KeepFrames::finish)))
+}
+
+/// The frame's columns a side view's gauges read: the rim gauge's band and the gap
+/// gauge's \[px\].
+fn band_columns(rest: &RestCalibration) -> std::ops::Range<usize> {
+    let x = rest.roi.map_or(0, |r| r[0] as usize);
+    let mut band = rest.gauges.rim.band_columns();
+    if let Some(gap) = &rest.gauges.gap {
+        let columns = gap.band_columns();
+        band = band.start.min(columns.start)..band.end.max(columns.end);
+    }
+    x + band.start..x + band.end
 }
 
 impl FrameReadings {
