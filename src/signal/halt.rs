@@ -7,8 +7,8 @@
 //! the rest tail, or as three of the final turns (two turns missed, whatever the
 //! sampling's phase), means the disk lies flat or moves below the threshold for good:
 //! t_φ is the last rise before the first such span, and a later lone excursion
-//! (an H.264 refresh of the still picture tens of frames on, read up to 0.15 px
-//! high) is noise, not motion resumed. Nor is a picture held level for most of a final turn
+//! (an H.264 refresh of the still picture tens of frames on, read up to 0.15 px high)
+//! is noise, not motion resumed. Nor is a picture held level for most of a final turn
 //! and repeating an earlier reading, whatever its height: the rim comes down to the
 //! plate every turn, and an encoder may show an earlier picture again for several
 //! frames after the halt. After its last rise the rim comes down to the plate: the
@@ -225,8 +225,8 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // frame's reading exactly is the codec's copy of that picture (a moving rim, or a
     // still one under sensor noise, never reads the same twice), no new reading: at
     // coarse quantisers a still disk's picture is redrawn every 20–30 frames and held,
-    // 0.25 px up or down, in between. One short run alone is such a redraw, which the halt
-    // below then measures as noise.
+    // 0.25 px up or down, in between. One short run alone is such a redraw, which the
+    // halt below then measures as noise.
     //
     // A short run whose readings just before and just after it lie in the still band
     // (within half the threshold of the rest level) is an impulse: the picture
@@ -382,9 +382,9 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // stand as far above the picture right after them too (the median of the next
     // [`MIN_REST_FRAMES`] readings): an encoder settles on a still disk over many
     // frames, so its first still pictures may read the edge above the later level by
-    // more than σ (about 3 σ), and the frames after them read the same. Against that median
-    // alone, white noise would extend the descent more often (its own noise adds to
-    // the test's).
+    // more than σ (about 3 σ), and the frames after them read the same. Against that
+    // median alone, white noise would extend the descent more often (its own noise adds
+    // to the test's).
     while let Some(n) = samples.iter().position(|&i| i > index && t[i] <= until) {
         let next = samples[n];
         // A rise that the search above took for a held picture is no descent either

@@ -457,13 +457,13 @@ const WINDOW_PERIODS: f64 = 1.5;
 /// the halt. Each is one frame missing just before it, so the capture clock runs one
 /// nominal period ahead of the timestamps from it on.
 ///
-/// The margin is the halt's: the test's window after a step reaches the frames it
-/// holds up to the halt, and a halt seen late by an encoder's still pictures (up to
-/// 12–15 ms on coded footage, which the energy law's bound moves back later in
-/// `analyse`) puts those pictures inside a step test near it, which may then flag
-/// the last moving frame (F = 17.5 against a halt 6 frames late). A flag is enough to warn; counting a frame
-/// that is not missing would move every time after it, so the clock is corrected
-/// only where the window is clear of the halt.
+/// The margin is the halt's: the test's window after a step reaches the frames it holds
+/// up to the halt, and a halt seen late by an encoder's still pictures (up to 12–15 ms
+/// on coded footage, which the energy law's bound moves back later in `analyse`) puts
+/// those pictures inside a step test near it, which may then flag the last moving frame
+/// (F = 17.5 against a halt 6 frames late). A flag is enough to warn; counting a frame
+/// that is not missing would move every time after it, so the clock is corrected only
+/// where the window is clear of the halt.
 pub fn missing_frames(flags: &[FrameFlag], frame_s: f64, repeated: &[usize]) -> Vec<FrameFlag> {
     flags
         .iter()

@@ -254,12 +254,13 @@ fn codec_refreshes_in_the_rest_tail_are_not_motion() {
 }
 
 /// A still disk coded by x264 as a repeating group of a P frame and three B frames:
-/// each frame type reads the rim a little differently and the group repeats exactly
-/// (as a dark-plate render reads, 2.4, 0.1, −0.6 and 1.0 × 10⁻⁵ m in turn). Its autocorrelation has a trough at 2 frames and 0.8 at 4, as an
-/// oscillation's would, but the readings repeat one group to the next: the codec's
-/// cadence, not motion, and the halt stays within a frame of the truth. The same
-/// pattern with sensor noise on every reading (distinct readings, a disk still
-/// rocking by ±1.5 × 10⁻⁵ m at a period of 4 frames) is refused.
+/// each frame type reads the rim a little differently and the group repeats exactly (as
+/// a dark-plate render reads, 2.4, 0.1, −0.6 and 1.0 × 10⁻⁵ m in turn). Its
+/// autocorrelation has a trough at 2 frames and 0.8 at 4, as an oscillation's would,
+/// but the readings repeat one group to the next: the codec's cadence, not motion, and
+/// the halt stays within a frame of the truth. The same pattern with sensor noise on
+/// every reading (distinct readings, a disk still rocking by ±1.5 × 10⁻⁵ m at a period
+/// of 4 frames) is refused.
 #[test]
 fn the_encoders_frame_type_cadence_is_not_an_oscillation() {
     let (t, z, truth) = clip(0.0, 1);
@@ -1824,8 +1825,8 @@ fn camera_at_3_degrees() -> SideViewRim {
     }
 }
 
-/// Heights of `clip(0.0, 7)` drawn with `camera`'s profile, noise NOISE, lifted by `lift`
-/// [m] until the halt.
+/// Heights of `clip(0.0, 7)` drawn with `camera`'s profile, noise NOISE, lifted by
+/// `lift` [m] until the halt.
 fn lifted_heights(camera: &SideViewRim, lift: f64) -> (Vec<f64>, Vec<f64>) {
     let (t, _, truth) = clip(0.0, 7);
     let mut rng = SplitMix64::new(8);

@@ -589,8 +589,8 @@ fn point_medians(points: &[[f64; 4]]) -> [f64; 4] {
 /// disk's frames differ only by noise; a disk still rocking moves its top and its
 /// bottom together, one still sliding its left and right ends, while the codec's
 /// refresh of one frame's picture moves one point (0.76 px at z_base on a light plate
-/// at a coarse quantiser, the others within 0.2 px). The rim edge, the precise reading, is
-/// checked on its own.
+/// at a coarse quantiser, the others within 0.2 px). The rim edge, the precise reading,
+/// is checked on its own.
 fn moved_frame(
     points: &[[f64; 4]],
     medians: &[f64; 4],

@@ -3,10 +3,11 @@
 //! The zero is the edge at rest. A lifted rim's edge is read the same way, but not
 //! exactly: blur, the rim's rounding, the mirror image or the shadow under it and the
 //! codec differ between rest and lift, so every lifted height of a clip carries one
-//! shared offset (on sharp rendered rims a clip's heights are off by the same amount
-//! to ±0.03 px from 0.25 to 6 px; on rounded rims the offset also changes with the
-//! height). The residuals of the energy fits cannot show it; `analyse` refits with the zero moved by ± its 1σ uncertainty and carries
-//! half the change of n into n's interval.
+//! shared offset (on sharp rendered rims a clip's heights are off by the same amount to
+//! ±0.03 px from 0.25 to 6 px; on rounded rims the offset also changes with the
+//! height). The residuals of the energy fits cannot show it; `analyse` refits with the
+//! zero moved by ± its 1σ uncertainty and carries half the change of n into n's
+//! interval.
 //!
 //! That uncertainty is a property of the reading, measured against ground truth as
 //! the RMS over clips of the mean error of z_rim over the frames lifted past 0.5 px
