@@ -414,7 +414,7 @@ impl ExperimentConfig {
 /// the tilt. An edge read linearly in the profile (the area of the step) of the band's
 /// mean profile is the mean of the columns' edges, which is the centre line's to the
 /// rim's curvature, (w/R)²/6 of the peak (0.03 % at 2 %); the noise of the mean falls
-/// as 1/√(2w + 1) (on the open footage's 720 × 1280 side views, 5 → 35–45 columns).
+/// as 1/√(2w + 1) (on 720 × 1280 side views, 5 → 35–45 columns).
 /// The other edge readers (a level's crossing, the mirror-edge model's fit) are
 /// linear only for small spreads, which the 2 % keeps small: ±0.4 px at a 20 px peak.
 pub fn band_for_disk(disk_width_px: f64, default_px: usize) -> usize {

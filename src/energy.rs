@@ -67,10 +67,9 @@
 //!   turn's shared errors, the frames a smooth error slower than a turn (a φ
 //!   oscillating at 0.41 of the turn rate alternates in sign over the turns' sums), so
 //!   the wider interval of n is kept. On `scripts/coverage 120` renders the per-frame
-//!   fit's errors were 1.14 of its stated errors rms over the frames, 0.96 now; over
-//!   the open footage and three re-encodings of it 1.20, 0.86, 1.43 and 1.23, now
-//!   0.89, 0.83, 1.08 and 1.07 (tested; BENCHMARKS.md, "Per-frame intervals over the
-//!   turns").
+//!   fit's errors are 0.96 of its stated errors RMS (1.14 with the frames' covariance
+//!   alone); on real-rim footage at four codings 0.83–1.08 (0.86–1.43 with the
+//!   frames' alone; tested).
 //! * t0's interval, with t0 free, is the wider of the sandwich's and the delete-a-block
 //!   jackknife's ([`jackknife_se_t0`]: each turn, or each peak, left out in turn and
 //!   the law fitted again). The final few samples, close together in time and
@@ -82,8 +81,7 @@
 //!   jackknife's in 89–95 % (tested). It matters where the halt seen is combined
 //!   ([`HaltSighting::fit`]): the free t0 is weighed by its variance. The free fit's
 //!   n interval stays the sandwich's, which the coverage runs find honest; the
-//!   combined fit's widens with t0's variance (BENCHMARKS.md, "The free t0's interval
-//!   from the jackknife").
+//!   combined fit's widens with t0's variance.
 
 use crate::model::closed_form;
 use crate::model::params::DiskParams;
@@ -186,8 +184,8 @@ pub enum HaltTime {
 ///   falls to the least rise the detector sees, z_v, whose stationary-rolling energy
 ///   is E_v. The detector's threshold is a rise above the still disk's rest level,
 ///   and the energies' heights are measured from the zero the moving rim places
-///   (`signal::motion_zero`), which an encoder can code below the rest (0.045 px on
-///   the robustness gate's s11): z_v is the threshold plus the rest's height above
+///   (`signal::motion_zero`), which an encoder can code below the rest (by 0.045 px,
+///   half a 0.1 px threshold): z_v is the threshold plus the rest's height above
 ///   that zero ([`HaltSighting::visible_rise`]), and each drawn reading is the rim's
 ///   rise less that height;
 /// * χ turning ever faster, ψ̇ = ψ̇_v (τ/Δ)^{−n/2}, as stationary rolling has
@@ -203,8 +201,8 @@ pub enum HaltTime {
 /// (exposure and the codec move the last moving frame by up to a frame either way).
 /// With all motion visible (Δ → 0) this is t0 − t_last uniform over a frame. On 320 px
 /// renders, whose final frames read the rim near contact or below z_v, it puts t0
-/// 1–5 frames after t_last; on footage whose disk spans 900 px, within a frame or two
-/// (BENCHMARKS.md, "The halt seen from the final turns").
+/// 1–5 frames after t_last; on footage whose disk spans 900 px, within a frame or
+/// two.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct HaltSighting {
     /// t_last, the time of the last frame with rim motion \[s\].
@@ -1050,10 +1048,10 @@ impl HaltSighting {
     /// small to see), and which is not known. Nor when it and the turns' end T
     /// ([`Self::turns_end`]) differ by as much: T, fitted to the times of every turn of
     /// the window, is a third measurement, and a sighting that two others do not both
-    /// bear out is not used. Held pictures end the motion seen early: on the robustness
-    /// gate's seed 0 (s06, s15; I and P pictures at crf 28) the sighting put t0 13–22
-    /// ms early against T within 2.3 ms, and the combination followed it, n −0.061 on
-    /// s06 (BENCHMARKS.md, "The halt seen, checked against the turns' end").
+    /// bear out is not used. Held pictures end the motion seen early: with I and P
+    /// pictures at a coarse quantiser the sighting can put t0 13–22 ms early while T
+    /// lies within 2.3 ms of the truth, and a combination that followed the sighting
+    /// would move n by −0.06.
     fn fit(&self, t: &[f64], energy: &[f64], turns: &[f64]) -> Result<PowerLawFit, FitError> {
         let free = fit_free(t, energy, turns)?;
         let se_t0_free = free.se_t0.unwrap_or(f64::NAN);

@@ -486,8 +486,8 @@ struct RenderArgs {
     #[arg(long, default_value_t = DEFAULT_CRF, value_parser = clap::value_parser!(u8).range(0..=51))]
     crf: u8,
     /// Most frames from one I picture to the next in an MP4 (libx264's keyint;
-    /// default 250). Phones key every second or less; the open footage's median
-    /// gaps are 10–148 frames.
+    /// default 250). Phones key every second or less; other encoders' median gaps
+    /// run from 10 to about 150 frames.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     keyint: Option<u32>,
     /// Most B pictures in a row in an MP4 (libx264's bframes; default 3). 0 codes I

@@ -29,7 +29,7 @@
 //! It is a check, not a calibration. The relation assumes rolling without slip at
 //! the stationary state, and two renderers already disagree in it by 1.3 % at φ =
 //! 0.02 rad: the independent footage follows eq. 2.29 as printed (+ c h sin² φ),
-//! ours the corrected form (BENCHMARKS.md, "The precession check"). The result is
+//! ours the corrected form (docs/validation.md, "Open footage"). The result is
 //! reported, and a warning raised when the heights' φ and the precession's differ by
 //! more than [`AGREEMENT`] at the window's mean; nothing measured is changed.
 

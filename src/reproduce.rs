@@ -104,8 +104,8 @@ fn failed(
 }
 
 /// Computes every row (the simulations run in parallel). Table 4.1 tunes η for ten
-/// models and dominates the cost (minutes, see BENCHMARKS.md); `include_table_4_1 =
-/// false` leaves it out.
+/// models and dominates the cost (docs/validation.md, "Speed: simulator");
+/// `include_table_4_1 = false` leaves it out.
 pub fn reproduce(include_table_4_1: bool) -> Reproduction {
     let mut blocks: Vec<fn() -> Vec<Row>> = vec![
         rocking_can_rows,
@@ -313,8 +313,8 @@ fn contour_rows() -> Vec<Row> {
 /// last, while below 1e-6 rad the end moves by a few milliseconds and E is below
 /// 1e-4 of E(0). The fitted n does not depend on the angle between 1e-4 and 1e-10
 /// (tests/simulator.rs, `table_4_1_exponent_does_not_depend_on_stopping_angle`;
-/// BENCHMARKS.md). The contour-like models end on θ̇ = 0 at φ ≈ 3e-5 before
-/// reaching it.
+/// docs/validation.md, "Speed: simulator"). The contour-like models end on θ̇ = 0
+/// at φ ≈ 3e-5 before reaching it.
 pub const TABLE_4_1_FLAT_ANGLE: f64 = 1e-6;
 
 /// Energy exponent of one Table 4.1 model: η tuned so the motion ends at `stop`

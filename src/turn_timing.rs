@@ -23,9 +23,9 @@
 //! following the corrected eq. (2.29) the pure power law reads n 0.0012–0.0016 low
 //! (n = 0.4–0.7, φ falling from 0.025 to 0.0015 rad; unit test below); eq. (2.29) as
 //! printed (`+ c h sin² φ`, which the independent footage's renderer follows) makes
-//! it high, by +0.005 on that footage's true peaks (BENCHMARKS.md). A φ
-//! oscillating about stationary rolling, or slip, moves the turns' rate and so this
-//! estimate, not the heights'. n is reported, with its interval, never combined into
+//! it high, by +0.005 on that renderer's true peaks. A φ oscillating about
+//! stationary rolling, or slip, moves the turns' rate and so this estimate, not the
+//! heights'. n is reported, with its interval, never combined into
 //! the fits; T, the same halt as the energy law's t0, helps place t_φ and bounds a
 //! halt seen after it (`analyse::law_halt`, `analyse::law_bound`).
 //!

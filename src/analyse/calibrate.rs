@@ -383,9 +383,8 @@ const END_STEP_RATIO: f64 = 2.0;
 /// kind's ends step that much more sharply (the two found the same disk), the
 /// plate under the disk decides ([`vision::Calibration::under_rim_light`]): darker
 /// there than beside the disk is a light plate's shadow, brighter a dark plate's
-/// mirror image. (o03 of the open footage under gamma 0.7: both kinds found the
-/// same disk, ends 49.8 and 50.4; the dark plate's reading of that light plate read
-/// n +0.022 and the heights 2.5 % low.)
+/// mirror image. (A light plate under a darker tone curve can give both kinds the
+/// same disk; read as dark, its heights come out 2.5 % low and n +0.02.)
 ///
 /// A dark-plate calibration of a light plate finds a sliver of the plate, an
 /// unsteady blob, or (on a plate brighter than the disk's side) a run that stops

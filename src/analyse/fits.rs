@@ -262,11 +262,11 @@ pub(super) fn peak_energies(params: &DiskParams, series: &StateSeries) -> Vec<En
 
 /// How far a state's precession rate may lie from stationary rolling's at its φ
 /// (eq. 4.40, corrected) for eq. 3.8, which assumes stationary rolling, to read its
-/// energy: a factor of 2 either way (ψ̇² by 4). On the open footage, as given,
-/// mirrored, with drops and under another tone curve, every state lies within 0.73 …
-/// 1.13 of it (nutation and the local fits' noise) but two: one 3.5 ms before the
-/// halt of o02 under gamma 0.7 at 5.8 (its window cut by the halt; its energy 27
-/// times its neighbours', the per-frame n −0.034), and one of o08 mirrored at 0.37.
+/// energy: a factor of 2 either way (ψ̇² by 4). On real-rim footage, as given,
+/// mirrored, with drops and under another tone curve, states lie within 0.73 … 1.13
+/// of it (nutation and the local fits' noise); the rare outliers are local fits gone
+/// wrong, e.g. 5.8 times it a few ms before the halt, its window cut by the halt (its
+/// energy 27 times its neighbours', the per-frame n −0.034 if read), or 0.37.
 pub(super) const STATIONARY_RATE_FACTOR: f64 = 2.0;
 
 /// Whether `state`'s |ψ̇| lies within [`STATIONARY_RATE_FACTOR`] of stationary
@@ -323,10 +323,9 @@ pub(super) fn frame_energies(
 /// their counted ψ ([`turn_timing::fit_turn_timing`]), up to the last peak the local
 /// fit located. A parabolic peak after it is the last rise at the halt or a turn the
 /// halt cuts short (the local fit spans 1.5 turns): its time marks where the motion
-/// stopped, not a crest of the turn (on the open footage re-encoded at CRF 26 such
-/// peaks made the timing's n +0.046 and +0.058 on two clips; BENCHMARKS.md, *n from
-/// the turns' timing*). The troughs halve the timing's scatter over the peaks alone
-/// (the same BENCHMARKS section).
+/// stopped, not a crest of the turn (on coarsely coded footage such peaks move the
+/// timing's n by +0.05). The troughs halve the timing's scatter over the peaks
+/// alone.
 pub(super) fn turn_timing_fit(series: &PeakSeries) -> Result<TurnTimingFit, String> {
     let last_crest = series
         .peaks
@@ -348,7 +347,7 @@ mod tests {
     use super::*;
 
     /// A state at the precession rate of stationary rolling at its φ (eq. 4.40), or
-    /// within the 0.73 … 1.13 of it that the open footage's states show, is read by
+    /// within the 0.73 … 1.13 of it that real-rim footage's states show, is read by
     /// eq. 3.8; the outliers seen (5.8 and 0.37 times it) are not, nor is a φ where no
     /// stationary rolling exists.
     #[test]

@@ -253,16 +253,14 @@ pub(super) struct LawBound {
 /// does not rise again, and its turns, ψ̇ ∝ (T − t)^{−n/2}, end at T, so a rise seen
 /// after the halt is a coded picture: an encoder that shows earlier pictures again
 /// for a few frames after the halt, or settles on the still disk over many, read as
-/// motion (o05 of the open footage re-encoded at CRF 20: t_φ 9.5 frames late, a
-/// spurious peak). Either fit may see it alone: the spurious low peaks pull the peaks
-/// fit's free t0 onto the last of them (the same clip re-encoded by libx264
-/// 0.164.3095: peaks of 0.21 and 0.20 px at frames 623 and 625, the disk flat from
-/// 615.5; the peaks fit's t0 5.6 ms before the halt seen, within 3σ of 7.4 ms, while
-/// the per-frame fit's lay 21 ± 0.5 ms before it, 0.3 frames from the truth). The
-/// turns' law may see it where neither fit can: where the final peaks barely fix the
-/// energies' t0 (±13 ms on seed 7's robustness scene s03, crf 23), the halt seen
-/// decides the combined t0, and its coded pictures 4 frames after the true halt made
-/// n +0.046, while the turns ended 0.5 frames from the truth, ±1.2 ms. The bound is
+/// motion (t_φ up to 10 frames late, with a spurious peak). Either fit may see it
+/// alone: spurious low peaks (0.2 px, several frames after the disk lay flat) pull
+/// the peaks fit's free t0 onto the last of them, within its 3σ of the halt seen,
+/// while the per-frame fit's t0 lies 20 ms before it, near the truth. The turns' law
+/// may see it where neither fit can: where the final peaks barely fix the energies'
+/// t0 (±13 ms), the halt seen decides the combined t0, and coded pictures 4 frames
+/// after the true halt make n +0.05, while the turns end within a frame of the
+/// truth, ±1.2 ms. The bound is
 /// the earliest over the laws that disagree of their halt + 3 σ + one frame
 /// `frame_s` (the last frame of motion falls up to a frame after the halt,
 /// [`HaltSighting`]); `None` when the halt seen agrees, or the bound does not lie
@@ -347,12 +345,12 @@ pub(super) fn halt_sighting(
 /// The halt detector's last frame of motion is a rule, a rise above the rest's noise,
 /// and comes early by the frames whose motion the footage does not show: the last
 /// rises fall below the threshold, and an encoder holds pictures whose change is
-/// below its quantiser (7 frames early on the robustness gate's s17, crf 28; on 8 of
-/// its 24 scenes more than 2 frames off, RMS 6.4 ms). The laws' halts follow every
-/// turn of the window: over those 24 scenes t0 is off by 2.0 ms RMS and T by 1.1; over
-/// the open footage and its five re-encodings (48 clips) by 0.54 and 0.61 frames, and
-/// their errors are independent enough that the mean is off by 1.1 ms and 0.36
-/// frames RMS (BENCHMARKS.md, "t_φ where the laws place the halt"). T needs no height
+/// below its quantiser (on rendered scenes up to 7 frames early at a coarse
+/// quantiser, a third of them more than 2 frames off, RMS 6.4 ms). The laws' halts
+/// follow every turn of the window: on rendered scenes t0 is off by 2.0 ms RMS and
+/// T by 1.1; on real-rim footage coded five ways by 0.54 and 0.61 frames, and their
+/// errors are independent enough that the mean is off by 1.1 ms and 0.36 frames RMS
+/// (docs/validation.md, "Where the halt lies"). T needs no height
 /// and t0 no count of the turns, so a codec's shaved swings move one and not the
 /// other.
 pub(super) fn law_halt(

@@ -26,9 +26,9 @@ pub struct ScaleReport {
     /// z_b \[px\]: the row where the near bottom rim meets the plate. The calibration's
     /// z_base, the edge of the side at rest, unless the mirror-edge model measured
     /// the rim (a dark plate): then the plate line where the rim meets its mirror
-    /// image (on the open footage's rounded rims z_base lies 0.8–2.3 px above the
-    /// true rim, the plate line within 0.5 px of it, and eq. 3.10's scale was
-    /// 1.0–1.4 % large; a sharp rim's plate line lies within 0.2 px of its edge).
+    /// image (on rounded rims z_base lies 0.8–2.3 px above the true rim, the plate
+    /// line within 0.5 px of it, and eq. 3.10's scale from z_base is 1.0–1.4 % large;
+    /// a sharp rim's plate line lies within 0.2 px of its edge).
     /// `None` in results written before it was recorded (then z_base).
     #[serde(default)]
     pub bottom_rim_row_px: Option<f64>,
@@ -131,8 +131,8 @@ impl ScaleReport {
     ///   the camera (d_c = d + R), F = f Δh (1/(d_c − R) − 1/(d_c + R)) apart with
     ///   f = d_c/δ_c, so Δh = F δ_c (d_c² − R²)/(2R d_c); the camera is Δh + 2H above
     ///   the plate and tan ε = (Δh + 2H)/d at the near bottom rim. Close to the disk
-    ///   that is 0.5–1.5° more than the top face's own elevation (the open footage's
-    ///   o01, 0.45 m: 2.53° at the bottom rim, 0.91° at the top face).
+    ///   that is 0.5–1.5° more than the top face's own elevation (at 0.45 m: 2.53° at
+    ///   the bottom rim, 0.91° at the top face).
     pub fn with_near_rim_elevation(
         mut self,
         cal: &vision::Calibration,
@@ -172,7 +172,7 @@ impl ScaleReport {
     /// with d the camera's distance from the near rim ([`Self::camera_distance_m`]),
     /// δ_c the diameter's scale at the disk's centre and c_y the principal point's
     /// row, `principal_row`: the centre of the frame's side view, where a phone's
-    /// camera and the open footage's have it (ours aims at the disk's centre on the
+    /// camera and other renderers have it (ours aims at the disk's centre on the
     /// plate, 0.05 of the rows lower, which moves the factor by about a tenth of its
     /// departure from 1). To first order s_b/δ − 1 = (2H/d)(tan θ_b − tan(θ_b − p)):
     /// +0.1 … +0.5 % for a camera 0.2–0.6 m away looking down by 2–5°, by which δ

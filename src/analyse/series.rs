@@ -433,8 +433,7 @@ pub(super) fn rim_model(scale: &ScaleReport, disk: &DiskParams) -> Box<dyn RimMo
 /// The rim's profile the motion's zero is fitted with ([`signal::motion_zero`]): the
 /// camera's ([`ScaleReport::side_view_rim`]) when `choice` asks for the motion's zero.
 /// `None` keeps the still disk's edge: asked for, or the camera's elevation not known,
-/// where the first-order profile would read 0.05–0.12 px of offset that is not there
-/// (BENCHMARKS.md, "The zero from the motion").
+/// where the first-order profile would read 0.05–0.12 px of offset that is not there.
 pub(super) fn motion_profile(
     choice: RimZeroChoice,
     scale: &ScaleReport,

@@ -17,14 +17,13 @@
 //! samples the disk moves over do not move. A light flickering at the mains' 100 Hz
 //! or 50 Hz scales every pixel by its gain, frame by frame: unscaled, the steps
 //! follow the gain's changes, which at the flicker's extremes all but vanish between
-//! two frames (seed 11's robustness scene s23, flicker 0.05 + 0.02: the gain 0.9440 →
-//! 0.9414 from frame 146 to 147, between steps of 6 %), and a frame whose rim moved
-//! 0.7 px was taken for a duplicate (its step 0.30 of its neighbours', 0.89 with the
-//! gain divided out) and its height left out. A duplicate or a blend repeats its
-//! neighbours' gain with their pixels, so s = 1 there. A least-squares s (Σ f g / Σ
-//! g²) was tried first: the moving disk's own samples weigh in it, and on o02 of the
-//! open footage re-encoded at CRF 26 (I and P pictures keyed every 60) it raised the
-//! steps of moving frames and took one of them for a duplicate.
+//! two frames (under 5 % + 2 % flicker the gain may change by 0.3 % between frames
+//! whose neighbours' steps are 6 %), so a frame whose rim moved 0.7 px can look like
+//! a duplicate (its step 0.30 of its neighbours', 0.89 with the gain divided out)
+//! and lose its height. A duplicate or a blend repeats its neighbours' gain with
+//! their pixels, so s = 1 there. The median, not a least-squares s (Σ f g / Σ g²):
+//! the moving disk's own samples weigh in the latter, which on coarsely coded
+//! footage raises the steps of moving frames and takes some for duplicates.
 //!
 //! A still disk gives both at the noise level, so the noise is read at rest (the
 //! clip's last frames, which the calibration requires at rest) and a frame is judged
@@ -41,9 +40,8 @@
 //! told a repeat: the caller judges only the frames up to the last frame of motion
 //! (`analyse` drops the marks after the halt the signal stage finds on the heights).
 //! With the flicker divided out the still frames' steps fall to the codec's noise,
-//! and an encoder's refresh of the still picture 26 frames after o05's halt
-//! (re-encoded at CRF 26, keyed every 60) stood above them and was marked as
-//! interpolated.
+//! and an encoder's refresh of the still picture (tens of frames after the halt)
+//! stands above them and would be marked as interpolated.
 
 use serde::{Deserialize, Serialize};
 
@@ -288,8 +286,8 @@ mod tests {
     /// flickering by 6 % at 100 Hz and 2 % at 50 Hz (480 fps), every pixel scaled by
     /// the gain frame by frame and read in whole grey levels. Unscaled, the plate's
     /// steps follow the gain: here the still frames' steps are the flicker's, and
-    /// neither frame is found; on seed 11's robustness scene s23, where the gain turned
-    /// between two frames, one was taken for a duplicate. The gain divided out, the
+    /// neither frame is found; where the gain turns between two frames, a moving frame
+    /// can be taken for a duplicate. The gain divided out, the
     /// same two frames are found and no other.
     #[test]
     fn a_flickering_light_makes_no_repeat() {

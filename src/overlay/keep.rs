@@ -26,7 +26,7 @@
 //! samples ([`KeptFrames::paint_yuv`]; recoded first if the clip's matrix or
 //! range is not the video's), and only the contact sheet's few frames are
 //! converted to colour ([`KeptFrames::paint`]). A 720×1280 clip at 480 fps keeps about
-//! 0.3 MB a frame, 101 MB for the default span (BENCHMARKS.md).
+//! 0.3 MB a frame, 101 MB for the default span.
 //!
 //! Videos not in 8-bit planar 4:2:0, videos turned by a display matrix, and
 //! spans that would need more than [`MAX_KEPT_BYTES`] keep nothing: their

@@ -133,10 +133,10 @@ pub struct DiskShape {
     /// Radius of the rounding of both rims \[m\]; 0: sharp. The rounding is drawn in
     /// the shading: over the last `edge_radius` of the side and of each face the
     /// normal turns as a quarter circle's of that radius does, seen along the face
-    /// (sin α = depth into the band / radius), from the face's to the other face's
-    /// (a real disk's rim, and the open footage's, whose bottom 1–2.6 px fade from
-    /// the side's level). The outline stays the cylinder's: the true rim, where
-    /// z_rim is measured, is the corner.
+    /// (sin α = depth into the band / radius), from the face's to the other face's (a
+    /// real disk's rim, whose bottom 1–2.6 px may fade from the side's level). The
+    /// outline stays the cylinder's: the true rim, where z_rim is measured, is the
+    /// corner.
     pub edge_radius: f64,
 }
 

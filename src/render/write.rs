@@ -106,11 +106,10 @@ pub const DEFAULT_CRF: u8 = 23;
 /// libx264's defaults (an I picture at most every 250 frames, up to 3 B pictures in
 /// a row, placed adaptively) code three quarters of a slow-motion clip as B
 /// pictures, predicted from both sides, and keep one I picture per half second at
-/// 480 fps. Phones and the independent footage code differently: the open clips
-/// hold 5–27 I pictures in 768 frames, and their side views 81–91 % P pictures
-/// (o05: 18 I, 699 P, 49 B), and a phone's hardware encoder often writes none but I
-/// and P. The two lose a moving edge differently (BENCHMARKS.md, "The encoder's
-/// picture structure"), so a render can draw either.
+/// 480 fps. Phones and other encoders' settings code differently: clips may hold
+/// 5–27 I pictures in 768 frames and 81–91 % P pictures in their side views, and a
+/// phone's hardware encoder often writes none but I and P. The two structures lose a
+/// moving edge differently, so a render can draw either.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ClipEncoding {
     /// Constant-rate factor (0 lossless in luma, 23 libx264's default, 51 the worst).

@@ -7,8 +7,8 @@
 //! the rest tail, or as three of the final turns (two turns missed, whatever the
 //! sampling's phase), means the disk lies flat or moves below the threshold for good:
 //! t_φ is the last rise before the first such span, and a later lone excursion
-//! (an H.264 refresh frame, 50 frames on, read 0.15 px high on the open footage) is
-//! noise, not motion resumed. Nor is a picture held level for most of a final turn
+//! (an H.264 refresh of the still picture tens of frames on, read up to 0.15 px high)
+//! is noise, not motion resumed. Nor is a picture held level for most of a final turn
 //! and repeating an earlier reading, whatever its height: the rim comes down to the
 //! plate every turn, and an encoder may show an earlier picture again for several
 //! frames after the halt. After its last rise the rim comes down to the plate: the
@@ -19,11 +19,10 @@
 //! A still picture is not motion at any height: the rim comes down to the plate once
 //! a turn, so a run of more than [`STILL_READINGS`] readings (more than the final
 //! turns at 480 fps) that stays level is not the rim moving. An encoder may redraw a
-//! still disk in steps and hold each picture for many frames (seed 7's s17 of
-//! `tests/robustness.rs`, I and P pictures, the disk drifting: 31 frames held
-//! 0.33 px above the later rest, at a 0.21 px threshold, from 4 frames after the
-//! halt, the last 10 of them in the rest tail); a reading that begins or ends such a
-//! run ([`in_still_picture`]) is no rise. Shorter holds need more evidence
+//! still disk in steps and hold each picture for many frames (I and P pictures
+//! only, a drifting disk: some 30 frames held 1.5 thresholds above the later rest,
+//! from a few frames after the halt into the rest tail); a reading that begins or
+//! ends such a run ([`in_still_picture`]) is no rise. Shorter holds need more evidence
 //! ([`held`]).
 //!
 //! Motion is one-sided: the rim of a rolling disk is never below its rest on the plate
@@ -105,9 +104,9 @@ const HELD_TURN_FRACTION: f64 = 0.75;
 /// held picture repeats one of them.
 const REFERENCE_PICTURES: usize = 16;
 /// Two readings this fraction of the noise σ apart or closer are one picture read
-/// twice ([`held`]): distinct pictures under sensor noise differ by about σ√2, and a
-/// copy read at another frame's light gain by 1e-5 px (o05 of the open footage, σ
-/// 0.05 px).
+/// twice ([`held`]): distinct pictures under sensor noise differ by about σ√2, while
+/// a codec's copy read at another frame's light gain (flicker) moves by about 1e-5 px
+/// at σ 0.05 px, 2e-4 σ.
 const COPY_FRACTION: f64 = 1e-3;
 /// Noise σ by which every reading of a level window must clear the motion threshold
 /// for the level to be a held picture without a repeated reading ([`held`]): well
@@ -115,8 +114,8 @@ const COPY_FRACTION: f64 = 1e-3;
 /// stays motion.
 pub(crate) const RESOLVED_SIGMAS: f64 = 4.0;
 /// Readings beyond its own that a level run needs to be a still picture
-/// ([`in_still_picture`]): more than the final turns at 480 fps (5–7 frames on the
-/// open footage), and as many as make a rest tail.
+/// ([`in_still_picture`]): more than the final turns at 480 fps (5–7 frames), and as
+/// many as make a rest tail.
 const STILL_READINGS: usize = MIN_REST_FRAMES;
 /// Re-measurements of the rest segment before t_φ is taken as settled.
 const MAX_HALT_ITERATIONS: usize = 8;
@@ -225,15 +224,15 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     // run of more than [`REFRESH_FRAMES`] readings. A frame that repeats the previous
     // frame's reading exactly is the codec's copy of that picture (a moving rim, or a
     // still one under sensor noise, never reads the same twice), no new reading: at
-    // crf 30 a still disk's picture is redrawn every 20–30 frames and held, 0.25 px
-    // up or down, in between. One short run alone is such a redraw, which the halt
-    // below then measures as noise.
+    // coarse quantisers a still disk's picture is redrawn every 20–30 frames and held,
+    // 0.25 px up or down, in between. One short run alone is such a redraw, which the
+    // halt below then measures as noise.
     //
     // A short run whose readings just before and just after it lie in the still band
     // (within half the threshold of the rest level) is an impulse: the picture
-    // redrawn in one frame and back at rest in the next, as H.264 does under a darker
-    // tone curve again and again (o01 of the open footage under gamma 0.7: single
-    // frames 0.2–0.3 px up, their neighbours within 0.03 px). A rim that lifts is
+    // redrawn in one frame and back at rest in the next, as H.264 does again and again
+    // under a darker tone curve (single frames 0.2–0.3 px up, their neighbours within
+    // 0.03 px). A rim that lifts is
     // smooth over the final turn's frames and is not back at rest in one frame;
     // impulses are not counted among the runs.
     let runs = rise_runs(&tail, |i| moving(i, level, threshold));
@@ -344,9 +343,9 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     let (mut level, mut noise, mut threshold) = (level, noise, threshold);
     for _ in 0..MAX_HALT_ITERATIONS {
         // The rest segment's readings, but for still pictures held above the rest
-        // (module docs): they are the codec's, not the noise about the rest, and as a
-        // third of the segment (seed 7's s17) they would raise the noise and the level,
-        // then the threshold, move t_φ earlier and take the final turns into the
+        // (module docs): they are the codec's, not the noise about the rest, and when
+        // they make up a third of the segment they would raise the noise and the
+        // level, then the threshold, move t_φ earlier and take the final turns into the
         // segment in turn.
         let rest: Vec<usize> = samples
             .iter()
@@ -377,23 +376,21 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
     }
     // The last rise is the last peak or a frame on its way up; the rim then comes
     // down to the plate, and frames that continue that descent by more than the
-    // noise above the rest level are motion still, below the threshold or not (o03
-    // of the open footage: 0.33 and 0.22 px above the rest level after a last peak
-    // of 1.23 px, with a rest noise σ of 0.18 px and a 5σ threshold; the truth 0.23
-    // and 0.29 px, at rest one frame later). They must stand as far above the
-    // picture right after them too (the median of the next [`MIN_REST_FRAMES`]
-    // readings): an encoder settles on a still disk over many frames, so its first
-    // still pictures may read the edge above the later level by more than σ, and the
-    // frames after them read the same (o08: 0.056 px over the level, 2.8 σ; o05: the
-    // first still picture held at 0.44 px for the next frames). Against that median
-    // alone, white noise would extend the descent more often (its own noise adds to
-    // the test's).
+    // noise above the rest level are motion still, below the threshold or not (under
+    // flicker the rest noise is large: a descent of 0.33 and 0.22 px after a 1.23 px
+    // peak lies under a 5σ threshold of 0.9 px, yet is the rim coming down). They must
+    // stand as far above the picture right after them too (the median of the next
+    // [`MIN_REST_FRAMES`] readings): an encoder settles on a still disk over many
+    // frames, so its first still pictures may read the edge above the later level by
+    // more than σ (about 3 σ), and the frames after them read the same. Against that
+    // median alone, white noise would extend the descent more often (its own noise adds
+    // to the test's).
     while let Some(n) = samples.iter().position(|&i| i > index && t[i] <= until) {
         let next = samples[n];
         // A rise that the search above took for a held picture is no descent either
         // (a repeated reading may be: the decoder may show a picture again while the
-        // rim comes down, robustness scene s22: frame 311 repeats 309's reading to
-        // 1e-8 px, 0.25 px, a frame before the halt, true 0.26 px).
+        // rim comes down, repeating a reading two frames back to 1e-8 px a frame
+        // before the halt, at the true height of the descent).
         if moving(next, level, threshold)
             && period.is_some_and(|p| in_held_picture(n, p, level, threshold, noise))
         {
@@ -448,10 +445,9 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
 /// which differ by at least 0.85 × (peak − trough), near the threshold for a turn
 /// whose peak rises above it and well over half of it. A span of readings that
 /// stays level for that long does not show the rim moving: either one picture is
-/// shown again, as an encoder may after the halt (o05 of the open footage
-/// re-encoded at crf 16 reads 0.41 px for five frames, three after the disk lay
-/// flat, repeating a near-contact frame seven before to 1e-5 px; o08 at crf 26
-/// 0.45–0.55 px for six, two of them exact repeats), or the motion is too small to
+/// shown again, as an encoder may after the halt (five or six frames held at
+/// 0.4–0.55 px, some after the disk lay flat, repeating a near-contact frame several
+/// frames before to 1e-5 px), or the motion is too small to
 /// resolve (a two-view render whose last turns rock by 0.15 px at a 0.1 px
 /// threshold reads 0.10–0.12 px, all distinct, for five frames before the halt).
 /// A repeated reading tells the first: a moving rim, or a still one under sensor
@@ -460,11 +456,10 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
 /// 0.85 of its peak, more than 0.85 of the threshold, within a window whose
 /// readings spread by less than half of it. An encoder that shows an earlier
 /// picture again with the light's flicker coded over it repeats no reading exactly
-/// (o05 of the open footage, once the zero of z_rim is the whole rest tail's:
-/// 0.33–0.40 px in frames 618–622, the disk flat from 615.5, at a 0.16 px threshold
-/// and σ 0.02 px). The final turn is the shortest of the last ones
-/// ([`final_turn`]): the turn shortens towards the halt, and the median that sizes
-/// the span ending the motion lags it (o08 at crf 26: 7 frames, the last turn 5).
+/// (0.33–0.40 px for five frames after the disk lay flat, at a 0.16 px threshold and
+/// σ 0.02 px). The final turn is the shortest of the last ones ([`final_turn`]): the
+/// turn shortens towards the halt, and the median that sizes the span ending the
+/// motion lags it (7 frames against a last turn of 5).
 #[allow(clippy::too_many_arguments)]
 fn held(
     samples: &[usize],
@@ -511,13 +506,12 @@ fn held(
 /// one under sensor noise, never reads the same twice; an encoder shows a picture
 /// again where the frame differs from it by less than its quantiser resolves, so the
 /// copy says only that the rim is near the copied height. Near the threshold that is
-/// no evidence of motion; well above it, it is (seed 7's s06: frame 308 repeats
-/// 304's 0.39 px, true 0.40 and 0.43 px, 0.31 px over the rest level at a 0.10 px
-/// threshold and σ 0.02 px). Seed 7's two-view scene s16 of `tests/robustness.rs`
-/// (crf 28, halt at frame 312): the P pictures 310, 314 and 318 read 0.107 px, as
-/// frames 305, 306 and 309 did, 0.15 px over the rest level at a 0.10 px threshold,
-/// between B pictures that read 0.03 and −0.05 px, so no span of them is level; t_φ
-/// fell on the last copy, 6 frames late, and that copy counted as a spurious peak.
+/// no evidence of motion (at a coarse quantiser with B pictures, P pictures after the
+/// halt repeat a reading just over the threshold between B pictures read at rest, so
+/// no span of them is level; taken as rises they would put t_φ several frames late,
+/// on the last copy, and make that copy a spurious peak). Well above it, it is (a
+/// copy 0.31 px over the rest level at a 0.10 px threshold, σ 0.02 px, is the rim
+/// still up, within 0.04 px of its true height).
 fn repeated(samples: &[usize], z: &[f64], n: usize, noise: f64, quantum: Option<f64>) -> bool {
     quantum.is_none()
         && (n.saturating_sub(REFERENCE_PICTURES)..n)
@@ -610,14 +604,14 @@ fn rest_statistics(z: &[f64], indices: &[usize], floor: f64) -> (f64, f64) {
 /// period and comes back above [`OSCILLATION_CORRELATION`] at a full period. A still
 /// disk on H.264 footage is not: the encoder copies a frame's picture to the next
 /// ones, so the readings are correlated over a few frames (lag-one correlation about
-/// 0.7 on the independent footage set), but that correlation decays without a
+/// 0.7), but that correlation decays without a
 /// trough. An oscillation therefore needs a correlation above the threshold at some
 /// lag *after* one below [`OSCILLATION_TROUGH`].
 ///
 /// Nor is the encoder's cadence: x264 codes a still picture as a repeating group of
 /// frame types (a P frame and three B frames), each type read a little differently,
 /// so a still tail can correlate at the group's length. Those readings repeat
-/// exactly, one group to the next (a dark-plate render at crf 23, seed 1003: 31 of 44
+/// exactly, one group to the next (on a dark plate about 70 % of a still tail's
 /// readings equal the one 4 frames before, to 1e-9 m), while a moving rim, or a still
 /// one under sensor noise, never reads the same twice. A lag at which at least half
 /// the readings repeat the one a lag before (to [`COPY_FRACTION`] of the `noise` σ)

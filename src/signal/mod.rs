@@ -197,10 +197,8 @@ pub struct SignalConfig {
     /// of motion, the rest tail and every window of the local fits stay as found.
     pub halt_at: Option<f64>,
     /// F statistic above which a rim phase step is flagged. Frames more than three
-    /// from a skip give F ≤ 0 (the stepped model fits them worse) on the dark, light
-    /// and two-view
-    /// renders; the light fixture's drops give F = 21 and 141, five light renders
-    /// with other seeds 47–297.
+    /// from a skip give F ≤ 0 (the stepped model fits them worse) on dark, light and
+    /// two-view renders; dropped frames on light renders give F = 21 to 297.
     pub phase_step_statistic: f64,
 }
 

@@ -99,8 +99,8 @@ pub struct PeakSeries {
 /// lower than the peak before it by more than the noise: the halt has already told it
 /// from noise (it rises above the motion threshold and the rim rests after it), so it
 /// is the last turn's peak whatever its prominence over the single noisy reading after
-/// it (o02 of the open footage: 0.78 px above the rest level at the halt frame, a true
-/// peak of 0.71 px, with a rest noise of 0.15 px and a 6σ prominence test of 0.92 px).
+/// it (on a noisy light plate a true last peak of 0.71 px, read 0.78 px, falls short
+/// of a 6σ prominence test of 0.92 px).
 /// Where two peaks lie two turns apart or more, the turns between them are the
 /// highest maxima above the motion threshold where the turns around place them
 /// ([`with_missed_turns`]), and so is a final turn after the last peak
@@ -161,9 +161,9 @@ pub fn precession(times: &[f64], step: f64) -> Vec<PrecessionSample> {
 /// peak (`true`) or a trough, zero at the last, with ψ̇ as in [`precession`]. Each
 /// interval counts the half-turns of its parity nearest Δt / T (T as in
 /// [`precession`]): an odd number from a peak to a trough or back, an even one, two
-/// at least, between two peaks or two troughs. Plain rounding took a trough 5.4 ms
-/// before a last peak, between half-turns of 3–4 ms, for a whole turn (scene s09 of
-/// `tests/robustness.rs`, seed 7), and so put every peak before it at a trough's χ.
+/// at least, between two peaks or two troughs. Plain rounding takes a trough 1.5
+/// half-turns before a last peak (5.4 ms between half-turns of 3–4 ms) for a whole
+/// turn, and so puts every peak before it at a trough's χ.
 pub fn precession_half_turns(turning: &[(f64, bool)]) -> Vec<PrecessionSample> {
     let times: Vec<f64> = turning.iter().map(|&(t, _)| t).collect();
     counted(&times, PI, |j, ratio| {
@@ -243,12 +243,11 @@ pub(crate) fn extrema(
     // The halt's last rise as the last turn's peak (see above): above the motion
     // threshold, and lower than the peak before it by more than the noise, as the
     // rim's amplitude decays (a picture the encoder holds after the halt repeats a
-    // height to 1e-5 px: o05 re-encoded at crf 16, five frames at 0.41 px, t_φ 7.5
-    // frames late). Not where `motion_until` cut the motion there (`Halt::motion_cut`):
-    // the frames after it are no rest then, only rises a law of the motion left out,
-    // so the halt has told the last rise from nothing (seed 7's robustness scene s03
-    // at crf 23: the coded pictures after the halt rose 0.27 px above the rest two
-    // frames after it, at the cut).
+    // height to 1e-5 px, for several frames; taken as a peak it puts t_φ frames late).
+    // Not where `motion_until` cut the motion there (`Halt::motion_cut`): the frames
+    // after it are no rest then, only rises a law of the motion left out, so the halt
+    // has told the last rise from nothing (coded pictures after the halt may rise
+    // 0.27 px above the rest right at the cut).
     if let (Some(&(k, p)), Some(&(previous, _))) = (maxima.last(), raw.last())
         && idx[k] == halt.index
         && k != previous
@@ -459,10 +458,9 @@ const NEIGHBOUR_INTERVALS: usize = 2;
 /// them are noise. Where the turns around it place a turn and the rim is moving (all
 /// of this lies before t_φ), a turn is there; its peak needs only to rise as the halt
 /// asks any motion to. Near the halt of a noisy clip a final turn read low by the codec
-/// can fall below 6σ of prominence and still clear the threshold (robustness scene
-/// s17, σ 0.09 px: a turn read at 0.50 px, truth 0.78 px, over a trough at 0.04 px,
-/// 5.2σ of prominence, between two peaks found 10 frames apart in turns of 5–7
-/// frames).
+/// can fall below 6σ of prominence and still clear the threshold (at σ 0.09 px, a
+/// turn of 0.78 px read at 0.50 px over a trough at 0.04 px, 5.2σ of prominence,
+/// between two peaks found two turns apart).
 fn with_missed_turns(
     raw: &[(usize, f64)],
     maxima: &[(usize, f64)],
@@ -514,10 +512,9 @@ fn with_missed_turns(
 ///
 /// The rule that takes the halt's last rise as the last peak needs the last frame of
 /// motion to be the crest; where the rim is still seen coming down a frame after it,
-/// the crest stood only on its prominence (seed 3's robustness scene s05, crf 23: a
-/// final crest read 0.45 px, truth 0.56 px, a frame before the last frame of motion,
-/// its prominence below the 6σ test's 0.43 px; seed 11's s05, a crest read 0.53 px,
-/// truth 0.63 px, two frames before it).
+/// the crest stood only on its prominence, which a final crest read low by the codec
+/// (0.45 px for a true 0.56 px, one or two frames before the last frame of motion)
+/// may not have against the 6σ test.
 fn final_turn(
     raw: &[(usize, f64)],
     maxima: &[(usize, f64)],
@@ -637,8 +634,8 @@ mod tests {
         assert!((tv - 1.4).abs() < 1e-12 && (yv - 4.0).abs() < 1e-12);
     }
 
-    /// The ending of scene s09 (seed 7) of `tests/robustness.rs`: a trough 5.4 ms
-    /// before the last peak, after half-turns of 4.1 and 3.0 ms. Δt / T = 1.5 there,
+    /// An ending with a trough 5.4 ms before the last peak, after half-turns of 4.1
+    /// and 3.0 ms. Δt / T = 1.5 there,
     /// which plain rounding counts as a whole turn; from a trough to a peak it is an odd
     /// number of half-turns, one. Peaks stay at even multiples of π all the way back,
     /// and a peak lost between two troughs leaves them two half-turns apart.

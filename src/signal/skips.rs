@@ -177,19 +177,18 @@ const CONSISTENT_SIGMAS: f64 = 4.0;
 /// error from the two fits' residuals (a jump of β̇ inside a window, which the
 /// quadratics cannot follow, raises the residual and the error with it, and hides a
 /// skip within 12 frames of it). A skip is thus seen only where the strip turns by
-/// more than `sigmas` spreads in a frame. On o06 of the open footage a step of 0.54
-/// frame turns (7 errors from zero, 6 from a turn, no frame dropped) was flagged by
-/// the test against zero alone; renumbered drops on our renders read 0.74–1.13
-/// turns, within 3.2 errors of one. Of flags within 6 frames, the largest step is
+/// more than `sigmas` spreads in a frame. The test against zero alone is not enough:
+/// a two-view clip with no frame dropped can show a step of half a frame's turn (7
+/// errors from zero, 6 from a turn), while a dropped frame reads 0.74–1.13 turns,
+/// within 3.2 errors of one. Of flags within 6 frames, the largest step is
 /// kept.
 ///
 /// Only frames before `t_beta`, the strip's stop, are flagged, and the window after
 /// such a frame is fitted with the quadratic held at its value from the stop on: a
-/// stopped strip shows no skip, and a strip that stops at once (o07 of the open
-/// footage, 3.4 frames after the fall) puts a kink in the windows across its stop,
-/// which a quadratic does not follow: it read as a step of 1.4 frames' turn one
-/// frame after the stop, and on o07 re-encoded at CRF 20 as 0.88 of a turn (6.3
-/// spreads) two frames before it. A window ending at the stop instead keeps too few
+/// stopped strip shows no skip, and a strip that stops at once (a few frames after
+/// the fall) puts a kink in the windows across its stop, which a quadratic does not
+/// follow: it reads as a step of 0.9–1.4 frames' turn within two frames of the stop,
+/// as a dropped frame would. A window ending at the stop instead keeps too few
 /// frames to see a drop three frames after the fall, with the strip still turning
 /// (`tests/analyse.rs`). The spread of the steps is still taken over the whole clip.
 pub fn strip_angle_steps(
@@ -458,14 +457,13 @@ const WINDOW_PERIODS: f64 = 1.5;
 /// the halt. Each is one frame missing just before it, so the capture clock runs one
 /// nominal period ahead of the timestamps from it on.
 ///
-/// The margin is the halt's: the test's window after a step reaches the frames it
-/// holds up to the halt, and a halt seen late by an encoder's still pictures (12–15
-/// ms on the open footage's codec draws and the full-size renders, which the energy
-/// law's bound moves back later in `analyse`) puts those pictures inside a step
-/// test near it: o05 of the open footage at CRF 20 flagged its last moving frame (F
-/// = 17.5) against a halt 6 frames late. A flag is enough to warn; counting a frame
-/// that is not missing would move every time after it, so the clock is corrected
-/// only where the window is clear of the halt.
+/// The margin is the halt's: the test's window after a step reaches the frames it holds
+/// up to the halt, and a halt seen late by an encoder's still pictures (up to 12–15 ms
+/// on coded footage, which the energy law's bound moves back later in `analyse`) puts
+/// those pictures inside a step test near it, which may then flag the last moving frame
+/// (F = 17.5 against a halt 6 frames late). A flag is enough to warn; counting a frame
+/// that is not missing would move every time after it, so the clock is corrected only
+/// where the window is clear of the halt.
 pub fn missing_frames(flags: &[FrameFlag], frame_s: f64, repeated: &[usize]) -> Vec<FrameFlag> {
     flags
         .iter()

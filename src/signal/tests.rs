@@ -254,13 +254,13 @@ fn codec_refreshes_in_the_rest_tail_are_not_motion() {
 }
 
 /// A still disk coded by x264 as a repeating group of a P frame and three B frames:
-/// each frame type reads the rim a little differently and the group repeats exactly
-/// (a dark-plate render at crf 23, seed 1003, read 2.4, 0.1, −0.6 and 1.0 × 10⁻⁵ m in
-/// turn). Its autocorrelation has a trough at 2 frames and 0.8 at 4, as an
-/// oscillation's would, but the readings repeat one group to the next: the codec's
-/// cadence, not motion, and the halt stays within a frame of the truth. The same
-/// pattern with sensor noise on every reading (distinct readings, a disk still
-/// rocking by ±1.5 × 10⁻⁵ m at a period of 4 frames) is refused.
+/// each frame type reads the rim a little differently and the group repeats exactly (as
+/// a dark-plate render reads, 2.4, 0.1, −0.6 and 1.0 × 10⁻⁵ m in turn). Its
+/// autocorrelation has a trough at 2 frames and 0.8 at 4, as an oscillation's would,
+/// but the readings repeat one group to the next: the codec's cadence, not motion, and
+/// the halt stays within a frame of the truth. The same pattern with sensor noise on
+/// every reading (distinct readings, a disk still rocking by ±1.5 × 10⁻⁵ m at a period
+/// of 4 frames) is refused.
 #[test]
 fn the_encoders_frame_type_cadence_is_not_an_oscillation() {
     let (t, z, truth) = clip(0.0, 1);
@@ -289,7 +289,7 @@ fn the_encoders_frame_type_cadence_is_not_an_oscillation() {
 }
 
 /// After the halt, before the rest tail: an excursion 7.5 σ high 50 frames after the
-/// last rise (an H.264 refresh on the open footage), and one 6 σ high with a 5 σ low
+/// last rise (an H.264 refresh of the still picture), and one 6 σ high with a 5 σ low
 /// one, 20 frames after it. A flat disk does not rise again, so the first is not
 /// motion; the second lies within 1.5 × the deepest low reading, so it is noise too.
 /// Either leaves t_φ within a frame of the truth.
@@ -338,8 +338,8 @@ fn the_final_descent_belongs_to_the_motion() {
 
 /// The first still picture after the last rise, read 2.5 σ over the later rest
 /// level, with the frames after it reading the same (an encoder's still picture that
-/// settles on the later level only at its next refresh: o05 and o08 of the open
-/// footage), is rest, not the final descent: the descent is measured against the
+/// settles on the later level only at its next refresh), is rest, not the final
+/// descent: the descent is measured against the
 /// picture right after it. The same frame followed by readings at the later level
 /// is still the descent.
 #[test]
@@ -368,8 +368,8 @@ fn a_held_still_picture_is_not_the_final_descent() {
 
 /// The halt's last moving frame, higher than its neighbours, is the last turn's peak
 /// even when it stands less than the peaks' prominence test above them: the halt has
-/// told it from noise already (o02 of the open footage: 5.1 σ above the rest at the
-/// halt frame, a true peak of 0.71 px, missed by the 6σ prominence test).
+/// told it from noise already (a noisy rest: 5.1 σ above the rest at the halt frame,
+/// a true peak of 0.71 px, missed by the 6σ prominence test).
 #[test]
 fn the_last_rise_at_the_halt_is_the_last_peak() {
     let (t, z, _, config, before) = clip_and_halt();
@@ -458,8 +458,8 @@ fn turn_scaled(
 
 /// A turn whose peak the codec reads low, between two peaks found at their full
 /// height, is found when it clears the motion threshold but not the prominence test
-/// (robustness scene s17: a turn read at 0.50 px over a 0.04 px trough, 5.2σ, truth
-/// 0.78 px); lower than the threshold, it is lost, and no other peak appears.
+/// (a turn of 0.78 px read at 0.50 px over a 0.04 px trough, 5.2σ); lower than the
+/// threshold, it is lost, and no other peak appears.
 #[test]
 fn a_turn_below_the_prominence_test_between_two_peaks_is_found() {
     let (t, z, truth, config, halt) = clip_and_halt();
@@ -493,9 +493,8 @@ fn a_turn_below_the_prominence_test_between_two_peaks_is_found() {
 
 /// The last turn read low by the codec, its crest clearing the motion threshold but
 /// not the prominence test, with the rim seen coming down a frame after it (so the
-/// halt's last frame is no crest): it is found where the turns before place it
-/// (seed 3's robustness scene s05). Below the threshold it is lost, and no other
-/// peak appears.
+/// halt's last frame is no crest): it is found where the turns before place it.
+/// Below the threshold it is lost, and no other peak appears.
 #[test]
 fn a_final_turn_below_the_prominence_test_is_found() {
     let (t, z, truth, config, halt) = clip_and_halt();
@@ -540,9 +539,9 @@ fn a_final_turn_below_the_prominence_test_is_found() {
     );
 }
 
-/// A lone excursion more than a rest span after the halt (an H.264 refresh frame on
-/// o08 of the open footage, 0.19 px at frame 639) is noise, and so is a lower one two
-/// frames after the last peak (0.13 px at frame 589, which set t_φ 2.8 frames late).
+/// A lone excursion more than a rest span after the halt (an H.264 refresh frame,
+/// 0.19 px) is noise, and so is a lower one two frames after the last peak (0.13 px;
+/// taken as motion it sets t_φ nearly 3 frames late).
 #[test]
 fn a_late_lone_excursion_sizes_the_noise_near_the_halt() {
     let (t, z, _, config, before) = clip_and_halt();
@@ -563,8 +562,8 @@ fn a_late_lone_excursion_sizes_the_noise_near_the_halt() {
 }
 
 /// A lone excursion within a rest span of the halt but more than three final turns
-/// after it (an H.264 refresh 45 frames after the halt on o08 of the open footage
-/// re-encoded at crf 16, which set t_φ 53 frames late) is noise: the oscillation
+/// after it (an H.264 refresh some 45 frames after the halt, which taken as motion
+/// sets t_φ that late) is noise: the oscillation
 /// only decays, and once it has stayed below the threshold for whole turns it does
 /// not rise above it again.
 #[test]
@@ -585,13 +584,13 @@ fn an_excursion_turns_after_the_halt_is_not_motion() {
     assert_eq!(halt.index, last);
 }
 
-/// A still disk whose picture the encoder redraws in steps (seed 7's robustness
-/// scene s17, I and P pictures, the disk drifting: 31 frames held 0.33 px above the
-/// later rest from 4 frames after the halt, at a 0.21 px threshold, and the later
-/// still picture stepping again in the rest tail) is at rest: each picture is held
+/// A still disk whose picture the encoder redraws in steps (I and P pictures, the
+/// disk drifting: some 30 frames held 1.5 thresholds above the later rest from a few
+/// frames after the halt, and the later still picture stepping again in the rest
+/// tail) is at rest: each picture is held
 /// far longer than a turn and never comes back down within it, as a rolling rim
 /// does. Here two such pictures, 31 frames each, three thresholds high, each reading
-/// distinct (the light's flicker coded over them, as in s17): one from 4 frames
+/// distinct (the light's flicker coded over them): one from 4 frames
 /// after the halt, one over the rest tail's start. Its last 10 frames in the tail
 /// would refuse the clip for "no rest tail" if readings were measured from the
 /// tail's median alone.
@@ -611,8 +610,8 @@ fn still_pictures_redrawn_in_steps_are_rest() {
     assert_halt_within_a_frame(&halt, &truth);
 }
 
-/// The encoder's frame-type cadence after the halt (robustness scene s14: 0.07,
-/// 0.12, 0.07, 0 px, a turn of 4 frames like the last true turns, for 12 frames) is
+/// The encoder's frame-type cadence after the halt (0.07, 0.12, 0.07, 0 px, a
+/// period of 4 frames like the last true turns, for 12 frames) is
 /// read as motion on its own; with `motion_until` at the energy law's halt it is not,
 /// and t_φ is found within a frame. Each reading differs from the others by a
 /// thousandth of the threshold or more, as pictures coded under flicker do (readings
@@ -635,12 +634,11 @@ fn rises_after_the_laws_halt_are_not_motion() {
     assert_halt_within_a_frame(&halt, &truth);
 }
 
-/// A picture the decoder shows again after the halt (seed 7's robustness scene s16,
-/// crf 28: the P pictures 310, 314 and 318 read 0.107 px as frames 305, 306 and 309
-/// did, 0.15 px over the rest level at a 0.10 px threshold, the halt at 312) is no
-/// motion: a copy says only that the rim is within the coder's resolution of the
-/// copied height. A copy of a height well above the threshold is motion (seed 7's
-/// s06: frame 308 repeats 304's 0.39 px, true 0.40 and 0.43 px).
+/// A picture the decoder shows again after the halt (P pictures at a coarse
+/// quantiser repeating readings of the last turns, 0.15 px over the rest level at a
+/// 0.10 px threshold) is no motion: a copy says only that the rim is within the
+/// coder's resolution of the copied height. A copy of a height well above the
+/// threshold is motion (0.39 px repeated, true 0.40 and 0.43 px).
 #[test]
 fn a_picture_shown_again_is_motion_only_when_resolved() {
     let (t, z, truth, config, before) = clip_and_halt();
@@ -650,8 +648,8 @@ fn a_picture_shown_again_is_motion_only_when_resolved() {
         before.threshold + halt::RESOLVED_SIGMAS * before.noise,
     );
     // Readings of the last turns, among the decoder's references for a picture two
-    // frames after t_φ: a trough read just over the threshold (as s16's 305), and a
-    // reading well over it.
+    // frames after t_φ: a trough read just over the threshold, and a reading well
+    // over it.
     let recent = last - 14..=last;
     let height = |i: usize| z[i] - level;
     let trough = recent
@@ -679,8 +677,8 @@ fn a_picture_shown_again_is_motion_only_when_resolved() {
 }
 
 /// A picture held after the halt, level for most of a final turn though above the
-/// threshold (o05 of the open footage re-encoded at crf 16: 0.41 px for five frames,
-/// three after the disk lay flat, a copy of a near-contact frame), is not motion: the
+/// threshold (0.41 px for five frames, three after the disk lay flat, a copy of a
+/// near-contact frame), is not motion: the
 /// rim of a rolling disk comes down to the plate every turn. Nor is a level that
 /// repeats no reading but stands twice the threshold high. Level readings near the
 /// threshold that never repeat (motion too small to resolve), the same rise for one
@@ -1279,8 +1277,8 @@ fn all_flags(t: &[f64], z: &[f64], beta: &[f64]) -> Vec<FrameFlag> {
     .expect("flags")
 }
 
-/// A strip that stops at once (β̇ from 2 rad/s to 0 between two frames, as on o07 of
-/// the open footage) is not a skipped frame: the kink between the windows either
+/// A strip that stops at once (β̇ from 2 rad/s to 0 between two frames, as a two-view
+/// clip's may) is not a skipped frame: the kink between the windows either
 /// side of it read as a step of more than the strip's turn per frame, and only
 /// boundaries before the stop are tested now.
 #[test]
@@ -1309,12 +1307,12 @@ fn an_abrupt_strip_stop_is_not_a_skip() {
 
 /// A strip that slows to its stop within a frame or two is not a skipped frame
 /// either, wherever the stop falls in its frame and whether the stop is measured on
-/// time or a frame late: 1.91 rad/s (o07 of the open footage) stopped by 1200 rad/s²,
-/// angles read to 1.4e-4 rad (o07 re-encoded at CRF 20, whose stop flagged a step of
-/// 0.88 of a frame's turn, 6.3 spreads, two frames before it). A window after a
-/// boundary just before the stop held two turning frames and ten still ones, which a
-/// quadratic does not follow: 74 of these 100 draws were flagged. The window after
-/// a boundary is now fitted with the quadratic held from the stop on.
+/// time or a frame late: 1.91 rad/s stopped by 1200 rad/s², angles read to
+/// 1.4e-4 rad (as coded two-view footage reads them; such a stop can read as a step
+/// of 0.9 of a frame's turn, 6 spreads, two frames before it). A window after a
+/// boundary just before the stop holds two turning frames and ten still ones, which
+/// a quadratic does not follow (fitted so, 74 of these 100 draws are flagged); the
+/// window after a boundary is fitted with the quadratic held from the stop on.
 #[test]
 fn a_strip_slowing_to_its_stop_is_not_a_skip() {
     let t: Vec<f64> = (0..400).map(|i| i as f64 * FRAME).collect();
@@ -1352,8 +1350,8 @@ fn a_strip_slowing_to_its_stop_is_not_a_skip() {
 }
 
 /// A renumbered dropped frame moves the strip on by one frame's turn; a step of half
-/// a turn (o06 of the open footage: 0.54 turns, 7 spreads, no frame dropped) is
-/// something else, and a step of two turns is two frames dropped together.
+/// a turn (0.54 turns, 7 spreads, as a two-view clip with no frame dropped can
+/// show) is something else, and a step of two turns is two frames dropped together.
 #[test]
 fn a_strip_step_is_a_skip_only_in_whole_frame_turns() {
     let t: Vec<f64> = (0..300).map(|i| i as f64 * FRAME).collect();
@@ -1696,8 +1694,8 @@ fn the_halt_seen_models_the_detector_on_the_final_turns() {
 }
 
 /// The still disk read above the zero its moving rim places, by 50 μm (half the
-/// threshold, as an encoder coding the still picture 0.045 px above the contacts,
-/// at a 0.1 px threshold, makes it on the robustness gate's s11): the detector counts
+/// threshold, as an encoder may make it by coding the still picture 0.045 px above
+/// the contacts at a 0.1 px threshold): the detector counts
 /// rises above the rest, so the final peaks sink from sight earlier. With the rest's
 /// height above the zero ([`crate::energy::HaltSighting::visible_rise`]) the model
 /// follows the detector as closely as with none (2.60 ± 1.29 frames measured,
@@ -1827,8 +1825,8 @@ fn camera_at_3_degrees() -> SideViewRim {
     }
 }
 
-/// Heights of clip seed 7 drawn with `camera`'s profile, noise NOISE, lifted by `lift`
-/// [m] until the halt.
+/// Heights of `clip(0.0, 7)` drawn with `camera`'s profile, noise NOISE, lifted by
+/// `lift` [m] until the halt.
 fn lifted_heights(camera: &SideViewRim, lift: f64) -> (Vec<f64>, Vec<f64>) {
     let (t, _, truth) = clip(0.0, 7);
     let mut rng = SplitMix64::new(8);

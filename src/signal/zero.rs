@@ -4,9 +4,8 @@
 //! like a moving one: the codec codes a still disk once and keeps it (its error is
 //! then the same in every rest frame), the blur, the rounded rim, the mirror image or
 //! the shadow under a lifted rim all differ between rest and lift. So every lifted
-//! height can carry one shared offset, 0.03–0.10 px on our renders and on the open
-//! footage (BENCHMARKS.md "The zero from the motion"), and the energy fits cannot
-//! see it in their residuals.
+//! height can carry one shared offset, 0.03–0.10 px on coded clips, and the energy
+//! fits cannot see it in their residuals.
 //!
 //! The motion itself fixes the zero. Over one turn the rim's height follows the
 //! model's profile, z = R sin φ (1 + cos χ) to first order (module docs): its mean is
@@ -23,25 +22,23 @@
 //! at the last turning point, a peak) and linear in t between them, φ(t) piecewise
 //! linear with a knot every [`KNOT_TURNS`] turns (a last piece shorter than a turn
 //! joins the one before). Least squares (Levenberg–Marquardt from the peaks' φ), c's
-//! standard error the linearised one, s² (JᵀJ)⁻¹: over the scenes below the zero's
-//! RMS error is 0.7 of it on ours, 1.3 of it on the open footage. There the side views
-//! read their heights 0.02–0.03 px low after it, as the codec smoothed their swing over
-//! time: the fit takes a swing shrunk about its mean for an offset, and no fit of the
-//! heights can tell the two apart (BENCHMARKS.md); `vision::MOTION_ZERO_PROFILE_PX` is
+//! standard error the linearised one, s² (JᵀJ)⁻¹: the zero's RMS error is 0.7 of it
+//! on sharp rendered rims, 1.3 of it on rounded rims under lossy coding. There side
+//! views read their heights 0.02–0.03 px low after it, as the codec smooths their
+//! swing over time: the fit takes a swing shrunk about its mean for an offset, and no
+//! fit of the heights can tell the two apart; `vision::MOTION_ZERO_PROFILE_PX` is
 //! added for it.
 //!
 //! One fit of the whole window, not a mean over windows of 1.5 turns each fitted
-//! with its own φ, φ̇, χ, ψ̇, ψ̈ and c (the method until 2026-11-29): the turning points
-//! fix the phase, so the heights are left to fix φ and c alone, and every frame
-//! counts for all of them. The heights' offset from the truth fell from 0.0104 to
-//! 0.0089 px RMS over the 24 robustness scenes, from 0.0090 to 0.0077 px over seed
-//! 7's, and from 0.028 to 0.024 px over the open footage's eight clips; n moved by
-//! less than that suggests (BENCHMARKS.md, "The zero from one fit of the window").
+//! with its own φ, φ̇, χ, ψ̇, ψ̈ and c: the turning points fix the phase, so the
+//! heights are left to fix φ and c alone, and every frame counts for all of them
+//! (the heights' offset from the truth about 15 % smaller RMS than with the windows'
+//! mean; see docs/validation.md, "Open footage", for the zero's error today).
 //!
 //! The profile must be the camera's: a camera at elevation ε sees the front rim move
 //! by H φ cos χ in depth, which tilts the swing against the mean by (H/R) tan ε and
-//! reads as an offset of (H/R) tan ε · R sin φ, 0.02–0.05 px on the open footage.
-//! `analyse` passes [`super::SideViewRim`] with the clip's ε for that reason.
+//! reads as an offset of (H/R) tan ε · R sin φ, 0.02–0.05 px at elevations of a few
+//! degrees. `analyse` passes [`super::SideViewRim`] with the clip's ε for that reason.
 
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};

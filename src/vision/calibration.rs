@@ -162,9 +162,9 @@ impl Calibration {
     /// the same row beside the disk (a quarter of its width beyond either end, 2 px
     /// clear of it), 0–255; of these the one of largest magnitude. A reflective
     /// plate shows the disk's mirror image there, brighter than the plate beside it
-    /// (positive: +44 to +72 on the open footage's dark plates, +33 to +60 under
-    /// gamma 0.7); a matt plate the disk's shadow, darker (negative: −65 on o03 under
-    /// gamma 0.7, whose shadow is 13 rows deep and the lit plate below it 16 brighter
+    /// (positive: +44 to +72 on dark plates, +33 to +60 under a darker tone curve); a
+    /// matt plate the disk's shadow, darker (negative: −65 on a light plate under a
+    /// darker tone curve, a shadow 13 rows deep with the lit plate below it brighter
     /// than beside the disk). `None` when the rows or the plate beside the disk lie
     /// outside the frame.
     pub fn under_rim_light(&self, frame: &FrameView) -> Option<f64> {
@@ -488,7 +488,7 @@ pub fn calibrate_at_rest(
     // On a light plate z_base is the rim gauge's own edge at rest: the gauge places
     // the disk's bottom by the step from its threshold crossing, the calibration by
     // the first departure from the side's level, and their runs can differ by tenths
-    // of a pixel (0.3–0.6 px on the open footage), an offset in every z_rim.
+    // of a pixel (0.3–0.6 px on rounded rims), an offset in every z_rim.
     let rest_edges: Option<Vec<f64>> = rest_edges.into_iter().collect();
     let calibration = match rest_edges {
         Some(edges) if rezero => Calibration {
@@ -589,8 +589,8 @@ fn point_medians(points: &[[f64; 4]]) -> [f64; 4] {
 /// disk's frames differ only by noise; a disk still rocking moves its top and its
 /// bottom together, one still sliding its left and right ends, while the codec's
 /// refresh of one frame's picture moves one point (0.76 px at z_base on a light plate
-/// at crf 30, the others within 0.2 px). The rim edge, the precise reading, is
-/// checked on its own.
+/// at a coarse quantiser, the others within 0.2 px). The rim edge, the precise reading,
+/// is checked on its own.
 fn moved_frame(
     points: &[[f64; 4]],
     medians: &[f64; 4],
@@ -613,8 +613,8 @@ fn moved_frame(
 /// top rim with it (both by 2R sin φ at the near side, to first order), so with the
 /// near top rim's rows `tops` known, a frame whose rim edge lies beyond `tol` while
 /// its top rim rose by less than half as much is the codec's refresh of that frame's
-/// bottom edge (0.58 px alone on the open footage's o01 under a darker tone curve,
-/// its top rim within 0.01 px), not motion, and is passed over.
+/// bottom edge (0.58 px alone on a dark plate under a darker tone curve, its top rim
+/// within 0.01 px), not motion, and is passed over.
 fn check_rim_still(
     heights: &[f64],
     tops: Option<&[f64]>,
@@ -1350,9 +1350,9 @@ mod tests {
     }
 
     /// The codec's refresh of one rest frame redraws its bottom edge (here over a
-    /// light plate's shadow) 0.7 px lower and leaves its top where it was (o01 of the
-    /// open footage under a darker tone curve: 0.58 px on its dark plate, the top
-    /// within 0.01 px): no tilt moves the near bottom rim
+    /// light plate's shadow) 0.7 px lower and leaves its top where it was (as H.264
+    /// does under a darker tone curve on a dark plate too: 0.58 px, the top within
+    /// 0.01 px): no tilt moves the near bottom rim
     /// without the near top rim, so the frames are at rest. (The refreshed edge still
     /// enters the light plate's z_base, the mean of the rest edges, here by 0.7/4 px;
     /// z_rim's zero is taken again over the whole rest tail after the first pass.)

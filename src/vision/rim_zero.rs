@@ -3,12 +3,11 @@
 //! The zero is the edge at rest. A lifted rim's edge is read the same way, but not
 //! exactly: blur, the rim's rounding, the mirror image or the shadow under it and the
 //! codec differ between rest and lift, so every lifted height of a clip carries one
-//! shared offset (on our renders a clip's heights are off by the same amount to
-//! ±0.03 px from 0.25 to 6 px; on the open set's rounded rims the offset also changes
-//! with the height; BENCHMARKS.md "The zero's uncertainty by how the rim is read").
-//! The residuals of the energy fits cannot
-//! show it; `analyse` refits with the zero moved by ± its 1σ uncertainty and carries
-//! half the change of n into n's interval.
+//! shared offset (on sharp rendered rims a clip's heights are off by the same amount to
+//! ±0.03 px from 0.25 to 6 px; on rounded rims the offset also changes with the
+//! height). The residuals of the energy fits cannot show it; `analyse` refits with the
+//! zero moved by ± its 1σ uncertainty and carries half the change of n into n's
+//! interval.
 //!
 //! That uncertainty is a property of the reading, measured against ground truth as
 //! the RMS over clips of the mean error of z_rim over the frames lifted past 0.5 px
@@ -23,11 +22,11 @@ use serde::{Deserialize, Serialize};
 /// standard error \[px\]: the camera's elevation in the profile is known to ±0.5°, φ
 /// may oscillate about stationary rolling, and a renderer's or a camera's pictures
 /// of a lifted rim may share an error no fit of the motion sees. Measured as the RMS
-/// over clips of the difference from the truth's offset of the lifted heights
-/// (BENCHMARKS.md "The zero from the motion", "The zero from one fit of the
-/// window"): 0.024 px over the open footage's eight clips (the largest 0.044 px, o04
-/// with φ oscillating; its side views all 0.02–0.04 px low), 0.009 and 0.008 px over
-/// the robustness scenes of two seeds (the largest 0.037 px, s17 at crf 28); 0.03 px.
+/// over clips of the difference from the truth's offset of the lifted heights:
+/// 0.024 px on rounded rims coded at the footage's quality (the largest 0.044 px
+/// with φ oscillating; side views all 0.02–0.04 px low), 0.008–0.009 px on rendered
+/// scenes (the largest 0.037 px at a quantiser coarser than the footage's); 0.03 px.
+/// docs/validation.md, "Open footage", gives today's figure.
 pub const MOTION_ZERO_PROFILE_PX: f64 = 0.03;
 
 /// The method that read the rim's heights, as far as it decides how well their zero
@@ -47,8 +46,7 @@ pub enum RimReading {
 }
 
 impl RimReading {
-    /// 1σ of the zero of z_rim \[px\] for heights read this way (BENCHMARKS.md "The
-    /// zero's uncertainty by how the rim is read").
+    /// 1σ of the zero of z_rim \[px\] for heights read this way.
     ///
     /// * Sharp rim, mirror-edge model: RMS 0.039 px (mean −0.028, −0.094 … +0.011 px)
     ///   over the 50 dark-plate renders of `scripts/coverage`'s conditions drawn with

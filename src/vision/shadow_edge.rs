@@ -7,10 +7,10 @@
 //! the levels at the two ends of the monotone run through it, three rows either
 //! side. A real rim is rounded and blurred over 4–5 rows, so those ends lie inside
 //! whatever is next to the edge, and below the edge that changes: with the rim
-//! lifted it is the disk's shadow on the plate (0.58 of the side's level on the
-//! open footage); at rest, the rounded rim standing on the lit plate (0.67–0.68).
-//! The rest frames, which give the zero of z_rim, read their edge lower than the
-//! same disk lifted, and every lifted height came out 0.5–0.9 px low (o02, o03).
+//! lifted it is the disk's shadow on the plate (about 0.58 of the side's level); at
+//! rest, the rounded rim standing on the lit plate (0.67–0.68). The rest frames,
+//! which give the zero of z_rim, read their edge lower than the same disk lifted,
+//! and every lifted height comes out 0.5–0.9 px low.
 //!
 //! # The rule
 //!
@@ -323,7 +323,7 @@ mod tests {
             .enumerate()
             .map(|(k, &z)| Some(window(plate - z, false, 1.0 + 0.1 * (k as f64).sin())))
             .collect();
-        // First pass: 0.6 px low and noisy, as on the open footage.
+        // First pass: 0.6 px low and noisy, as on rounded rims over a light plate.
         let mut heights: Vec<Option<f64>> = lifts
             .iter()
             .enumerate()

@@ -726,10 +726,10 @@ mod tests {
         assert!(split_views(&frame, 0, 0).is_err());
     }
 
-    /// A darker tone curve (`scripts/reencode-footage --eq gamma=0.7` on the open
-    /// footage's two-view clips) makes the black above the side view's disk as black
-    /// as the divider: that band reaches the frame's top row, a margin, and the
-    /// divider is still found below the side view.
+    /// A darker tone curve (as `scripts/reencode-footage --eq gamma=0.7` makes) can
+    /// turn the black above a two-view clip's side-view disk as black as the
+    /// divider: that band reaches the frame's top row, a margin, and the divider is
+    /// still found below the side view.
     #[test]
     fn split_passes_over_a_margin_as_black_as_the_divider() {
         let side = SideScene {
