@@ -16,8 +16,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use eulerdisk::config::{
-    CalibrationConfig, DiskConfig, ExperimentConfig, FitConfig, HaltChoice, Plate,
-    RimZeroChoice, VisionConfig,
+    CalibrationConfig, DiskConfig, ExperimentConfig, FitConfig, HaltChoice, Plate, RimZeroChoice,
+    VisionConfig,
 };
 use eulerdisk::model::params::Preset;
 
@@ -55,13 +55,22 @@ fn docs_long_flags(text: &str) -> BTreeSet<String> {
     let mut i = 0;
     while i + 2 < chars.len() {
         let starts_token = i == 0 || !(chars[i - 1].is_alphanumeric() || chars[i - 1] == '-');
-        if starts_token && chars[i] == '-' && chars[i + 1] == '-' && chars[i + 2].is_ascii_alphanumeric()
+        if starts_token
+            && chars[i] == '-'
+            && chars[i + 1] == '-'
+            && chars[i + 2].is_ascii_alphanumeric()
         {
             let mut j = i + 2;
             while j < chars.len() && (chars[j].is_ascii_alphanumeric() || chars[j] == '-') {
                 j += 1;
             }
-            flags.insert(chars[i..j].iter().collect::<String>().trim_end_matches('-').to_string());
+            flags.insert(
+                chars[i..j]
+                    .iter()
+                    .collect::<String>()
+                    .trim_end_matches('-')
+                    .to_string(),
+            );
             i = j;
         } else {
             i += 1;
@@ -183,7 +192,9 @@ fn every_cli_flag_is_documented_and_every_documented_flag_exists() {
     let mut problems = Vec::new();
     for sub in &subs {
         let Some(in_docs) = documented.get(sub) else {
-            problems.push(format!("{doc_file}: no section `## \\`eulerdisk {sub}\\`` for subcommand `{sub}`"));
+            problems.push(format!(
+                "{doc_file}: no section `## \\`eulerdisk {sub}\\`` for subcommand `{sub}`"
+            ));
             continue;
         };
         let in_help: BTreeSet<String> = docs_help_flags(&docs_help(&[sub, "--help"]))
@@ -319,7 +330,9 @@ fn docs_toml_blocks(text: &str) -> Vec<String> {
     let mut blocks = Vec::new();
     let mut current: Option<String> = None;
     for line in text.lines() {
-        let line = line.strip_prefix("//!").map_or(line, |l| l.strip_prefix(' ').unwrap_or(l));
+        let line = line
+            .strip_prefix("//!")
+            .map_or(line, |l| l.strip_prefix(' ').unwrap_or(l));
         if current.is_none() && line.trim_start().starts_with("```toml") {
             current = Some(String::new());
         } else if current.is_some() && line.trim_start().starts_with("```") {
@@ -365,7 +378,11 @@ fn every_documented_config_key_parses_and_every_config_key_is_documented() {
     }
 
     // The parser's check is meaningful only if it rejects keys it does not know.
-    for made_up in ["fsp = 480\n", "[fit]\nwindows_s = 0.5\n", "[disk]\nradius = 0.04\n"] {
+    for made_up in [
+        "fsp = 480\n",
+        "[fit]\nwindows_s = 0.5\n",
+        "[disk]\nradius = 0.04\n",
+    ] {
         assert!(
             ExperimentConfig::parse(made_up, path).is_err(),
             "the config parser accepted the made-up key in {made_up:?}: unknown keys are no \
@@ -427,11 +444,15 @@ fn every_documented_config_key_parses_and_every_config_key_is_documented() {
     for source in ["README.md", "docs/config.md", "src/config.rs"] {
         for block in docs_toml_blocks(&docs_read(source)) {
             let Ok(table) = block.parse::<toml::Table>() else {
-                problems.push(format!("{source}: a ```toml example is not valid TOML:\n{block}"));
+                problems.push(format!(
+                    "{source}: a ```toml example is not valid TOML:\n{block}"
+                ));
                 continue;
             };
             if let Err(e) = ExperimentConfig::parse(&block, Path::new(source)) {
-                problems.push(format!("{source}: a ```toml example is rejected by the config parser: {e}"));
+                problems.push(format!(
+                    "{source}: a ```toml example is rejected by the config parser: {e}"
+                ));
             }
             let mut paths = BTreeSet::new();
             docs_toml_paths(&table, "", &mut paths);
