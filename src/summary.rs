@@ -85,7 +85,7 @@ pub struct StudyResults {
     pub failures: Vec<ClipFailure>,
     pub crate_version: String,
     /// Set by a `--shard K/N` run: which share, and every clip it owns, so
-    /// [`merge`] can tell a complete set of shards from an incomplete one.
+    /// [`merge`](crate::study::merge) can tell a complete set of shards from an incomplete one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<ShardRecord>,
 }

@@ -98,7 +98,7 @@ pub enum AnalyseError {
         /// The span's capture times from the clip's first frame \[s\].
         start_s: f64,
         end_s: f64,
-        /// The clip's sections, as [`FrameTiming::sections_text`] lists them.
+        /// The clip's sections, as [`footage::FrameTiming::sections_text`] lists them.
         sections: String,
     },
 }

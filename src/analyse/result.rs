@@ -26,7 +26,7 @@ pub struct ZeroFromMotion {
     pub shift_m: f64,
 }
 
-/// Where the laws placed the halt t_φ ([`law_halt`]): the estimates it is the mean of,
+/// Where the laws placed the halt t_φ ([`law_halt`](super::halt::law_halt)): the estimates it is the mean of,
 /// from the fits before it was placed, and the halt detector's last frame of motion,
 /// all on the clock that starts at t_φ \[s\].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -247,15 +247,15 @@ pub struct Experiment {
     /// Flagged frames inside the fit window.
     pub skips_in_window: usize,
     /// φ from the heights against φ from the precession rate over the fit window
-    /// ([`precession::precession_check`]); `None` with too few states, and in results
+    /// ([`crate::precession::precession_check`]); `None` with too few states, and in results
     /// written before it was recorded.
     #[serde(default)]
     pub precession: Option<PrecessionCheck>,
-    /// n from the times of z_rim's peaks and troughs alone in the fit window ([`turn_timing::fit_turn_timing`]),
+    /// n from the times of z_rim's peaks and troughs alone in the fit window ([`crate::turn_timing::fit_turn_timing`]),
     /// or why it could not be fitted; `None` in results written before it was recorded.
     #[serde(default)]
     pub turn_timing: Option<Result<TurnTimingFit, String>>,
-    /// Where t_φ was placed by the laws ([`law_halt`]); `None` when it is the last
+    /// Where t_φ was placed by the laws ([`law_halt`](super::halt::law_halt)); `None` when it is the last
     /// frame of motion seen (`halt = "measured"`, or the placement failed) and in
     /// results written before it was recorded.
     #[serde(default)]
