@@ -432,35 +432,7 @@ pub fn material_groups(records: &[ExponentRecord], setup: DiskSetup) -> Vec<Grou
 // Summaries
 // ---------------------------------------------------------------------------------
 
-/// How sample quantiles are interpolated (Hyndman & Fan 1996 numbering).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum QuantileMethod {
-    /// Type 5 (Hazen): the i-th smallest of n values sits at p = (i − 0.5)/n, linear in
-    /// between, clamped to the extremes. MATLAB's `prctile`/`boxplot` use it, so it is
-    /// what the thesis's box plots (figs 3.15, 3.17) show.
-    #[default]
-    Hazen,
-    /// Type 7: the i-th smallest sits at p = (i − 1)/(n − 1) (R, NumPy and Excel default).
-    Linear,
-}
-
-/// Quantile `p ∈ [0, 1]` of `sorted` (ascending, non-empty) by `method`.
-pub fn quantile_sorted(sorted: &[f64], p: f64, method: QuantileMethod) -> f64 {
-    let n = sorted.len();
-    if n == 0 {
-        return f64::NAN;
-    }
-    // 0-based fractional position.
-    let h = match method {
-        QuantileMethod::Hazen => n as f64 * p - 0.5,
-        QuantileMethod::Linear => (n as f64 - 1.0) * p,
-    };
-    let h = h.clamp(0.0, (n - 1) as f64);
-    let lo = h.floor() as usize;
-    let hi = (lo + 1).min(n - 1);
-    let frac = h - lo as f64;
-    sorted[lo] + frac * (sorted[hi] - sorted[lo])
-}
+pub use crate::numeric::robust::{QuantileMethod, quantile_sorted};
 
 /// Summary of one group, as drawn in a box plot (figs 3.15, 3.17).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -12,4 +12,4 @@ pub mod minimise;
 pub mod robust;
 
 pub use minimise::{GoldenSection, bracket_minimum, golden_section};
-pub use robust::{mad_sigma, median, upper_median};
+pub use robust::{QuantileMethod, mad_sigma, median, quantile_sorted, upper_median};
