@@ -2,8 +2,6 @@
 //! store them, analysed with no hand-set option beyond the capture fps, against the
 //! rendered truth and the same clip written plainly.
 
-mod util;
-
 use std::path::{Path, PathBuf};
 
 use eulerdisk::analyse::{Experiment, analyse_clip};
@@ -18,7 +16,7 @@ fn render(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
         args.extend_from_slice(&["--halt", "0.5"]);
     }
     args.extend_from_slice(extra);
-    let out = util::eulerdisk(dir, &args);
+    let out = crate::util::eulerdisk(dir, &args);
     assert!(
         out.status.success(),
         "render {extra:?}: {}",

@@ -13,9 +13,9 @@
 //! any footage §5's targets are set on: those must be measured, and their rows are
 //! information ([`COARSE_CRF`]).
 //!
-//! The test prints one row per scene (`cargo test --release --test robustness --
-//! --nocapture drawn_scenes`) and fails listing every scene that misses a target, with the
-//! metric and by how much. One column is for information only: the heights' offset
+//! The test prints one row per scene (`cargo test --release --test integration --
+//! --nocapture robustness::drawn_scenes`) and fails listing every scene that misses
+//! a target, with the metric and by how much. One column is for information only: the heights' offset
 //! (a of z − z_true = a + b·z_true over the scored window, the error of z_rim's zero),
 //! the error of the camera's elevation at the near rim as measured, and the precession
 //! check (`eulerdisk::precession`: φ from the heights over φ from the precession rate,
