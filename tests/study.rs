@@ -6,8 +6,7 @@ use std::process::Command;
 
 use serde_json::Value;
 
-use crate::util::eulerdisk;
-use crate::util::fixture;
+use crate::util::{eulerdisk, fixture};
 
 fn ok(out: &std::process::Output) {
     assert!(

@@ -4,8 +4,7 @@
 //! timestamps; a slow-motion clip stored at a playback rate is blamed on its
 //! frame rate first. Each test in a fresh temporary folder.
 
-use crate::util::eulerdisk;
-use crate::util::fixture;
+use crate::util::{eulerdisk, fixture};
 use std::path::Path;
 
 /// Issue 13.3: skip flags were timed from the clip's start but checked against the
