@@ -3,10 +3,9 @@
 //! input. Tolerances carry their reasons; where one is wider than the issue asks,
 //! the comment says so and the README lists it under known limits.
 
-mod util;
+use std::path::Path;
 
-use std::path::{Path, PathBuf};
-
+use crate::util::{f, fixture, truth};
 use eulerdisk::analyse::{AnalyseError, Experiment, analyse_clip};
 use eulerdisk::config::ExperimentConfig;
 use eulerdisk::vision::RimReading;
@@ -16,27 +15,13 @@ use serde_json::Value;
 /// true halt: half a frame (measured 0.10 frames on the dark-plate fixture).
 const HALT_PLACED_S: f64 = 0.5 / 480.0;
 
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(name)
-}
-
-fn truth(name: &str) -> Value {
-    let text = std::fs::read_to_string(fixture(name)).unwrap();
-    serde_json::from_str(&text).unwrap()
-}
-
 fn config(text: &str) -> ExperimentConfig {
     ExperimentConfig::parse(text, Path::new("test.toml")).unwrap()
 }
 
-fn analyse(name: &str, text: &str) -> Experiment {
-    analyse_clip(&fixture(name), &config(text), &|_, _| {}).unwrap()
-}
-
-fn f(v: &Value) -> f64 {
-    v.as_f64().unwrap()
+/// The fixture NAME analysed with the config TEXT (once for all tests: `util`).
+fn analyse(name: &str, text: &str) -> &'static Experiment {
+    crate::util::analysed(name, text)
 }
 
 #[test]
@@ -437,7 +422,7 @@ fn light_plate_drops_are_flagged_and_clean_clips_are_not() {
 #[test]
 fn two_view_drops_before_and_after_the_halt_are_flagged() {
     let dir = tempfile::tempdir().unwrap();
-    let out = util::eulerdisk(
+    let out = crate::util::eulerdisk(
         dir.path(),
         &[
             "render",
@@ -845,7 +830,7 @@ fn render_clip(args: &[&str]) -> (tempfile::TempDir, Value) {
     let mut render = vec!["render"];
     render.extend_from_slice(args);
     render.extend_from_slice(&["-o", "clip.mp4"]);
-    let out = util::eulerdisk(dir.path(), &render);
+    let out = crate::util::eulerdisk(dir.path(), &render);
     assert!(
         out.status.success(),
         "{}",

@@ -1,7 +1,6 @@
 //! The `eulerdisk` binary end to end, each test in a fresh temporary folder.
 
-mod util;
-use util::eulerdisk;
+use crate::util::eulerdisk;
 
 /// `simulate` with the thesis's contour-friction run writes the CSV, the JSON summary
 /// and the plot panel, and the summary carries the physics: the end on θ̇ = 0 with
@@ -78,8 +77,7 @@ fn info_missing_clip_names_the_file() {
 #[test]
 fn an_io_error_is_named_once() {
     let dir = tempfile::tempdir().unwrap();
-    let fixture =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/side-dark-n050.mp4");
+    let fixture = crate::util::fixture("side-dark-n050.mp4");
     let out = eulerdisk(
         dir.path(),
         &[
@@ -211,10 +209,11 @@ fn analyse_and_compare_refuse_what_would_mix_or_mislead() {
 }
 
 /// Issue 13.7: a folder the user cannot write is an error naming it, not a panic.
-/// Root writes anywhere (CAP_DAC_OVERRIDE), so a privileged test runs the binary
-/// as `nobody` (uid and gid 65534, the permissions a lab user has): the folder is
-/// then as read-only to it as to any user. Skipped only when root cannot start a
-/// process as `nobody` (the binary's folders not open to others, or no setuid).
+/// Root writes anywhere (CAP_DAC_OVERRIDE), so a privileged test runs a copy of the
+/// binary (the build's folders may be closed to others) as `nobody` (uid and gid
+/// 65534, the permissions a lab user has): the folder is then as read-only to it as
+/// to any user. Where root cannot start a process as `nobody`, the test fails and
+/// says so.
 #[test]
 fn a_read_only_output_folder_is_an_error_naming_it() {
     use std::os::unix::fs::PermissionsExt;
@@ -224,7 +223,17 @@ fn a_read_only_output_folder_is_an_error_naming_it() {
     std::fs::create_dir(&locked).unwrap();
     std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
     let privileged = std::fs::write(locked.join("probe"), b"x").is_ok();
-    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_eulerdisk"));
+    let mut program = std::path::PathBuf::from(env!("CARGO_BIN_EXE_eulerdisk"));
+    if privileged {
+        std::fs::remove_file(locked.join("probe")).unwrap();
+        // `nobody` must reach the working folder (a temporary folder is 0700) and
+        // the binary.
+        std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o755)).unwrap();
+        let copy = dir.path().join("eulerdisk");
+        std::fs::copy(&program, &copy).unwrap();
+        program = copy;
+    }
+    let mut command = std::process::Command::new(&program);
     command.args([
         "simulate",
         "--model",
@@ -236,19 +245,18 @@ fn a_read_only_output_folder_is_an_error_naming_it() {
     ]);
     command.current_dir(dir.path());
     if privileged {
-        std::fs::remove_file(locked.join("probe")).unwrap();
-        // `nobody` must reach the working folder (a temporary folder is 0700).
-        std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o755)).unwrap();
         command.uid(65534).gid(65534);
     }
-    let out = match command.output() {
-        Ok(out) => out,
-        Err(e) if privileged => {
-            eprintln!("SKIPPED: running as root, and cannot run the binary as nobody: {e}");
-            return;
+    let out = command.output().unwrap_or_else(|e| {
+        if privileged {
+            panic!(
+                "running as root, which writes into any folder, and cannot run the binary \
+                 as nobody (uid 65534) to see a read-only folder as a user does: {e}; \
+                 run the tests as an ordinary user"
+            )
         }
-        Err(e) => panic!("run eulerdisk: {e}"),
-    };
+        panic!("run eulerdisk: {e}")
+    });
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     let err = stderr(&out);
     assert!(

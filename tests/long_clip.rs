@@ -2,8 +2,6 @@
 //! than 8 s, found from the container's index and grown back by key frames, and
 //! measures the frames it decodes as the whole-clip pass does.
 
-mod util;
-
 use std::path::Path;
 
 use eulerdisk::analyse::{Decoding, analyse_clip_decoding};
@@ -19,7 +17,7 @@ use serde_json::Value;
 #[test]
 fn a_span_near_the_end_measures_as_the_whole_clip() {
     let dir = tempfile::tempdir().unwrap();
-    let out = util::eulerdisk(
+    let out = crate::util::eulerdisk(
         dir.path(),
         &[
             "render",

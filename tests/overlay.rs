@@ -2,29 +2,13 @@
 //! checked against what was measured and against the ground truth of rendered
 //! clips.
 
-mod util;
-
 use std::path::{Path, PathBuf};
 
+use crate::util::{f, fixture, json};
 use eulerdisk::footage::FrameSource;
-use serde_json::Value;
-
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(name)
-}
-
-fn json(path: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
-fn f(v: &Value) -> f64 {
-    v.as_f64().unwrap()
-}
 
 fn run(dir: &Path, args: &[&str]) {
-    let out = util::eulerdisk(dir, args);
+    let out = crate::util::eulerdisk(dir, args);
     assert!(
         out.status.success(),
         "eulerdisk {args:?}: {}",

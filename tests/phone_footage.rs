@@ -2,9 +2,8 @@
 //! store them, analysed with no hand-set option beyond the capture fps, against the
 //! rendered truth and the same clip written plainly.
 
-mod util;
-
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 use eulerdisk::analyse::{Experiment, analyse_clip};
 use eulerdisk::config::ExperimentConfig;
@@ -18,7 +17,7 @@ fn render(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
         args.extend_from_slice(&["--halt", "0.5"]);
     }
     args.extend_from_slice(extra);
-    let out = util::eulerdisk(dir, &args);
+    let out = crate::util::eulerdisk(dir, &args);
     assert!(
         out.status.success(),
         "render {extra:?}: {}",
@@ -30,6 +29,31 @@ fn render(dir: &Path, name: &str, extra: &[&str]) -> PathBuf {
 fn analyse(clip: &Path) -> Experiment {
     let config = ExperimentConfig::parse("fps = 480\n", Path::new("test.toml")).unwrap();
     analyse_clip(clip, &config, &|_, _| {}).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The plain clip lossless (`render … --crf 0`) and its analysis, made once for the
+/// test binary ([`shared`]).
+fn plain_lossless() -> &'static (PathBuf, Experiment) {
+    static CLIP: OnceLock<(PathBuf, Experiment)> = OnceLock::new();
+    CLIP.get_or_init(|| shared("plain-crf0.mp4", &["--crf", "0"]))
+}
+
+/// The plain clip at `render`'s default crf and its analysis, made once for the test
+/// binary ([`shared`]).
+fn plain_default() -> &'static (PathBuf, Experiment) {
+    static CLIP: OnceLock<(PathBuf, Experiment)> = OnceLock::new();
+    CLIP.get_or_init(|| shared("plain.mp4", &[]))
+}
+
+/// A clip that two tests compare against, rendered with `extra` and analysed: into
+/// Cargo's folder for test data (the same bytes on every run; `render` writes a
+/// clip whole or not at all), not a temporary folder that one test would remove.
+fn shared(name: &str, extra: &[&str]) -> (PathBuf, Experiment) {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("phone_footage");
+    std::fs::create_dir_all(&dir).unwrap();
+    let clip = render(&dir, name, extra);
+    let e = analyse(&clip);
+    (clip, e)
 }
 
 fn z_rim(e: &Experiment) -> Vec<Option<f64>> {
@@ -57,7 +81,7 @@ fn a_rotation_tagged_clip_measures_as_the_original() {
     let dir = tempfile::tempdir().unwrap();
     // crf 0: lossless, so the only difference left is libswscale's chroma
     // filtering, which is not symmetric under a quarter turn.
-    let plain = analyse(&render(dir.path(), "plain.mp4", &["--crf", "0"]));
+    let (_, plain) = plain_lossless();
     let truth_n = 0.5;
     assert!(
         (plain.peaks_fit.fit.n - truth_n).abs() < 0.01,
@@ -138,7 +162,7 @@ fn duplicated_and_interpolated_frames_are_flagged_and_left_out() {
     let n = e.peaks_fit.fit.n;
     assert!((n - 0.5).abs() < 0.01, "n = {n}");
 
-    let plain = analyse(&render(dir.path(), "plain.mp4", &[]));
+    let (_, plain) = plain_default();
     let repeats = plain.series.flags.iter().filter(|f| {
         matches!(
             f.reason,
@@ -168,8 +192,7 @@ fn last_frame_mean(clip: &Path) -> f64 {
 fn ten_bit_and_full_range_clips_measure_as_eight_bit_limited() {
     let dir = tempfile::tempdir().unwrap();
     // crf 0 (lossless) so that what differs is the storage, not the codec's error.
-    let base = render(dir.path(), "limited.mp4", &["--crf", "0"]);
-    let reference = analyse(&base);
+    let (base, reference) = plain_lossless();
     let signal = reference.plan.video_signal.clone().unwrap();
     assert_eq!((signal.bit_depth, signal.full_range), (8, false));
     let grey = last_frame_mean(&base);
@@ -432,8 +455,8 @@ fn jittered_timestamps_are_the_frames_capture_times() {
 
     // As good a fit as the unjittered clip's: n within 0.01 of the prescribed 0.5
     // for both (0.506 and 0.500 measured), the truth inside the 95 % interval.
-    let plain = analyse(&render(dir.path(), "plain.mp4", &[]));
-    for e in [&jittered, &plain] {
+    let (_, plain) = plain_default();
+    for e in [&jittered, plain] {
         let fit = &e.peaks_fit.fit;
         assert!((fit.n - 0.5).abs() < 0.01, "n = {}", fit.n);
         assert!(fit.ci95_n.0 < 0.5 && 0.5 < fit.ci95_n.1, "{:?}", fit.ci95_n);
@@ -441,7 +464,7 @@ fn jittered_timestamps_are_the_frames_capture_times() {
     // The halt: t_φ, where the laws place it, a quarter frame after the true halt on
     // both (0.500525 s jittered, 0.500522 s plain), so within half a frame; the last
     // frame of motion seen before it (0.499925 s and 0.497917 s), within two frames.
-    for e in [&jittered, &plain] {
+    for e in [&jittered, plain] {
         let dt = (e.series.halt.t_phi - halt).abs();
         assert!(dt < 0.5 / 480.0, "t_φ {}", e.series.halt.t_phi);
         let seen = e.frames[e.series.halt.index].t_capture;

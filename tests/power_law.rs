@@ -9,8 +9,6 @@
 //! the rim up to 0.3 px off near the halt); the README lists that under filming
 //! advice.
 
-mod util;
-
 use std::path::Path;
 
 use eulerdisk::analyse::{EnergyFit, Experiment, analyse_clip};
@@ -25,7 +23,7 @@ const HALT_PLACED_S: f64 = 0.5 / 480.0;
 /// the clip, 480 × 320 px, 480 fps) and analyses it with t0 free.
 fn render_and_analyse(dir: &Path, n: f64) -> (Experiment, Value) {
     let name = format!("n{:03.0}", n * 100.0);
-    let out = util::eulerdisk(
+    let out = crate::util::eulerdisk(
         dir,
         &[
             "render",

@@ -13,9 +13,9 @@
 //! any footage §5's targets are set on: those must be measured, and their rows are
 //! information ([`COARSE_CRF`]).
 //!
-//! The test prints one row per scene (`cargo test --release --test robustness --
-//! --nocapture drawn_scenes`) and fails listing every scene that misses a target, with the
-//! metric and by how much. One column is for information only: the heights' offset
+//! The test prints one row per scene (`cargo test --release --test integration --
+//! --nocapture robustness::drawn_scenes`) and fails listing every scene that misses
+//! a target, with the metric and by how much. One column is for information only: the heights' offset
 //! (a of z − z_true = a + b·z_true over the scored window, the error of z_rim's zero),
 //! the error of the camera's elevation at the near rim as measured, and the precession
 //! check (`eulerdisk::precession`: φ from the heights over φ from the precession rate,
@@ -29,9 +29,12 @@
 //! their ground truths (`sNN.truth.json`) in DIR; `EULERDISK_ROBUSTNESS_SEED=N` draws
 //! another 24 scenes (the gate's verdicts are for the default seed).
 
+use std::collections::HashMap;
+use std::collections::hash_map::Entry;
 use std::f64::consts::TAU;
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::{Mutex, OnceLock};
 
 use eulerdisk::analyse::{Experiment, analyse_clip};
 use eulerdisk::config::ExperimentConfig;
@@ -284,6 +287,57 @@ fn render(scene: &SceneSpec, dir: &Path) -> (std::path::PathBuf, GroundTruth) {
     (path, renderer.truth().clone())
 }
 
+/// A scene as the gate measures it: its ground truth and its analysis with no config
+/// beyond the frame rate, or the error (without the clip's path).
+type Measured = (GroundTruth, Result<Experiment, String>);
+
+/// The scene rendered and analysed ([`Measured`]), once for the test binary where
+/// one measurement ends before the next asks: the tests of single drawn scenes (run
+/// first, in name order) and the gate read one result. A scene asked for while it is
+/// being measured is measured again rather than waited for: a rayon thread of the
+/// gate that waited could hold up the pool that the other measurement needs.
+fn measured(scene: &SceneSpec) -> &'static Measured {
+    enum Slot {
+        Measuring,
+        Done(&'static Measured),
+    }
+    static SCENES: OnceLock<Mutex<HashMap<String, Slot>>> = OnceLock::new();
+    let scenes = SCENES.get_or_init(Default::default);
+    // Every field of the scene, so that only the same scene is shared.
+    let key = format!("{scene:?}");
+    let first = match scenes.lock().expect("scenes").entry(key.clone()) {
+        Entry::Occupied(slot) => match slot.get() {
+            Slot::Done(m) => return m,
+            Slot::Measuring => false,
+        },
+        Entry::Vacant(slot) => {
+            slot.insert(Slot::Measuring);
+            true
+        }
+    };
+    let m: &'static Measured = Box::leak(Box::new(render_and_analyse(scene)));
+    if first {
+        scenes.lock().expect("scenes").insert(key, Slot::Done(m));
+    }
+    m
+}
+
+/// Renders the scene into `EULERDISK_ROBUSTNESS_KEEP`'s folder, where the clip and its
+/// truth are kept, or into a temporary folder, removed; analyses it with no config
+/// beyond the frame rate.
+fn render_and_analyse(scene: &SceneSpec) -> Measured {
+    let keep = std::env::var_os("EULERDISK_ROBUSTNESS_KEEP").map(std::path::PathBuf::from);
+    let temp = tempfile::tempdir().expect("tempdir");
+    let dir = keep.unwrap_or_else(|| temp.path().to_path_buf());
+    std::fs::create_dir_all(&dir).expect("clip folder");
+    let config =
+        ExperimentConfig::parse("fps = 480\n", Path::new("robustness.toml")).expect("config");
+    let (clip, truth) = render(scene, &dir);
+    let result = analyse_clip(&clip, &config, &|_, _| {})
+        .map_err(|e| format!("{e:#}").replace(&format!("{}: ", clip.display()), ""));
+    (truth, result)
+}
+
 /// How close each measurement must be, and why.
 ///
 /// * Calibration points x_l, x_r, z_t, z_base within [`CAL_PX`] = 0.5 px: a point
@@ -442,7 +496,7 @@ fn error_budget(errors: &[SceneErrors]) -> String {
     )
 }
 
-fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<Experiment, String>) -> Score {
+fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<&Experiment, &str>) -> Score {
     let mut failures = Vec::new();
     let e = match result {
         Ok(e) => e,
@@ -760,7 +814,7 @@ fn two_view_scenes_on_light_plates_are_measured_with_no_config() {
                 e.plan.plate
             );
         }
-        let s = score(&scene, &truth, result);
+        let s = score(&scene, &truth, result.as_ref().map_err(String::as_str));
         eprintln!("{}", s.row);
         if !s.failures.is_empty() {
             failed.push(format!("{}: {}", scene.name, s.failures.join("; ")));
@@ -777,13 +831,10 @@ fn two_view_scenes_on_light_plates_are_measured_with_no_config() {
 /// backdrop's (`vision::light_plate`). Run with no config, as the gate does.
 #[test]
 fn a_dark_top_face_on_a_light_plate_is_not_read_as_thin() {
-    let temp = tempfile::tempdir().expect("tempdir");
-    let config =
-        ExperimentConfig::parse("fps = 480\n", Path::new("robustness.toml")).expect("config");
     let scene = draw_scenes_of(SEED).swap_remove(5);
     assert_eq!(scene.spec.plate, Plate::Light, "{}", scene.name);
-    let (clip, truth) = render(&scene, temp.path());
-    let e = analyse_clip(&clip, &config, &|_, _| {}).expect("analysed");
+    let (truth, result) = measured(&scene);
+    let e = result.as_ref().expect("analysed");
     let error = e.plan.calibration.calibration.z_t - truth.calibration.z_t - HALF;
     assert!(error.abs() <= CAL_PX, "{}: z_t {error:+.2} px", scene.name);
 }
@@ -795,15 +846,12 @@ fn a_dark_top_face_on_a_light_plate_is_not_read_as_thin() {
 /// them (`vision::near_top_rim_leaning`). Run with no config, as the gate does.
 #[test]
 fn a_face_thinner_than_its_blur_is_read_where_the_disk_leans() {
-    let temp = tempfile::tempdir().expect("tempdir");
-    let config =
-        ExperimentConfig::parse("fps = 480\n", Path::new("robustness.toml")).expect("config");
-    let mut scene = draw_scenes_of(SEED).swap_remove(8);
-    scene.encoding.crf = COARSE_CRF;
-    let (clip, truth) = render(&scene, temp.path());
+    // As the gate codes the scenes at crf 20 again.
+    let scene = coarse(&draw_scenes_of(SEED).swap_remove(8));
+    let (truth, result) = measured(&scene);
     let face = truth.calibration.z_t - truth.camera.z_t_far;
     assert!(face < 1.0, "{}: the face is {face:.2} px tall", scene.name);
-    let e = analyse_clip(&clip, &config, &|_, _| {}).expect("analysed");
+    let e = result.as_ref().expect("analysed");
     let leaning = e.plan.top_rim_leaning.expect("z_t from the leaning frames");
     let error = e.plan.calibration.calibration.z_t - truth.calibration.z_t - HALF;
     assert!(
@@ -815,6 +863,18 @@ fn a_face_thinner_than_its_blur_is_read_where_the_disk_leans() {
     );
 }
 
+/// The scene coded again at [`COARSE_CRF`].
+fn coarse(scene: &SceneSpec) -> SceneSpec {
+    SceneSpec {
+        name: format!("{}@{COARSE_CRF}", scene.name),
+        encoding: ClipEncoding {
+            crf: COARSE_CRF,
+            ..scene.encoding
+        },
+        ..scene.clone()
+    }
+}
+
 /// The gate (§4): the 24 drawn scenes at [`GATE_CRF`] meet every target; the six
 /// coded at 20 are coded again at [`COARSE_CRF`], must be measured, and are scored
 /// for information (BENCHMARKS.md, "The gate at the open footage's quality").
@@ -822,24 +882,13 @@ fn a_face_thinner_than_its_blur_is_read_where_the_disk_leans() {
 fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
     let scenes = draw_scenes();
     assert!(scenes.len() >= 24);
-    // EULERDISK_ROBUSTNESS_KEEP=DIR keeps the clips and their truths there.
-    let keep = std::env::var_os("EULERDISK_ROBUSTNESS_KEEP").map(std::path::PathBuf::from);
-    let temp = tempfile::tempdir().expect("tempdir");
-    let dir = keep.clone().unwrap_or_else(|| temp.path().to_path_buf());
-    std::fs::create_dir_all(&dir).expect("clip folder");
-    let config =
-        ExperimentConfig::parse("fps = 480\n", Path::new("robustness.toml")).expect("config");
-    // Render, measure and score one scene; its clip is removed unless kept. Every
-    // scene must be measured, the coarse codes too.
+    // Render, measure and score one scene ([`measured`]: its clip is removed unless
+    // EULERDISK_ROBUSTNESS_KEEP=DIR keeps it). Every scene must be measured, the
+    // coarse codes too.
     let measure = |scene: &SceneSpec| {
-        let (clip, truth) = render(scene, &dir);
-        let result = analyse_clip(&clip, &config, &|_, _| {})
-            .map_err(|e| format!("{e:#}").replace(&format!("{}: ", clip.display()), ""));
-        let s = score(scene, &truth, result);
+        let (truth, result) = measured(scene);
+        let s = score(scene, truth, result.as_ref().map_err(String::as_str));
         eprintln!("{}", s.row);
-        if keep.is_none() {
-            std::fs::remove_file(&clip).ok();
-        }
         s
     };
     // The same frames coded coarser than the targets' footage: measured, and scored
@@ -847,14 +896,7 @@ fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
     let coarse_scenes: Vec<SceneSpec> = scenes
         .iter()
         .filter(|s| s.encoding.crf == GATE_CRF[2])
-        .map(|scene| SceneSpec {
-            name: format!("{}@{COARSE_CRF}", scene.name),
-            encoding: ClipEncoding {
-                crf: COARSE_CRF,
-                ..scene.encoding
-            },
-            ..scene.clone()
-        })
+        .map(coarse)
         .collect();
     // As many scenes at a time as rayon has threads (two on the CI's two cores):
     // rendering is parallel, the analysis mostly not, so one scene at a time left a

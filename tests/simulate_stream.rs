@@ -1,11 +1,12 @@
 //! Issue 13.4: `simulate` streams its trajectory. `simulate --model none --t-end
 //! 1e9` grew without limit (481 MB after 36 s): the samples were kept in memory
 //! until the run ended. Now each goes to the CSV as it is produced, and the plot
-//! keeps a bounded envelope. This test binary counts every heap allocation (its own
-//! global allocator, hence a file of its own with a single test) and checks that a
-//! run 10× longer takes no more heap at its peak, while its CSV holds every sample
-//! and the physics of the long run holds: energy conserved while rolling without
-//! dissipation, lost only while slipping.
+//! keeps a bounded envelope. The test counts every heap allocation of its process (a
+//! counting global allocator, read only in a process running this test alone: the
+//! test runs itself again as a child, so no other test's allocations are counted)
+//! and checks that a run 10× longer takes no more heap at its peak, while its CSV
+//! holds every sample and the physics of the long run holds: energy conserved while
+//! rolling without dissipation, lost only while slipping.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::BufRead;
@@ -132,8 +133,28 @@ fn run(t_end: f64) -> Run {
     }
 }
 
+/// Set in the child process that runs the test alone.
+const ALONE: &str = "EULERDISK_TEST_ALLOCATIONS_ALONE";
+
 #[test]
 fn a_ten_times_longer_run_streams_in_the_same_memory() {
+    if std::env::var_os(ALONE).is_none() {
+        // Other tests allocate beside this one in this process: run the binary
+        // again with this test alone, whose allocations are then all counted.
+        let name = "simulate_stream::a_ten_times_longer_run_streams_in_the_same_memory";
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .args([name, "--exact", "--test-threads=1", "--nocapture"])
+            .env(ALONE, "1")
+            .output()
+            .expect("run the test binary again");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success() && stdout.contains("1 passed"),
+            "the test alone in a child process:\n{stdout}\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        return;
+    }
     let short = run(5.0);
     let long = run(50.0);
     for (t_end, r) in [(5.0, &short), (50.0, &long)] {

@@ -1,19 +1,12 @@
 //! `eulerdisk study` and `merge` end to end on a footage tree built from the
 //! rendered fixtures plus three broken clips, each test in a fresh folder.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use serde_json::Value;
 
-mod util;
-use util::eulerdisk;
-
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(name)
-}
+use crate::util::{eulerdisk, fixture};
 
 fn ok(out: &std::process::Output) {
     assert!(
@@ -202,8 +195,8 @@ fn published_tables_are_written() {
 /// message is an error), and an experiment page's overlay video plays: after
 /// Chromium's virtual time has run, the page's script has recorded the
 /// `<video>`'s duration (`data-duration`, as long as overlay.json's frames at its rate)
-/// and no media error (`data-error`). Skipped, with a message, when Chromium is
-/// not installed (`scripts/setup-deps --tests` installs it).
+/// and no media error (`data-error`). Fails, naming it, when Chromium is not
+/// installed (`scripts/setup-deps --tests` installs it).
 #[test]
 fn study_page_loads_in_headless_chromium_without_errors() {
     let Some(chromium) = ["chromium", "chromium-browser", "google-chrome"]
@@ -215,8 +208,10 @@ fn study_page_loads_in_headless_chromium_without_errors() {
                 .is_ok_and(|o| o.status.success())
         })
     else {
-        eprintln!("SKIPPED: no chromium on PATH (scripts/setup-deps --tests installs it)");
-        return;
+        panic!(
+            "no chromium, chromium-browser or google-chrome on PATH: \
+             `scripts/setup-deps --tests` installs Debian's chromium"
+        );
     };
     let dir = tempfile::tempdir().unwrap();
     ok(&eulerdisk(

@@ -4,15 +4,8 @@
 //! timestamps; a slow-motion clip stored at a playback rate is blamed on its
 //! frame rate first. Each test in a fresh temporary folder.
 
-mod util;
+use crate::util::{eulerdisk, fixture};
 use std::path::Path;
-use util::eulerdisk;
-
-fn fixture(name: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(name)
-}
 
 /// Issue 13.3: skip flags were timed from the clip's start but checked against the
 /// window measured from the halt, so `skips_in_window` was always 0 and no warning
@@ -83,21 +76,16 @@ fn dropped_frames_in_the_window_warn_everywhere() {
 /// Issue 13.6: a 480 fps clip stored at 60 fps (no capture rate in the container,
 /// no `fps` in the config) was blamed on a missing rest tail; the frame rate is now
 /// named as the probable cause, with the key to set. The clip is the dark fixture
-/// with its timestamps stretched 8× by ffmpeg (skipped without ffmpeg).
+/// (480 frames/s) stored at 60 frames/s, its timestamps 8× apart ([`restamp`]).
 #[test]
 fn a_clip_stored_at_playback_rate_is_blamed_on_its_frame_rate() {
     let dir = tempfile::tempdir().unwrap();
-    let slow = dir.path().join("slow.mp4");
-    let made = std::process::Command::new("ffmpeg")
-        .args(["-loglevel", "error", "-itsscale", "8", "-i"])
-        .arg(fixture("side-dark-n050.mp4"))
-        .args(["-map_metadata", "-1", "-c", "copy"])
-        .arg(&slow)
-        .status();
-    if !made.is_ok_and(|s| s.success()) {
-        eprintln!("SKIPPED: no ffmpeg on PATH to restamp the fixture");
-        return;
-    }
+    restamp(
+        &fixture("side-dark-n050.mp4"),
+        &dir.path().join("slow.mp4"),
+        0..0,
+        60,
+    );
     let out = eulerdisk(dir.path(), &["analyse", "slow.mp4"]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);

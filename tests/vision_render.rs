@@ -6,32 +6,16 @@
 //! (`vision` module docs), so a truth point p is p + ½ in vision's coordinates.
 //! z_rim is a difference of rows and needs no shift.
 
-use std::path::{Path, PathBuf};
-
-use eulerdisk::analyse::{Experiment, analyse_clip};
-use eulerdisk::config::ExperimentConfig;
+use crate::util::{f, truth};
+use eulerdisk::analyse::Experiment;
 use serde_json::Value;
 
 /// Renderer → vision coordinates.
 const HALF: f64 = 0.5;
 
-fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(name)
-}
-
-fn truth(name: &str) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(fixture(name)).unwrap()).unwrap()
-}
-
-fn analyse(name: &str, toml: &str) -> Experiment {
-    let config = ExperimentConfig::parse(toml, Path::new("test.toml")).unwrap();
-    analyse_clip(&fixture(name), &config, &|_, _| {}).unwrap()
-}
-
-fn f(v: &Value) -> f64 {
-    v.as_f64().unwrap()
+/// The fixture NAME analysed with the config TOML (once for all tests: `util`).
+fn analyse(name: &str, toml: &str) -> &'static Experiment {
+    crate::util::analysed(name, toml)
 }
 
 /// Errors measured − truth of z_rim on every frame with an edge, and at the
