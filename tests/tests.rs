@@ -9,7 +9,7 @@ mod analyse;
 mod cli;
 mod compare;
 mod determinism;
-// mod docs_reference; (tests/docs_reference.rs, from the docs branch: added here at merge)
+mod docs_reference;
 mod long_clip;
 mod overlay;
 mod phone_footage;
