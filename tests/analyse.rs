@@ -717,7 +717,7 @@ fn a_strip_pointing_at_the_camera_leaves_the_near_top_rim() {
 /// Its error is the coding noise's on the thin top face's edge: over this scene's
 /// seeds 1–8 it is −0.04 … +0.19° (0.07° RMS), and −0.08 … +0.25° (0.12° RMS)
 /// with libswscale's exact conversions, which code and read the same frames with
-/// other roundings (BENCHMARKS.md, "libswscale's rounding on every CPU").
+/// other roundings (the history of 5374188's BENCHMARKS.md, "libswscale's rounding on every CPU").
 #[test]
 fn a_camera_distance_given_in_the_config_places_the_camera() {
     let (dir, truth) = render_clip(&CLOSE_CAMERA);

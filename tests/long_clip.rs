@@ -68,7 +68,7 @@ fn a_span_near_the_end_measures_as_the_whole_clip() {
     // the rim models' spread (below), learned from other frames: over this clip
     // rendered at n = 0.45, 0.5, 0.55 and 0.6 the two t_φ differ by −0.03 … +0.17
     // frames, and by −0.24 … +0.11 with libswscale's exact conversions
-    // (BENCHMARKS.md, "libswscale's rounding on every CPU").
+    // (the history of 5374188's BENCHMARKS.md, "libswscale's rounding on every CPU").
     let seen = |e: &eulerdisk::analyse::Experiment| e.frames[e.series.halt.index].index;
     assert_eq!(seen(&span), seen(&whole));
     let (t_span, t_whole) = (span.series.halt.t_phi, whole.series.halt.t_phi);

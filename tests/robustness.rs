@@ -59,7 +59,7 @@ const GATE_CRF: [u8; 3] = [18, 23, 20];
 /// A coarser code than any footage the targets are set on: the scenes the gate
 /// codes at 20 are also coded at crf 28 (a quantiser step 2.5 times the open
 /// footage's; 0.02 bit a pixel on the side views), must be measured, and are scored
-/// for information (BENCHMARKS.md, "Robustness scenes").
+/// for information (docs/validation.md, "Robustness gate").
 const COARSE_CRF: u8 = 28;
 /// Capture rate [frames/s], the only config the analysis is given.
 const FPS: f64 = 480.0;
@@ -460,8 +460,7 @@ impl StraightLine {
 /// heights' offset explains (least squares Δn = s·a + d, with R²), and how far the
 /// fitted halt and the turns' end lie from the true halt (RMS). R² is a correlation,
 /// not the zero's share: a zero 15 % closer to the truth left Δn as it was, since the
-/// coding that moves the zero shaves the peaks too (BENCHMARKS.md, "The zero from one
-/// fit of the window").
+/// coding that moves the zero shaves the peaks too.
 fn error_budget(errors: &[SceneErrors]) -> String {
     let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
     let peaks: Vec<(f64, f64)> = errors.iter().map(|e| (e.offset_px, e.n_peaks)).collect();
@@ -877,7 +876,7 @@ fn coarse(scene: &SceneSpec) -> SceneSpec {
 
 /// The gate (§4): the 24 drawn scenes at [`GATE_CRF`] meet every target; the six
 /// coded at 20 are coded again at [`COARSE_CRF`], must be measured, and are scored
-/// for information (BENCHMARKS.md, "The gate at the open footage's quality").
+/// for information (docs/validation.md, "Robustness gate").
 #[test]
 fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
     let scenes = draw_scenes();
@@ -900,7 +899,7 @@ fn drawn_scenes_are_measured_with_no_config_to_their_resolution() {
         .collect();
     // As many scenes at a time as rayon has threads (two on the CI's two cores):
     // rendering is parallel, the analysis mostly not, so one scene at a time left a
-    // core idle for much of the test (216 s; 149 s so, BENCHMARKS.md, "Test suite").
+    // core idle for much of the test (216 s; 149 s so, docs/validation.md, "The test suite").
     // Each scene's bytes and result are its own, whatever runs beside it
     // (tests/determinism.rs).
     let (gate, coarse): (Vec<_>, Vec<_>) = rayon::join(

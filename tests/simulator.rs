@@ -235,7 +235,7 @@ fn augmented_contour_friction_end_state() {
 
 /// Table 4.1, contour friction: with η tuned so the motion ends at 0.5 s, the energy
 /// (eq. 4.94) fitted with A_e, t0 and n free gives n = 0.67 (analytic 2/3). The other
-/// rows run in `eulerdisk reproduce` (about a second each, BENCHMARKS.md).
+/// rows run in `eulerdisk reproduce` (about a second each, docs/validation.md, "Speed: simulator").
 #[test]
 fn table_4_1_contour_exponent() {
     let (eta, n, end) =

@@ -111,12 +111,14 @@ mod tests {
     }
 
     /// A parabola's vertex, found to the bracket's width and by a fixed number of
-    /// steps (0.618^60 of the bracket: 3e-13), from a bracket found downhill.
+    /// steps (0.618^60 of the bracket: 2e-12), from a bracket found downhill. A
+    /// minimum is located to about √ε ≈ 1.5e-8 of the function's scale only: closer
+    /// to it, f differs from its least value by less than its rounding.
     #[test]
     fn golden_section_finds_a_parabolas_vertex() {
         let f = |x: f64| (x - 1.234).powi(2) + 0.5;
         let by_width = golden_section(f, -3.0, 4.0, Stop::Width(1e-9));
-        assert!((by_width.midpoint() - 1.234).abs() < 1e-9);
+        assert!((by_width.midpoint() - 1.234).abs() < 1e-7);
         let by_steps = golden_section(f, -3.0, 4.0, Stop::Steps(60));
         assert!((by_steps.best().0 - 1.234).abs() < 1e-7);
         let [(a, fa), (b, fb), (c, fc)] = bracket_minimum(f, -10.0, 0.5, 40);
