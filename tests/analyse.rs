@@ -210,8 +210,8 @@ fn the_precession_rate_checks_the_scale() {
             .iter()
             .any(|w| w.contains("precession's disagree"))
     };
-    assert!(!warned(&e), "{:?}", e.warnings);
-    let moved = analyse("side-dark-n050.mp4", &top_rim_misread(&e, 0.06));
+    assert!(!warned(e), "{:?}", e.warnings);
+    let moved = analyse("side-dark-n050.mp4", &top_rim_misread(e, 0.06));
     assert!(moved.plan.scale.at_near_rim(), "{}", moved.plan.scale.used);
     let scale = moved.plan.metres_per_px / e.plan.metres_per_px;
     assert!((scale * 1.06 - 1.0).abs() < 0.005, "scale ×{scale}");
@@ -222,7 +222,7 @@ fn the_precession_rate_checks_the_scale() {
         "×{ratio}: {}",
         misread.describe()
     );
-    assert!(warned(&moved), "{:?}", moved.warnings);
+    assert!(warned(moved), "{:?}", moved.warnings);
 }
 
 /// A config (480 fps) with `e`'s calibration but the near top rim z_t moved up by
@@ -253,7 +253,7 @@ fn the_turns_timing_gives_n_without_the_heights() {
             .expect("a timing fit")
     };
     let e = analyse("side-dark-n050.mp4", "fps = 480\n");
-    let fit = timing(&e);
+    let fit = timing(e);
     assert!((fit.n - true_n).abs() < 0.01, "n = {}", fit.n);
     assert!(
         (fit.ci95_n.0..=fit.ci95_n.1).contains(&true_n),
@@ -268,15 +268,15 @@ fn the_turns_timing_gives_n_without_the_heights() {
     );
     assert!(rest.plan.rim_zero_from_motion.is_none());
     let heights_moved = (rest.peaks_fit.fit.n - e.peaks_fit.fit.n).abs();
-    let timing_moved = (timing(&rest).n - fit.n).abs();
+    let timing_moved = (timing(rest).n - fit.n).abs();
     assert!(
         heights_moved > 0.004 && timing_moved < 0.1 * heights_moved,
         "the zero moved the heights' n by {heights_moved}, the timing's by {timing_moved}"
     );
 
-    let misread = analyse("side-dark-n050.mp4", &top_rim_misread(&e, 0.06));
+    let misread = analyse("side-dark-n050.mp4", &top_rim_misread(e, 0.06));
     assert!((misread.plan.metres_per_px / e.plan.metres_per_px * 1.06 - 1.0).abs() < 0.005);
-    assert!((timing(&misread).n - fit.n).abs() < 0.001);
+    assert!((timing(misread).n - fit.n).abs() < 0.001);
 }
 
 #[test]

@@ -112,7 +112,7 @@ fn a_rotation_tagged_clip_measures_as_the_original() {
         // The grey scene has no chroma but at the disk's anti-aliased edges: the
         // rotated chroma filter moves a rim height by under 0.01 px (0.0068 px
         // measured for a quarter turn, 0 for the mirror alone).
-        let dz = max_difference(&z_rim(&plain), &z_rim(&tagged));
+        let dz = max_difference(&z_rim(plain), &z_rim(&tagged));
         assert!(dz < 0.02, "{expected}: z_rim differs by {dz} px");
         let dn = (tagged.peaks_fit.fit.n - plain.peaks_fit.fit.n).abs();
         assert!(dn < 1e-3, "{expected}: n differs by {dn}");
@@ -195,7 +195,7 @@ fn ten_bit_and_full_range_clips_measure_as_eight_bit_limited() {
     let (base, reference) = plain_lossless();
     let signal = reference.plan.video_signal.clone().unwrap();
     assert_eq!((signal.bit_depth, signal.full_range), (8, false));
-    let grey = last_frame_mean(&base);
+    let grey = last_frame_mean(base);
     for (name, extra, depth, full, transfer) in [
         ("full.mp4", &["--full-range"][..], 8, true, "unspecified"),
         (
@@ -236,7 +236,7 @@ fn ten_bit_and_full_range_clips_measure_as_eight_bit_limited() {
             "{name}: mean grey {mean} against {grey}"
         );
         // Issue §4: the same z_rim series within 0.05 px (0.027 px measured).
-        let dz = max_difference(&z_rim(&reference), &z_rim(&e));
+        let dz = max_difference(&z_rim(reference), &z_rim(&e));
         assert!(dz < 0.05, "{name}: z_rim differs by {dz} px");
     }
 }

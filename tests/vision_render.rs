@@ -89,7 +89,7 @@ fn light_plate_clip_calibrates_on_the_shadow_and_tracks_the_rim() {
     // ≈ 0.10 px per frame and the plate line's 0.12 px: measured 0.14 px RMS on one
     // encode and 0.20 px on the next (the strip on the top face changed, and with
     // it the encoder's choices). 0.3 px, the figure for clean clips.
-    let (all, peaks) = z_rim_errors(&e, &truth);
+    let (all, peaks) = z_rim_errors(e, &truth);
     assert!(all.len() > 300, "{} frames with an edge", all.len());
     assert!(rms(&all) < 0.3, "z_rim RMS error {} px", rms(&all));
     assert!(peaks.len() > 25);
@@ -128,7 +128,7 @@ fn dark_plate_rim_edge_has_no_bias_at_the_peaks() {
         "z_base {} vs {want}",
         cal.z_base
     );
-    let (all, peaks) = z_rim_errors(&e, &truth);
+    let (all, peaks) = z_rim_errors(e, &truth);
     // At the peaks (25): mean −0.019 px (+0.004 px from the area edge alone, +0.09
     // px from the half-level crossing), RMS 0.045 px, the spread being the MPEG-4
     // coding (lossless: RMS 0.03 px). A bias of 0.05 px is 5 σ of the mean of 25

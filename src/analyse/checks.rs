@@ -10,6 +10,7 @@ use super::halt::Settled;
 use super::series::{MeasuredSpan, rim_model, rim_series, signal_config};
 use super::{EnergyFit, HaltPlacement};
 use crate::config::ExperimentConfig;
+use crate::energy::HaltTime;
 use crate::model::params::DiskParams;
 use crate::precession::{self, PrecessionCheck};
 use crate::signal::{self, StateSeries};
@@ -46,60 +47,14 @@ pub(super) fn finish_fits(
         plan,
         ..
     } = settled;
-    let Fits {
-        peaks: peaks_fit,
-        frames: frames_fit,
-        full_state: full_state_fit,
-        turns: turn_timing,
-    } = fits;
-    span.warnings.extend(halt_sighting_disagrees(&peaks_fit));
-    let halt = plan.halt(&span.series, bounded, turn_timing.as_ref().ok());
-    let skips = signal::flags_within(
-        &span.series.flags,
-        span.series.peaks.window.0,
-        span.series.peaks.window.1,
-    );
+    span.warnings.extend(halt_sighting_disagrees(&fits.peaks));
+    let halt = plan.halt(&span.series, bounded, fits.turns.as_ref().ok());
+    let (start, end) = span.series.peaks.window;
+    let skips = signal::flags_within(&span.series.flags, start, end);
     let skips_in_window = skips.len();
     span.warnings.extend(flagged_in_window(&skips));
-
-    // The zero of z_rim (placed by the motion, or the edge at rest) is shared by every
-    // height, so an error in it moves n without a trace in the residuals: each fit is
-    // made again with the zero moved down and up by its uncertainty, and half the
-    // change of n enters n's interval.
-    let zero_px = config
-        .rim_zero_uncertainty_px()
-        .unwrap_or_else(|| match &span.zero {
-            Some(z) => RimReading::motion_zero_uncertainty_px(z.zero.se / span.metres_per_px),
-            None => span.reading.zero_uncertainty_px(),
-        });
-    let moved = zero_moved_series(&span, params, zero_px, plan.window_s);
-    let window_s = plan.window_s;
-    let peaks_fit = with_zero_error(
-        peaks_fit,
-        &moved,
-        |s| peak_energies(params, s),
-        window_s,
-        halt,
-    );
-    let frames_fit = frames_fit.map(|f| {
-        with_zero_error(
-            f,
-            &moved,
-            |s| frame_energies(params, s, None),
-            window_s,
-            halt,
-        )
-    });
-    let full_state_fit = full_state_fit.map(|f| {
-        with_zero_error(
-            f,
-            &moved,
-            |s| frame_energies(params, s, s.strip.as_ref()),
-            window_s,
-            halt,
-        )
-    });
-
+    let zero_px = zero_uncertainty_px(config, &span);
+    let fits = with_zero_errors(fits, &span, params, zero_px, plan.window_s, halt);
     span.warnings.extend(unsteady_states(&span.series, params));
     span.warnings.extend(unread_peaks(&span.series));
     // φ from the heights against φ from the precession rate (crate::precession): a
@@ -108,12 +63,18 @@ pub(super) fn finish_fits(
         &span.series.states,
         params,
         span.series.peaks.window,
-        signal_config(window_s, span.metres_per_px).state_window_periods,
+        signal_config(plan.window_s, span.metres_per_px).state_window_periods,
     );
     span.warnings
         .extend(precession_disagrees(precession.as_ref()));
     span.warnings
-        .extend(timing_disagrees(&turn_timing, &peaks_fit));
+        .extend(timing_disagrees(&fits.turns, &fits.peaks));
+    let Fits {
+        peaks: peaks_fit,
+        frames: frames_fit,
+        full_state: full_state_fit,
+        turns: turn_timing,
+    } = fits;
     Fitted {
         span,
         peaks_fit,
@@ -124,6 +85,59 @@ pub(super) fn finish_fits(
         skips_in_window,
         precession,
         zero_px,
+    }
+}
+
+/// 1σ uncertainty of the zero of z_rim \[px\]: the config's, else the motion's
+/// ([`RimReading::motion_zero_uncertainty_px`]), else the rim reading's.
+fn zero_uncertainty_px(config: &ExperimentConfig, span: &MeasuredSpan) -> f64 {
+    config
+        .rim_zero_uncertainty_px()
+        .unwrap_or_else(|| match &span.zero {
+            Some(z) => RimReading::motion_zero_uncertainty_px(z.zero.se / span.metres_per_px),
+            None => span.reading.zero_uncertainty_px(),
+        })
+}
+
+/// The fits with n's interval widened by the zero of z_rim. The zero (placed by the
+/// motion, or the edge at rest) is shared by every height, so an error in it moves n
+/// without a trace in the residuals: each fit is made again with the zero moved
+/// down and up by its uncertainty `zero_px`, and half the change of n enters n's
+/// interval.
+fn with_zero_errors(
+    fits: Fits,
+    span: &MeasuredSpan,
+    params: &DiskParams,
+    zero_px: f64,
+    window_s: f64,
+    halt: HaltTime,
+) -> Fits {
+    let moved = zero_moved_series(span, params, zero_px, window_s);
+    let peaks = with_zero_error(
+        fits.peaks,
+        &moved,
+        |s| peak_energies(params, s),
+        window_s,
+        halt,
+    );
+    let frames = fits.frames.map(|f| {
+        with_zero_error(
+            f,
+            &moved,
+            |s| frame_energies(params, s, None),
+            window_s,
+            halt,
+        )
+    });
+    let full_state = fits.full_state.map(|f| {
+        let samples = |s: &StateSeries| frame_energies(params, s, s.strip.as_ref());
+        with_zero_error(f, &moved, samples, window_s, halt)
+    });
+    Fits {
+        peaks,
+        frames,
+        full_state,
+        turns: fits.turns,
     }
 }
 

@@ -121,22 +121,7 @@ pub(super) fn measure_frames<K: FrameKeeping>(
     for record in &mut frames {
         record.z_rim_m = record.z_rim_px.map(|z| z * metres_per_px);
     }
-    if no_edge == frames.len() {
-        return Err(AnalyseError::Clip {
-            path: clip.to_path_buf(),
-            reason: format!(
-                "no rim edge found on the centre line in any of the {} frames (γ = {:.1})",
-                frames.len(),
-                rest.calibration.threshold.gamma
-            ),
-        });
-    }
-    if no_edge > 0 {
-        warnings.push(format!(
-            "no rim edge found in {no_edge} of {} frames",
-            frames.len()
-        ));
-    }
+    warnings.extend(frames_without_edge(clip, no_edge, frames.len(), rest)?);
     let frame_times = set_capture_times(&mut frames, plan_span, first, &mut fps);
     warnings.splice(0..0, fps.warnings.iter().cloned());
     let measured = MeasuredFrames {
@@ -153,6 +138,28 @@ pub(super) fn measure_frames<K: FrameKeeping>(
         metres_per_px,
     };
     Ok((measured, kept))
+}
+
+/// A warning when `no_edge` of the span's `frames` showed no rim edge.
+///
+/// # Errors
+/// None of them did: the threshold finds no rim on the centre line.
+fn frames_without_edge(
+    clip: &Path,
+    no_edge: usize,
+    frames: usize,
+    rest: &RestCalibration,
+) -> Result<Option<String>, AnalyseError> {
+    if no_edge == frames {
+        return Err(AnalyseError::Clip {
+            path: clip.to_path_buf(),
+            reason: format!(
+                "no rim edge found on the centre line in any of the {frames} frames (γ = {:.1})",
+                rest.calibration.threshold.gamma
+            ),
+        });
+    }
+    Ok((no_edge > 0).then(|| format!("no rim edge found in {no_edge} of {frames} frames")))
 }
 
 /// Pass 2's stream: the frames from `first` to the end, each read with the rest

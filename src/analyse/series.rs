@@ -147,19 +147,8 @@ pub(super) fn signal_stage(
     let mut rim_zero_row_px = rim.zero_row_px;
     let mut description = rim.description;
     if let Some(zero) = &zero {
-        let shift_px = zero.shift_m / metres_per_px;
-        rim_zero_row_px -= shift_px;
-        description += &format!(
-            "; the motion places the zero of z_rim {:.3} ± {:.3} px {} the still disk's \
-             edge, at row {rim_zero_row_px:.2} px (signal::motion_zero, {} heights between {} \
-             turning points, the profile at ε = {:.2}°)",
-            shift_px.abs(),
-            zero.zero.se / metres_per_px,
-            if shift_px >= 0.0 { "above" } else { "below" },
-            zero.zero.points,
-            zero.zero.turning_points,
-            scale.near_rim_elevation_rad.unwrap_or(0.0).to_degrees()
-        );
+        rim_zero_row_px -= zero.shift_m / metres_per_px;
+        description += &zero_description(zero, metres_per_px, rim_zero_row_px, &scale);
     }
     Ok(MeasuredSpan {
         frames,
@@ -179,6 +168,28 @@ pub(super) fn signal_stage(
         known_flags,
         top_rim_leaning,
     })
+}
+
+/// How far the motion moved the zero of z_rim from the still disk's edge, to the row
+/// `zero_row_px`, for the plan's description of the rim's reading.
+fn zero_description(
+    zero: &ZeroFromMotion,
+    metres_per_px: f64,
+    zero_row_px: f64,
+    scale: &ScaleReport,
+) -> String {
+    let shift_px = zero.shift_m / metres_per_px;
+    format!(
+        "; the motion places the zero of z_rim {:.3} ± {:.3} px {} the still disk's \
+         edge, at row {zero_row_px:.2} px (signal::motion_zero, {} heights between {} \
+         turning points, the profile at ε = {:.2}°)",
+        shift_px.abs(),
+        zero.zero.se / metres_per_px,
+        if shift_px >= 0.0 { "above" } else { "below" },
+        zero.zero.points,
+        zero.zero.turning_points,
+        scale.near_rim_elevation_rad.unwrap_or(0.0).to_degrees()
+    )
 }
 
 /// The warning for the duplicated and interpolated frames left out of the fits.
