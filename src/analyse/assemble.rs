@@ -27,10 +27,7 @@ pub(super) fn experiment(
 ) -> Result<Experiment, AnalyseError> {
     let Fitted {
         span,
-        peaks_fit,
-        frames_fit,
-        full_state_fit,
-        turn_timing,
+        fits,
         halt_placement,
         skips_in_window,
         precession,
@@ -95,12 +92,12 @@ pub(super) fn experiment(
         plan,
         frames: span.frames,
         series: span.series,
-        peaks_fit,
-        frames_fit,
-        full_state_fit,
+        peaks_fit: fits.peaks,
+        frames_fit: fits.frames,
+        full_state_fit: fits.full_state,
         skips_in_window,
         precession,
-        turn_timing: Some(turn_timing),
+        turn_timing: Some(fits.turns),
         halt_placement,
         warnings: span.warnings,
         diagnostics: Diagnostics {

@@ -20,10 +20,8 @@ use crate::vision::RimReading;
 /// The fits as reported, with the checks' findings among the span's warnings.
 pub(super) struct Fitted {
     pub(super) span: MeasuredSpan,
-    pub(super) peaks_fit: EnergyFit,
-    pub(super) frames_fit: Option<EnergyFit>,
-    pub(super) full_state_fit: Option<EnergyFit>,
-    pub(super) turn_timing: Result<TurnTimingFit, String>,
+    /// The settled fits, their intervals of n widened by the zero of z_rim.
+    pub(super) fits: Fits,
     pub(super) halt_placement: Option<HaltPlacement>,
     pub(super) skips_in_window: usize,
     pub(super) precession: Option<PrecessionCheck>,
@@ -69,18 +67,9 @@ pub(super) fn finish_fits(
         .extend(precession_disagrees(precession.as_ref()));
     span.warnings
         .extend(timing_disagrees(&fits.turns, &fits.peaks));
-    let Fits {
-        peaks: peaks_fit,
-        frames: frames_fit,
-        full_state: full_state_fit,
-        turns: turn_timing,
-    } = fits;
     Fitted {
         span,
-        peaks_fit,
-        frames_fit,
-        full_state_fit,
-        turn_timing,
+        fits,
         halt_placement,
         skips_in_window,
         precession,
