@@ -24,9 +24,8 @@
 //! in §3.2.5 and §4.6. The model is *separable*: A_e enters linearly, so for given
 //! (n, t0) the best A_e is a closed-form projection. The search therefore runs over the
 //! one or two nonlinear parameters only (n, and t0 when it is free) by variable
-//! projection (Golub & Pereyra 1973) with a Levenberg–Marquardt step control
-//! (Marquardt 1963, Nielsen's damping update). The `levenberg-marquardt` crate was not
-//! used: its 0.15 release is built on nalgebra 0.34, not the crate's 0.35.
+//! projection (Golub & Pereyra 1973), solved by the crate's Levenberg–Marquardt
+//! ([`crate::numeric::lsq`]) with a trust radius on the parameters' steps.
 //!
 //! * t0 is searched as `t0 = t_last + T·e^s` (T the time span of the data), so every
 //!   trial t0 lies strictly after the last sample and (t0 − t)^n stays defined.
@@ -85,6 +84,7 @@
 
 use crate::model::closed_form;
 use crate::model::params::DiskParams;
+use crate::numeric::lsq::{self, Limits, Problem};
 use crate::numeric::minimise::{Stop, golden_section};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -640,22 +640,6 @@ pub fn window_sensitivity(
 
 /// Iteration limit of the Levenberg–Marquardt search.
 const MAX_ITERATIONS: usize = 200;
-/// A step is small when it changes n by < XTOL (1 + |n|) and ln(t0 − t_last) by < XTOL.
-const XTOL: f64 = 1e-12;
-/// Converged when the relative offset (about the distance to the minimum in standard
-/// errors, see [`relative_offset`]) is below this: with standard errors of ~1 % of n,
-/// parameters then change by ~1e-12 relative.
-const RO_TOL: f64 = 1e-10;
-/// A small step, or a point where no step lowers ‖r‖² any more (floating point), counts
-/// as converged only if the relative offset is at least this small (a millionth of a
-/// standard error).
-const STALL_RO: f64 = 1e-6;
-/// Relative rounding error of a computed ‖r‖² (a few hundred samples summed).
-const SSR_ROUNDING: f64 = 64.0 * f64::EPSILON;
-/// Damping beyond which no step can lower the error.
-const LAMBDA_MAX: f64 = 1e16;
-/// Smallest damping kept (below it the step is Gauss–Newton's anyway).
-const LAMBDA_MIN: f64 = 1e-12;
 /// Largest change of n, and of ln(t0 − t_last), in one step (initial trust radius).
 const MAX_STEP: f64 = 2.0;
 /// t0 − t_last beyond e^20 ≈ 5e8 data spans: t0 has run off to infinity (the data
@@ -767,10 +751,18 @@ fn fit_with_limit(
     };
 
     let start = problem.starting_values();
-    let outcome = levenberg_marquardt(&problem, start, max_iterations)?;
-    let p = &outcome.p;
+    let limits = Limits {
+        max_iterations,
+        max_step: MAX_STEP,
+    };
+    let outcome = lsq::minimise(&problem, start, limits).ok_or_else(|| {
+        FitError::degenerate(
+            "the starting power law is not finite (energies span too many decades)",
+        )
+    })?;
+    let p = &outcome.params;
     let n = p[0];
-    let d = problem.offset(p);
+    let d = problem.offset(p.as_slice());
     let t0 = t_last + d * span;
     if free && d < PINNED_OFFSET {
         return Err(FitError::HaltAtLastSample { t_last, n });
@@ -785,7 +777,7 @@ fn fit_with_limit(
 
     // Statistics in the scaled parameters (a, n[, d]) of y = a u^n, then mapped to
     // (A_e, n[, t0]). The search's amplitude refers to (u/u_max)^n; rescale it.
-    let amp = outcome.eval.amp * (1.0 + d).powf(-n);
+    let amp = problem.amplitude(p.as_slice()) * (1.0 + d).powf(-n);
     if !(amp.is_finite() && amp > 0.0) {
         return Err(FitError::degenerate(
             "the fitted amplitude is not a positive finite number",
@@ -802,17 +794,17 @@ fn fit_with_limit(
         }
     }
     let dof = points - parameters;
-    let ssr_scaled = outcome.eval.ssr;
+    let ssr_scaled = outcome.ssr;
     let s2 = ssr_scaled / dof as f64;
     let bread = inverse_normal_matrix(&jac)?;
     let mut by_time: Vec<usize> = (0..points).collect();
     by_time.sort_by(|&i, &j| tail[j].total_cmp(&tail[i]));
     // The long-run covariance over the samples, and where the series spans enough
     // turns over them too; the wider interval of n is kept (module docs).
-    let resid: Vec<f64> = by_time.iter().map(|&i| outcome.eval.resid[i]).collect();
+    let resid: Vec<f64> = by_time.iter().map(|&i| outcome.residuals[i]).collect();
     let scores: Vec<DVector<f64>> = by_time
         .iter()
-        .map(|&i| jac.row(i).transpose() * outcome.eval.resid[i])
+        .map(|&i| jac.row(i).transpose() * outcome.residuals[i])
         .collect();
     let each_sample: Vec<usize> = (0..points).collect();
     let mut long_run = LongRun::over_blocks(&bread, &resid, &scores, &each_sample, parameters)?;
@@ -1352,7 +1344,7 @@ impl Projection<'_> {
         }
     }
 
-    fn offset(&self, p: &DVector<f64>) -> f64 {
+    fn offset(&self, p: &[f64]) -> f64 {
         match self.offset {
             Offset::Fixed(d) => d,
             Offset::Free => p[1].exp(),
@@ -1368,7 +1360,7 @@ impl Projection<'_> {
     /// r depends on f only through its direction, so f is taken as (u/u_max)^n with
     /// u_max = 1 + d (so f ≤ 1: no overflow when t0 wanders far); then ∂f/∂n = f ln(u/u_max)
     /// and ∂f/∂s = n f (d/u − d/u_max). The returned `amp` refers to this f.
-    fn evaluate(&self, p: &DVector<f64>) -> Option<Evaluation> {
+    fn evaluate(&self, p: &[f64]) -> Option<Evaluation> {
         let m = self.tail.len();
         let k = self.nonlinear_parameters();
         let n = p[0];
@@ -1437,7 +1429,7 @@ impl Projection<'_> {
                 for step in 0..count {
                     let d = 10f64.powf(lo + (hi - lo) * step as f64 / (count - 1) as f64);
                     let p = DVector::from_vec(vec![self.log_log_exponent(d), d.ln()]);
-                    if let Some(eval) = self.evaluate(&p)
+                    if let Some(eval) = self.evaluate(p.as_slice())
                         && best.as_ref().is_none_or(|(ssr, _)| eval.ssr < *ssr)
                     {
                         best = Some((eval.ssr, p));
@@ -1449,155 +1441,50 @@ impl Projection<'_> {
             }
         }
     }
-}
 
-struct Outcome {
-    p: DVector<f64>,
-    eval: Evaluation,
-    iterations: usize,
-    converged: bool,
-}
-
-/// The relative offset of Bates & Watts (1981): the part of the residual that the
-/// parameters can still remove, q = rᵀJ (JᵀJ)⁻¹ Jᵀr (the Gauss–Newton reduction of
-/// ‖r‖²), compared with the rest,
-/// RO = √( (q/k) / ((‖r‖² − q)/(m − k − 1)) ),
-/// with k nonlinear parameters and one linear. RO is about the distance to the minimum in
-/// standard errors, independent of the parametrisation and of parameter correlations;
-/// zero at a stationary point. `None` when JᵀJ is singular.
-fn relative_offset(eval: &Evaluation, gradient: &DVector<f64>) -> Option<f64> {
-    if eval.ssr == 0.0 {
-        return Some(0.0);
+    /// The optimal linear amplitude a at p (for f = (u/u_max)^n); NaN where the model
+    /// is not finite.
+    fn amplitude(&self, p: &[f64]) -> f64 {
+        self.evaluate(p).map_or(f64::NAN, |eval| eval.amp)
     }
-    let (m, k) = eval.jac.shape();
-    let q = gradient.dot(&eval.jac.tr_mul(&eval.jac).cholesky()?.solve(gradient));
-    let rest = (eval.ssr - q).max(f64::MIN_POSITIVE);
-    Some(((q / k as f64) / (rest / (m - k - 1) as f64)).sqrt())
 }
 
-/// Levenberg–Marquardt on the projected residual: solve
-/// (JᵀJ + λ diag(JᵀJ)) δ = −Jᵀr, accept δ when it lowers ‖r‖², and adapt λ by the ratio
-/// ρ of actual to predicted reduction (Nielsen: λ ← λ max(1/3, 1 − (2ρ − 1)³) on
-/// success, λ ← ν λ with ν doubling on failure).
-///
-/// Converged when the residual is rounding noise (an exact power law), when the
-/// relative offset is below [`RO_TOL`], or when a step is below [`XTOL`] (relative) or
-/// no step lowers ‖r‖² any more while the relative offset is below [`STALL_RO`] (so a
-/// step made tiny by heavy damping far from the minimum is not taken for convergence).
-fn levenberg_marquardt(
-    problem: &Projection<'_>,
-    start: DVector<f64>,
-    max_iterations: usize,
-) -> Result<Outcome, FitError> {
-    let free = problem.nonlinear_parameters() == 2;
-    let mut p = start;
-    let mut current = problem.evaluate(&p).ok_or_else(|| {
-        FitError::degenerate(
-            "the starting power law is not finite (energies span too many decades)",
-        )
-    })?;
-    // Below this the residual is rounding noise: the data are an exact power law.
-    let exact = (16.0 * f64::EPSILON).powi(2) * problem.y.norm_squared();
-    let is_small = |step: &DVector<f64>, p: &DVector<f64>| {
-        step[0].abs() <= XTOL * (1.0 + p[0].abs()) && (!free || step[1].abs() <= XTOL)
-    };
-    let mut lambda = 1e-3;
-    let mut nu = 2.0;
-    // Trust radius on the largest parameter change; shrinks when clamped steps
-    // predict badly (the model in ln(t0 − t_last) is far from quadratic near the bound).
-    let mut radius = MAX_STEP;
-    let mut iterations = 0;
-    let converged = loop {
-        let gradient = current.jac.tr_mul(&current.resid);
-        let offset = relative_offset(&current, &gradient).unwrap_or(f64::INFINITY);
-        if current.ssr <= exact || offset <= RO_TOL {
-            break true;
+/// The projected residual for the crate's solver: one linear parameter (a)
+/// eliminated; n's step scaled by 1 + |n|, ln d's absolutely; t0 off limits when it
+/// runs off to infinity or onto the bound t0 > t_last (the caller reports which).
+impl Problem for Projection<'_> {
+    fn residual_count(&self) -> usize {
+        self.tail.len()
+    }
+
+    fn residuals(&self, p: &[f64], r: &mut [f64]) -> bool {
+        self.evaluate(p)
+            .map(|eval| r.copy_from_slice(eval.resid.as_slice()))
+            .is_some()
+    }
+
+    fn jacobian(&self, p: &[f64], jac: &mut DMatrix<f64>) {
+        if let Some(eval) = self.evaluate(p) {
+            jac.copy_from(&eval.jac);
         }
-        // Give up at the iteration limit, or when t0 runs off to infinity or onto the
-        // bound t0 > t_last (the caller reports which).
-        let off_limits = free && (p[1] > MAX_LOG_OFFSET || p[1] < PINNED_OFFSET.ln());
-        if iterations == max_iterations || off_limits {
-            break false;
-        }
-        iterations += 1;
-        let normal = current.jac.tr_mul(&current.jac);
-        let diag_floor = 1e-12 * normal.diagonal().max();
-        // Raise the damping until a step lowers the squared error.
-        let accepted = loop {
-            if lambda > LAMBDA_MAX {
-                break None;
-            }
-            let mut damped = normal.clone();
-            for j in 0..damped.nrows() {
-                damped[(j, j)] += lambda * normal[(j, j)].max(diag_floor);
-            }
-            let Some(cholesky) = damped.cholesky() else {
-                lambda *= nu;
-                nu *= 2.0;
-                continue;
-            };
-            let mut step = cholesky.solve(&(-&gradient));
-            let largest = step.amax();
-            let clamped = largest > radius;
-            if clamped {
-                step *= radius / largest;
-            }
-            let predicted = -(gradient.dot(&step) + 0.5 * step.dot(&(&normal * &step)));
-            let trial_p = &p + &step;
-            match problem.evaluate(&trial_p) {
-                Some(trial) if trial.ssr < current.ssr && predicted > 0.0 => {
-                    let rho = 0.5 * (current.ssr - trial.ssr) / predicted;
-                    lambda =
-                        (lambda * (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0)).max(LAMBDA_MIN);
-                    nu = 2.0;
-                    if clamped && rho < 0.25 {
-                        radius /= 4.0;
-                    } else if rho > 0.75 {
-                        radius = (2.0 * radius).min(MAX_STEP);
-                    }
-                    break Some((trial_p, trial, step));
-                }
-                // Next to the minimum the change of ‖r‖² drowns in its rounding error,
-                // but the gradient is still informative: accept a step that keeps ‖r‖²
-                // within rounding and at least halves the relative offset (a smaller
-                // gain is rounding noise too, and would let the search zigzag).
-                Some(trial)
-                    if trial.ssr - current.ssr <= SSR_ROUNDING * current.ssr
-                        && relative_offset(&trial, &trial.jac.tr_mul(&trial.resid))
-                            .is_some_and(|ro| ro < 0.5 * offset) =>
-                {
-                    lambda = (lambda / 3.0).max(LAMBDA_MIN);
-                    nu = 2.0;
-                    break Some((trial_p, trial, step));
-                }
-                // Steps below the tolerance no longer lower the error: stalled.
-                _ if is_small(&step, &p) => break None,
-                _ => {
-                    lambda *= nu;
-                    nu *= 2.0;
-                }
-            }
-        };
-        let Some((trial_p, trial, step)) = accepted else {
-            // No step lowers the error in floating point: a minimum if flat enough.
-            break offset <= STALL_RO;
-        };
-        let small = is_small(&step, &p);
-        p = trial_p;
-        current = trial;
-        if small
-            && relative_offset(&current, &current.jac.tr_mul(&current.resid))
-                .is_some_and(|ro| ro <= STALL_RO)
-        {
-            break true;
-        }
-    };
-    Ok(Outcome {
-        p,
-        eval: current,
-        iterations,
-        converged,
-    })
+    }
+
+    fn eliminated(&self) -> usize {
+        1
+    }
+
+    fn step_scale(&self, p: &[f64], j: usize) -> f64 {
+        if j == 0 { 1.0 + p[0].abs() } else { 1.0 }
+    }
+
+    fn off_limits(&self, p: &[f64]) -> bool {
+        matches!(self.offset, Offset::Free) && (p[1] > MAX_LOG_OFFSET || p[1] < PINNED_OFFSET.ln())
+    }
+
+    /// Below this the residual is rounding noise: the data are an exact power law.
+    fn rounding_ssr(&self) -> f64 {
+        (16.0 * f64::EPSILON).powi(2) * self.y.norm_squared()
+    }
 }
 
 #[cfg(test)]

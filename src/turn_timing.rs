@@ -341,7 +341,7 @@ fn least_squares(t_ms: &[f64], psi: &[f64], last: f64, start: &Law, free_end: bo
         t_ms.len(),
     )?;
     let p = fit.params.as_slice();
-    let se_q = fit.covariance.as_ref()?[(q_at, q_at)].sqrt();
+    let se_q = fit.covariance()?[(q_at, q_at)].sqrt();
     let law = Law {
         end: p[0],
         ln_c: p[1],

@@ -1,11 +1,7 @@
-//! The crate's numerics, written once: the least-squares solver of the local fits
-//! ([`lsq`]), the 1-D minimiser ([`minimise`]) and the robust statistics
-//! ([`robust`]) that every stage uses.
-//!
-//! The power law's fit (`crate::energy`) keeps its own Levenberg–Marquardt: a
-//! variable projection over one or two nonlinear parameters with a trust radius on
-//! the bounded t0 and the Bates–Watts stopping rule, which the local fits do not
-//! need and whose different stopping rule would move their numbers.
+//! The crate's numerics, written once: the least-squares solver ([`lsq`]) of the power
+//! law, the local fits, the turns' timing and the top face's profile; the 1-D
+//! minimiser ([`minimise`]); and the robust statistics ([`robust`]) that every stage
+//! uses.
 
 pub mod lsq;
 pub mod minimise;

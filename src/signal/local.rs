@@ -134,7 +134,7 @@ pub(crate) fn fit_local(
         u.len(),
     )?;
     let p = &fit.params;
-    let cov = fit.covariance.as_ref()?;
+    let cov = fit.covariance()?;
     let sign = if p[3] < 0.0 { -1.0 } else { 1.0 };
     let result = LocalFit {
         phi: p[0],

@@ -168,7 +168,7 @@ pub fn motion_zero(
         &p0,
         times.len(),
     )?;
-    let se = fit.covariance.as_ref()?[(c, c)].sqrt();
+    let se = fit.covariance()?[(c, c)].sqrt();
     let offset = fit.params[c];
     (offset.is_finite() && se.is_finite() && se > 0.0).then_some(MotionZero {
         offset,
