@@ -119,19 +119,55 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), OutputErro
     write_atomic(path, text.as_bytes())
 }
 
-/// Writes records as CSV with a header row, atomically.
-pub fn write_csv<T: Serialize>(path: &Path, records: &[T]) -> Result<(), OutputError> {
-    let serialise = |reason: String| OutputError::Serialise {
+/// Writes records as CSV with a header row, atomically. An empty table still gets
+/// its header (the field names of `T::default()`), so a reader always finds the
+/// columns. Fields holding a comma, a quote or a line break are quoted.
+pub fn write_csv<T: Serialize + Default>(path: &Path, records: &[T]) -> Result<(), OutputError> {
+    let serialise = |e: csv::Error| OutputError::Serialise {
         path: path.to_path_buf(),
-        reason,
+        reason: e.to_string(),
     };
     let mut writer = csv::Writer::from_writer(Vec::new());
     for record in records {
-        writer
-            .serialize(record)
-            .map_err(|e| serialise(e.to_string()))?;
+        writer.serialize(record).map_err(serialise)?;
     }
-    let bytes = writer.into_inner().map_err(|e| serialise(e.to_string()))?;
+    if records.is_empty() {
+        writer.serialize(T::default()).map_err(serialise)?;
+    }
+    let mut bytes = writer
+        .into_inner()
+        .map_err(|e| serialise(e.into_error().into()))?;
+    if records.is_empty() {
+        // Only the header line of the default row.
+        let header_end = bytes.iter().position(|&b| b == b'\n').map_or(0, |i| i + 1);
+        bytes.truncate(header_end);
+    }
+    write_atomic(path, &bytes)
+}
+
+/// Writes a table of text cells as CSV under `header`, atomically, quoting fields
+/// that hold a comma, a quote or a line break.
+///
+/// # Errors
+/// `Serialise` when a row's width differs from the header's; `Io` when the file
+/// cannot be written.
+pub fn write_csv_rows(
+    path: &Path,
+    header: &[&str],
+    rows: &[Vec<String>],
+) -> Result<(), OutputError> {
+    let serialise = |e: csv::Error| OutputError::Serialise {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    };
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    writer.write_record(header).map_err(serialise)?;
+    for row in rows {
+        writer.write_record(row).map_err(serialise)?;
+    }
+    let bytes = writer
+        .into_inner()
+        .map_err(|e| serialise(e.into_error().into()))?;
     write_atomic(path, &bytes)
 }
 
@@ -324,6 +360,29 @@ mod tests {
             expected | ((expected & 0o444) >> 2),
             "folders get x where r"
         );
+    }
+
+    /// Issue 73.10: a table with no rows was a 0-byte file; it now holds its header,
+    /// and a cell with a comma or a quote reads back whole.
+    #[test]
+    fn a_csv_table_always_has_its_header() {
+        #[derive(Serialize, Default)]
+        struct Row {
+            index: usize,
+            reason: String,
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("flags.csv");
+        write_csv::<Row>(&path, &[]).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "index,reason\n");
+        let rows = [Row {
+            index: 3,
+            reason: "a \"jump\", then more".into(),
+        }];
+        write_csv(&path, &rows).unwrap();
+        let mut reader = csv::Reader::from_path(&path).unwrap();
+        let record = reader.records().next().unwrap().unwrap();
+        assert_eq!(&record[1], rows[0].reason);
     }
 
     /// Issue 13.6: an output path that is a file was reported as "File exists (os
