@@ -90,7 +90,8 @@ pub struct StudyResults {
     pub shard: Option<ShardRecord>,
 }
 
-/// What a shard's `study.json` records about the share it ran.
+/// What a shard's `study.json` records about the share it ran, and about the
+/// whole study it is a share of.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ShardRecord {
     pub k: usize,
@@ -98,6 +99,11 @@ pub struct ShardRecord {
     /// The clips of this share (relative paths), each of which must appear among
     /// its experiments or failures.
     pub clips: Vec<String>,
+    /// The footage root's real path: shards of one study share it.
+    pub footage: std::path::PathBuf,
+    /// Every clip of the whole study (relative paths, sorted): shards of one study
+    /// share the list, and together own every clip of it.
+    pub study_clips: Vec<String>,
 }
 
 impl StudyResults {

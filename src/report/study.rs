@@ -13,7 +13,7 @@ use std::path::Path;
 use maud::{Markup, html};
 
 use super::ReportError;
-use super::html::{page, svg_figure, table};
+use super::html::{linked_table, page, svg_figure, table, url_path};
 use super::study_plots::{BoxPlot, BoxSeries, box_plot_svg, trend_plot_svg};
 use crate::output::{write_atomic, write_csv_rows};
 use crate::stats::{
@@ -156,9 +156,8 @@ const EXPONENT_COLUMNS: [&str; 17] = [
 fn exponent_row(e: &ExperimentSummary) -> Vec<String> {
     let m = &e.meta;
     let text = |s: &Option<String>| s.clone().unwrap_or_default();
-    let (timing_n, timing_low, timing_high) = e
-        .n_turn_timing
-        .map_or_else(Default::default, |(n, ci)| {
+    let (timing_n, timing_low, timing_high) =
+        e.n_turn_timing.map_or_else(Default::default, |(n, ci)| {
             (n.to_string(), ci[0].to_string(), ci[1].to_string())
         });
     vec![
@@ -370,6 +369,12 @@ pub fn write_study_report(
         }
     }
 
+    // Each clip's page, as the study (or merge) writes it below the report.
+    let clip_pages: Vec<String> = results
+        .experiments
+        .iter()
+        .map(|e| format!("experiments/{}/index.html", url_path(&e.clip)))
+        .collect();
     let failure_rows: Vec<Vec<String>> = results
         .failures
         .iter()
@@ -383,9 +388,10 @@ pub fn write_study_report(
             code { "tables/" } ", plots as SVG in " code { "plots/" } "."
         }
         h2 { "Exponents" }
-        (table(
+        (linked_table(
             &["clip", "disk", "material", "n", "95 % CI", "R²", "points", "fps (source)", "φ vs precession %", "n from the turns' timing (95 % CI)", "warnings"],
             &experiment_rows,
+            &clip_pages,
             |_, _| false,
         ))
         p class="note" {
@@ -396,7 +402,7 @@ pub fn write_study_report(
              alone, with no height, scale or zero in it (a check of n, never combined with it; a \
              warning where the two intervals are disjoint)."
         }
-        p class="note" { "Each clip's own page: " code { "experiments/<clip>/index.html" } "." }
+        p class="note" { "Each clip's name links to its own page." }
         h2 { "Per material" }
         (table(&summary_header, &summary_rows, |_, _| false))
         @if let Some(svg) = &box_svg {
@@ -568,12 +574,7 @@ mod tests {
     }
 
     /// Names with every character a table can trip on.
-    const AWKWARD: [&str; 4] = [
-        "oak, old",
-        "say \"hi\"",
-        "ébène # 100%",
-        "two  spaces",
-    ];
+    const AWKWARD: [&str; 4] = ["oak, old", "say \"hi\"", "ébène # 100%", "two  spaces"];
 
     /// Issue 73.1: exponents.csv's fields were not quoted, so a material "oak, old"
     /// gave 19 fields under a 17-field header. Read back by the `csv` crate with its
@@ -600,6 +601,13 @@ mod tests {
             assert_eq!(Some(&row[1]), e.meta.disk.as_deref());
             assert_eq!(Some(&row[2]), e.meta.material.as_deref());
             assert_eq!(row[9].parse::<f64>().unwrap(), e.r_squared);
+        }
+        // Issue 73.13: the page named no clip as a link. Each clip links to its page,
+        // its path percent-encoded.
+        let html = std::fs::read_to_string(out.path().join("index.html")).unwrap();
+        for e in &results.experiments {
+            let href = format!("href=\"experiments/{}/index.html\"", url_path(&e.clip));
+            assert!(html.contains(&href), "{href}");
         }
     }
 }
