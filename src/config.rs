@@ -121,11 +121,49 @@ pub struct VisionConfig {
     /// Threshold γ on the mean RGB intensity as a fraction of white, 0–1 (thesis §3.2.4).
     pub gamma: Option<f64>,
     /// Columns each side of the centre line searched for the rim edge \[px\].
+    #[serde(default, deserialize_with = "band_half_width_px")]
     pub band_half_width_px: Option<u32>,
     /// Two-view clips: the first row of the plan view \[px\].
+    #[serde(default, deserialize_with = "split_row")]
     pub split_row: Option<u32>,
     /// Region of interest `[x, y, width, height]` \[px\].
+    #[serde(default, deserialize_with = "roi")]
     pub roi: Option<[u32; 4]>,
+}
+
+/// A count of pixels for `key`: any TOML integer is read, and one that is negative
+/// or beyond 32 bits is refused naming the key, the value, the unit and the range
+/// (rather than serde's bare "expected u32").
+fn pixels<E: serde::de::Error>(key: &str, value: i64) -> Result<u32, E> {
+    u32::try_from(value).map_err(|_| {
+        E::custom(format!(
+            "`{key}` = {value} must be a whole number of pixels from 0 to {} [px]",
+            u32::MAX
+        ))
+    })
+}
+
+fn band_half_width_px<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
+    Option::<i64>::deserialize(d)?
+        .map(|v| pixels("vision.band_half_width_px", v))
+        .transpose()
+}
+
+fn split_row<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<u32>, D::Error> {
+    Option::<i64>::deserialize(d)?
+        .map(|v| pixels("vision.split_row", v))
+        .transpose()
+}
+
+fn roi<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[u32; 4]>, D::Error> {
+    let Some(values) = Option::<[i64; 4]>::deserialize(d)? else {
+        return Ok(None);
+    };
+    let mut roi = [0; 4];
+    for (px, value) in roi.iter_mut().zip(values) {
+        *px = pixels("vision.roi", value)?;
+    }
+    Ok(Some(roi))
 }
 
 /// Rest-frame calibration points \[px\] (thesis §3.2.4, eq. 3.10 with ERRATA).
@@ -265,6 +303,14 @@ impl ExperimentConfig {
             ),
             _ => Ok(()),
         };
+        // Above 0, at most `max`.
+        let up_to = |key: &str, value: Option<f64>, max: f64, unit: &str| match value {
+            Some(v) if !(v > 0.0 && v <= max) => fail(
+                key,
+                format!("`{key}` = {v} must lie above 0 and at most {max} [{unit}]"),
+            ),
+            _ => Ok(()),
+        };
         if let Some(fps) = self.fps
             && !(MIN_FPS..=MAX_FPS).contains(&fps)
         {
@@ -275,13 +321,33 @@ impl ExperimentConfig {
         }
         positive("camera_distance_m", self.camera_distance_m, "m")?;
         if let Some(disk) = &self.disk {
-            positive("disk.mass_kg", disk.mass_kg, "kg")?;
-            positive("disk.radius_m", disk.radius_m, "m")?;
-            positive("disk.half_thickness_m", disk.half_thickness_m, "m")?;
-            positive("disk.inertia_a_kg_m2", disk.inertia_a_kg_m2, "kg m²")?;
-            positive("disk.inertia_c_kg_m2", disk.inertia_c_kg_m2, "kg m²")?;
+            let (mass, length, inertia) = DISK_LIMITS;
+            up_to("disk.mass_kg", disk.mass_kg, mass, "kg")?;
+            up_to("disk.radius_m", disk.radius_m, length, "m")?;
+            up_to("disk.half_thickness_m", disk.half_thickness_m, length, "m")?;
+            up_to(
+                "disk.inertia_a_kg_m2",
+                disk.inertia_a_kg_m2,
+                inertia,
+                "kg m²",
+            )?;
+            up_to(
+                "disk.inertia_c_kg_m2",
+                disk.inertia_c_kg_m2,
+                inertia,
+                "kg m²",
+            )?;
         }
         let vision = self.vision.clone().unwrap_or_default();
+        if vision.band_half_width_px == Some(0) {
+            return fail(
+                "vision.band_half_width_px",
+                "`vision.band_half_width_px` = 0 px: the band needs at least 1 column either \
+                 side of the centre line (leave the key out for the default, 2 % of the \
+                 disk's width)"
+                    .into(),
+            );
+        }
         if let Some(gamma) = vision.gamma
             && !(gamma > 0.0 && gamma < 1.0)
         {
@@ -343,9 +409,10 @@ impl ExperimentConfig {
                     .or_else(|reason| fail("vision.band_half_width_px", reason))?;
             }
         }
-        positive(
+        up_to(
             "fit.window_s",
             self.fit.as_ref().and_then(|f| f.window_s),
+            MAX_WINDOW_S,
             "s",
         )?;
         if let Some(u) = self.fit.as_ref().and_then(|f| f.rim_zero_uncertainty_px)
@@ -443,6 +510,17 @@ pub fn band_fits_disk(band_half_width_px: u32, disk_width_px: f64) -> Result<(),
     }
     Ok(())
 }
+
+/// Longest fit window before the halt \[s\]: the power law describes the last
+/// moments of the motion (the thesis fits 0.5 s); a window of minutes would fit it
+/// where the disk still rolls at large angles.
+pub const MAX_WINDOW_S: f64 = 10.0;
+
+/// Largest disk accepted in `[disk]`: mass \[kg\], radius and half-thickness \[m\],
+/// moments of inertia \[kg m²\]. A disk that spins on a table is centimetres across
+/// and weighs grams to kilograms; beyond these the config holds a unit slip (mm
+/// written as m), which would fail far later as a clip with no energy samples.
+pub const DISK_LIMITS: (f64, f64, f64) = (100.0, 1.0, 10.0);
 
 /// Lowest and highest capture frame rate accepted [frames/s]: a 1 fps time-lapse
 /// to the fastest high-speed cameras.
@@ -544,6 +622,50 @@ mod tests {
                 "{text}"
             );
         }
+    }
+
+    /// Issue 73.9: `window_s = 1e9` and `band_half_width_px = 0` were accepted,
+    /// `half_thickness_m = 1e6` failed only at the fit, a negative pixel count said
+    /// "expected u32". Each is refused on reading, naming the key, the value, the
+    /// unit and the range.
+    #[test]
+    fn out_of_range_values_are_refused_with_key_value_unit_and_range() {
+        for (text, words) in [
+            (
+                "[fit]\nwindow_s = 1e9",
+                &["fit.window_s", "1000000000", "s", "10"][..],
+            ),
+            (
+                "[vision]\nband_half_width_px = 0",
+                &["vision.band_half_width_px", "= 0", "px", "1 column"],
+            ),
+            (
+                "[disk]\nhalf_thickness_m = 1e6",
+                &["disk.half_thickness_m", "1000000", "m", "at most 1"],
+            ),
+            (
+                "[vision]\nband_half_width_px = -3",
+                &["vision.band_half_width_px", "-3", "px", "from 0"],
+            ),
+            (
+                "[vision]\nsplit_row = -1",
+                &["vision.split_row", "-1", "px"],
+            ),
+            (
+                "[vision]\nroi = [0, -5, 10, 10]",
+                &["vision.roi", "-5", "px"],
+            ),
+        ] {
+            let err = ExperimentConfig::parse(text, Path::new("x.toml"))
+                .unwrap_err()
+                .to_string();
+            for word in words {
+                assert!(err.contains(word), "{text}: {word} missing from {err}");
+            }
+            assert!(err.contains("x.toml") && err.contains("line 2"), "{err}");
+        }
+        let fine = "[vision]\nband_half_width_px = 3\nroi = [0, 0, 720, 1280]\n[fit]\nwindow_s = 2";
+        ExperimentConfig::parse(fine, Path::new("x.toml")).unwrap();
     }
 
     #[test]

@@ -41,7 +41,8 @@ use std::io::IsTerminal;
     propagate_version = true,
     after_help = "Exit status: 0 success; 1 error (nothing could run); \
                   2 a study or merge finished but some clips failed, or a previous \
-                  report was kept"
+                  report was kept; 64 a command line that cannot be parsed (an \
+                  unknown flag, a value out of range)"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -134,9 +135,9 @@ struct OverlayArgs {
     /// The overlay video's span, t − t_φ from,to [s].
     #[arg(long, value_name = "FROM,TO", default_value = "-0.5,0.1", allow_hyphen_values = true, value_parser = parse_span)]
     overlay_span: (f64, f64),
-    /// Frames per second the overlay video plays at (a 480 fps clip at 30 plays
-    /// 16 × slower than filmed).
-    #[arg(long, value_name = "FPS", default_value_t = 30.0)]
+    /// Frames per second the overlay video plays at, 1–1000 (a 480 fps clip at 30
+    /// plays 16 × slower than filmed).
+    #[arg(long, value_name = "FPS", default_value_t = 30.0, value_parser = parse_overlay_fps)]
     overlay_fps: f64,
 }
 
@@ -148,6 +149,21 @@ impl OverlayArgs {
             playback_fps: self.overlay_fps,
             ..OverlaySpec::default()
         })
+    }
+}
+
+/// Slowest and fastest overlay playback [frames/s]: a video player shows neither a
+/// frame that stays for seconds nor a thousand frames a second.
+const OVERLAY_FPS: (f64, f64) = (1.0, 1000.0);
+
+/// The overlay's playback rate, within [`OVERLAY_FPS`].
+fn parse_overlay_fps(text: &str) -> Result<f64, String> {
+    let (lo, hi) = OVERLAY_FPS;
+    match text.trim().parse::<f64>() {
+        Ok(fps) if (lo..=hi).contains(&fps) => Ok(fps),
+        _ => Err(format!(
+            "`{text}`: give a playback rate from {lo} to {hi} frames/s"
+        )),
     }
 }
 
@@ -513,6 +529,11 @@ struct RenderArgs {
     out: PathBuf,
 }
 
+/// Exit status of a command line that cannot be parsed (an unknown flag, a value
+/// out of range): BSD's `EX_USAGE`, apart from 2, which says a study finished with
+/// failed clips.
+const EXIT_USAGE: u8 = 64;
+
 /// How a command that ran ended (an error is exit status 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Status {
@@ -524,7 +545,16 @@ enum Status {
 }
 
 fn main() -> ExitCode {
-    match run(Cli::parse()) {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(err) => {
+            // `--help` and `--version` are not errors; clap prints them to stdout.
+            let status = if err.use_stderr() { EXIT_USAGE } else { 0 };
+            let _ = err.print();
+            return ExitCode::from(status);
+        }
+    };
+    match run(cli) {
         Ok(Status::Complete) => ExitCode::SUCCESS,
         Ok(Status::ClipsFailed) => ExitCode::from(2),
         Err(err) => {
@@ -716,7 +746,10 @@ fn run_study(args: &StudyArgs) -> Result<Status> {
         bail!("give a footage folder, or --published");
     };
     eulerdisk::output::check_folder(&args.out)?;
-    let clips = study::discover(root, &args.out)?;
+    let footage = study::discover(root, &args.out)?;
+    for skipped in &footage.skipped {
+        eprintln!("warning: {skipped}");
+    }
     let out = OutputLock::acquire(&args.out)?;
     let analyser = study::StudyAnalyser {
         root: root.clone(),
@@ -759,7 +792,7 @@ fn run_study(args: &StudyArgs) -> Result<Status> {
         resume: args.resume,
         force: args.force,
     };
-    let study_run = study::run(clips, &out, run_options, &analyser, &events)?;
+    let study_run = study::run(footage, &out, run_options, &analyser, &events)?;
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
@@ -795,7 +828,8 @@ fn run_study(args: &StudyArgs) -> Result<Status> {
 
 fn run_merge(shards: &[PathBuf], out: &Path, welch: bool) -> Result<Status> {
     let results = study::merge(shards)?;
-    let _lock = OutputLock::acquire(out)?;
+    let lock = OutputLock::acquire(out)?;
+    study::gather_experiments(shards, &results, &lock)?;
     eulerdisk::output::write_json(&out.join(study::STUDY_FILE), &results)?;
     write_study_report(out, &results, report_options(welch))?;
     println!(
@@ -812,7 +846,19 @@ fn run_merge(shards: &[PathBuf], out: &Path, welch: bool) -> Result<Status> {
     })
 }
 
+/// `simulate`, leaving no empty output folder behind when it fails: a folder this
+/// run created is removed again if nothing was written into it.
 fn run_simulate(args: &SimulateArgs) -> Result<()> {
+    let existed = args.out.exists();
+    let outcome = simulate_into(args);
+    if outcome.is_err() && !existed {
+        // Removes the folder only when empty.
+        let _ = std::fs::remove_dir(&args.out);
+    }
+    outcome
+}
+
+fn simulate_into(args: &SimulateArgs) -> Result<()> {
     let mut dissipation = Dissipation::new(args.model);
     dissipation.augmented_exponent = args.p;
     let mut initial = InitialState::thesis_eq_4_43();
@@ -1116,6 +1162,14 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         let best = best_overlay.as_ref().map(|(model, o)| (*model, o));
         write_ranking(&dir, &args.experiment, options.method, &ranked, best)?;
         println!("report: {}", dir.join("index.html").display());
+        // A ranking of failures compares nothing: the run did not do what was asked.
+        if ranked.iter().all(|r| r.outcome.is_err()) {
+            bail!(
+                "every model failed on {} (see each reason above, and {})",
+                args.experiment.display(),
+                dir.join("index.html").display()
+            );
+        }
         return Ok(());
     }
     let comparison = compare::compare(&experiment, &args.experiment, &options)?;

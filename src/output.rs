@@ -10,6 +10,7 @@
 //! Files and folders get the permissions the user's umask allows (0666 and 0777
 //! masked), like any file a shell command creates.
 
+use std::collections::BTreeSet;
 use std::fs::Permissions;
 use std::io::Write;
 use std::os::unix::fs::PermissionsExt;
@@ -119,19 +120,55 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), OutputErro
     write_atomic(path, text.as_bytes())
 }
 
-/// Writes records as CSV with a header row, atomically.
-pub fn write_csv<T: Serialize>(path: &Path, records: &[T]) -> Result<(), OutputError> {
-    let serialise = |reason: String| OutputError::Serialise {
+/// Writes records as CSV with a header row, atomically. An empty table still gets
+/// its header (the field names of `T::default()`), so a reader always finds the
+/// columns. Fields holding a comma, a quote or a line break are quoted.
+pub fn write_csv<T: Serialize + Default>(path: &Path, records: &[T]) -> Result<(), OutputError> {
+    let serialise = |e: csv::Error| OutputError::Serialise {
         path: path.to_path_buf(),
-        reason,
+        reason: e.to_string(),
     };
     let mut writer = csv::Writer::from_writer(Vec::new());
     for record in records {
-        writer
-            .serialize(record)
-            .map_err(|e| serialise(e.to_string()))?;
+        writer.serialize(record).map_err(serialise)?;
     }
-    let bytes = writer.into_inner().map_err(|e| serialise(e.to_string()))?;
+    if records.is_empty() {
+        writer.serialize(T::default()).map_err(serialise)?;
+    }
+    let mut bytes = writer
+        .into_inner()
+        .map_err(|e| serialise(e.into_error().into()))?;
+    if records.is_empty() {
+        // Only the header line of the default row.
+        let header_end = bytes.iter().position(|&b| b == b'\n').map_or(0, |i| i + 1);
+        bytes.truncate(header_end);
+    }
+    write_atomic(path, &bytes)
+}
+
+/// Writes a table of text cells as CSV under `header`, atomically, quoting fields
+/// that hold a comma, a quote or a line break.
+///
+/// # Errors
+/// `Serialise` when a row's width differs from the header's; `Io` when the file
+/// cannot be written.
+pub fn write_csv_rows(
+    path: &Path,
+    header: &[&str],
+    rows: &[Vec<String>],
+) -> Result<(), OutputError> {
+    let serialise = |e: csv::Error| OutputError::Serialise {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    };
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    writer.write_record(header).map_err(serialise)?;
+    for row in rows {
+        writer.write_record(row).map_err(serialise)?;
+    }
+    let bytes = writer
+        .into_inner()
+        .map_err(|e| serialise(e.into_error().into()))?;
     write_atomic(path, &bytes)
 }
 
@@ -180,13 +217,16 @@ pub fn write_through_temporary<T, E: From<OutputError>>(
 }
 
 /// An advisory lock (`flock`) on one output folder, held until dropped: whoever
-/// holds it is the only eulerdisk run writing that folder. The lock file
-/// `.NAME.lock` sits beside the folder, so the folder itself can be replaced as a
-/// whole while the lock is held.
+/// holds it is the only eulerdisk run writing that folder. The lock belongs to the
+/// folder's real path (symbolic links resolved), so two spellings of one folder
+/// share one lock. The lock file `.NAME.lock` sits beside the folder, so the
+/// folder itself can be replaced as a whole while the lock is held, and is removed
+/// when the lock is released: a run leaves no lock file behind.
 #[derive(Debug)]
 pub struct OutputLock {
     folder: PathBuf,
-    _file: std::fs::File,
+    lock: PathBuf,
+    file: std::fs::File,
 }
 
 impl OutputLock {
@@ -196,33 +236,76 @@ impl OutputLock {
     /// `Locked` when another process holds it; `NotAFolder`/`Io` when the lock file
     /// cannot be created.
     pub fn acquire(folder: &Path) -> Result<Self, OutputError> {
-        let lock = sibling(folder, "lock");
-        create_folder(parent_of(&lock))?;
-        let file = std::fs::OpenOptions::new()
-            .create(true)
-            .truncate(false)
-            .write(true)
-            .open(&lock)
-            .map_err(io_error(&lock))?;
-        match file.try_lock() {
-            Ok(()) => Ok(OutputLock {
-                folder: folder.to_path_buf(),
-                _file: file,
-            }),
-            Err(std::fs::TryLockError::WouldBlock) => Err(OutputError::Locked {
-                path: folder.to_path_buf(),
-                lock,
-            }),
-            Err(std::fs::TryLockError::Error(e)) => Err(io_error(&lock)(e)),
+        let real = real_path(folder)?;
+        let lock = sibling(&real, "lock");
+        loop {
+            let file = std::fs::OpenOptions::new()
+                .create(true)
+                .truncate(false)
+                .write(true)
+                .open(&lock)
+                .map_err(io_error(&lock))?;
+            match file.try_lock() {
+                Ok(()) => {}
+                Err(std::fs::TryLockError::WouldBlock) => {
+                    return Err(OutputError::Locked {
+                        path: folder.to_path_buf(),
+                        lock,
+                    });
+                }
+                Err(std::fs::TryLockError::Error(e)) => return Err(io_error(&lock)(e)),
+            }
+            // The holder before us removes the file as it lets go: a lock taken on
+            // a removed file guards nothing, so take the file now at the path.
+            if same_file(&file, &lock) {
+                return Ok(OutputLock {
+                    folder: folder.to_path_buf(),
+                    lock,
+                    file,
+                });
+            }
         }
     }
-}
 
-impl OutputLock {
     /// The locked folder.
     pub fn folder(&self) -> &Path {
         &self.folder
     }
+}
+
+impl Drop for OutputLock {
+    /// Removes the lock file while still holding the lock (see [`OutputLock::acquire`]).
+    fn drop(&mut self) {
+        if same_file(&self.file, &self.lock) {
+            // Best effort: a lock file left behind is removed by the next run.
+            let _ = std::fs::remove_file(&self.lock);
+        }
+    }
+}
+
+/// Whether the open `file` is the file now at `path`.
+fn same_file(file: &std::fs::File, path: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (file.metadata(), std::fs::metadata(path)) {
+        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+        _ => false,
+    }
+}
+
+/// `path` with every symbolic link resolved: the folder itself when it exists,
+/// else its parent (created if missing) and its name.
+fn real_path(path: &Path) -> Result<PathBuf, OutputError> {
+    check_folder(path)?;
+    if let Ok(real) = path.canonicalize() {
+        return Ok(real);
+    }
+    let parent = parent_of(path);
+    create_folder(parent)?;
+    let real_parent = parent.canonicalize().map_err(io_error(parent))?;
+    Ok(match path.file_name() {
+        Some(name) => real_parent.join(name),
+        None => real_parent,
+    })
 }
 
 /// `.NAME.WHAT` beside `path` (hidden, so a study never takes it for footage).
@@ -231,6 +314,73 @@ fn sibling(path: &Path, what: &str) -> PathBuf {
         .file_name()
         .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
     parent_of(path).join(format!(".{name}.{what}"))
+}
+
+/// `NAME` of what a run writing folder `NAME` keeps beside it (given without its
+/// leading dot): its lock file `NAME.lock`, its staging and replaced folders
+/// `NAME.staging-…`, `NAME.replaced-…` ([`write_folder`]).
+fn leftover_owner(hidden: &str) -> Option<&str> {
+    hidden.strip_suffix(".lock").or_else(|| {
+        [".staging-", ".replaced-"]
+            .iter()
+            .find_map(|kind| hidden.rfind(kind).map(|i| &hidden[..i]))
+    })
+}
+
+/// Removes, below `dir` (itself included, hidden folders excepted), the lock
+/// files, staging and replaced folders that killed runs left: those of every
+/// folder whose lock is free (a live run holds the lock of what it writes, so its
+/// files stay). Best effort, like a cleanup.
+pub fn remove_stale(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let mut owners = BTreeSet::new();
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        match name.strip_prefix('.') {
+            Some(hidden) => {
+                if let Some(owner) = leftover_owner(hidden) {
+                    owners.insert(owner.to_string());
+                }
+            }
+            None if entry.path().is_dir() => remove_stale(&entry.path()),
+            None => {}
+        }
+    }
+    for owner in owners {
+        let dest = dir.join(&owner);
+        if let Ok(lock) = OutputLock::acquire(&dest) {
+            remove_leftovers(
+                dir,
+                &[&sibling(&dest, "staging-"), &sibling(&dest, "replaced-")],
+            );
+            drop(lock);
+        }
+    }
+}
+
+/// Copies the folder `from` into the existing folder `to`, file by file: a hard
+/// link where the file system allows it (the two folders then share the bytes),
+/// else a copy.
+///
+/// # Errors
+/// `Io` naming the file that could not be read or written.
+pub fn copy_tree(from: &Path, to: &Path) -> Result<(), OutputError> {
+    for entry in std::fs::read_dir(from).map_err(io_error(from))? {
+        let source = entry.map_err(io_error(from))?.path();
+        let Some(name) = source.file_name() else {
+            continue;
+        };
+        let target = to.join(name);
+        if source.is_dir() {
+            create_folder(&target)?;
+            copy_tree(&source, &target)?;
+        } else if std::fs::hard_link(&source, &target).is_err() {
+            std::fs::copy(&source, &target).map_err(io_error(&source))?;
+        }
+    }
+    Ok(())
 }
 
 /// Writes a whole output folder atomically: `fill` writes into a fresh staging
@@ -326,6 +476,29 @@ mod tests {
         );
     }
 
+    /// Issue 73.10: a table with no rows was a 0-byte file; it now holds its header,
+    /// and a cell with a comma or a quote reads back whole.
+    #[test]
+    fn a_csv_table_always_has_its_header() {
+        #[derive(Serialize, Default)]
+        struct Row {
+            index: usize,
+            reason: String,
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("flags.csv");
+        write_csv::<Row>(&path, &[]).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "index,reason\n");
+        let rows = [Row {
+            index: 3,
+            reason: "a \"jump\", then more".into(),
+        }];
+        write_csv(&path, &rows).unwrap();
+        let mut reader = csv::Reader::from_path(&path).unwrap();
+        let record = reader.records().next().unwrap().unwrap();
+        assert_eq!(&record[1], rows[0].reason);
+    }
+
     /// Issue 13.6: an output path that is a file was reported as "File exists (os
     /// error 17)"; the message now says it is a file.
     #[test]
@@ -376,9 +549,36 @@ mod tests {
         let names: Vec<String> = std::fs::read_dir(dir.path())
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .filter(|n| !n.ends_with(".lock"))
             .collect();
-        assert_eq!(names, ["exp"], "no staging folder left behind");
+        assert_eq!(names, ["exp"], "no staging folder or lock file left behind");
+    }
+
+    /// Issue 73.5: the lock was taken on the path as spelled, so `-o out` and
+    /// `-o link-to-out` wrote one folder at once. The lock belongs to the real path,
+    /// and no lock file is left once it is released.
+    #[test]
+    fn a_folder_reached_through_a_link_shares_its_lock() {
+        let dir = tempfile::tempdir().unwrap();
+        let real = dir.path().join("out");
+        std::fs::create_dir(&real).unwrap();
+        let link = dir.path().join("link-to-out");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        let held = OutputLock::acquire(&real).unwrap();
+        let err = OutputLock::acquire(&link).unwrap_err().to_string();
+        assert!(err.contains("another eulerdisk run"), "{err}");
+        let err = OutputLock::acquire(&dir.path().join("./link-to-out/../out"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("another eulerdisk run"), "{err}");
+        drop(held);
+        let again = OutputLock::acquire(&link).unwrap();
+        drop(again);
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["link-to-out", "out"], "no lock file left");
     }
 
     /// Issue 13.1: two runs cannot write one folder at once; the second is told who

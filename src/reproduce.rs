@@ -481,7 +481,7 @@ impl Reproduction {
         let md = dir.join("reproduce.md");
         write_atomic(&md, self.to_markdown().as_bytes())?;
         let csv = dir.join("reproduce.csv");
-        #[derive(Serialize)]
+        #[derive(Serialize, Default)]
         struct Flat<'a> {
             section: &'a str,
             quantity: &'a str,

@@ -100,18 +100,21 @@ struct ManifestToml {
 /// The clips below `root`, in natural order of their relative paths: video files,
 /// and folders of frame images (a frame folder is one clip; it is not searched
 /// further). Symbolic links are followed; a link back into its own ancestry (a
-/// loop), or two paths to one clip or folder, are refused rather than counted
-/// twice. Output folders are never footage: `exclude` (the study's own output)
+/// loop) is skipped, and two paths to one clip or folder are refused, rather than
+/// counted twice. Output folders are never footage: `exclude` (the study's own output)
 /// and any folder holding an eulerdisk result (`study.json`, `summary.json` or
 /// `result.json`) are skipped. Metadata comes from `root/study.toml` or `root/study.csv` when present
 /// (a listed clip missing on disk is an error; an unlisted clip gets folder-name
 /// metadata), else from the folder names: `DISK/MATERIAL/RUN`, `MATERIAL/RUN`, or
 /// `DISK/MATERIAL/ORIENTATION/RUN`.
 ///
+/// A symbolic-link loop is skipped with a warning (the rest of the tree is
+/// analysed).
+///
 /// # Errors
-/// The root cannot be listed or holds no clip; a symlink loop or a clip reached
-/// twice; the manifest is malformed or names a clip that does not exist.
-pub fn discover(root: &Path, exclude: &Path) -> Result<Vec<ClipEntry>, StudyError> {
+/// The root cannot be listed or holds no clip; a clip or folder reached twice; the
+/// manifest is malformed or names a clip that does not exist.
+pub fn discover(root: &Path, exclude: &Path) -> Result<Discovered, StudyError> {
     let root_error = |reason: String| StudyError::Root {
         path: root.to_path_buf(),
         reason,
@@ -123,6 +126,7 @@ pub fn discover(root: &Path, exclude: &Path) -> Result<Vec<ClipEntry>, StudyErro
         exclude: exclude.canonicalize().ok(),
         seen: Vec::new(),
         clips: Vec::new(),
+        skipped: Vec::new(),
     };
     walk.visit(root, &mut Vec::new()).map_err(root_error)?;
     let paths = walk.clips;
@@ -161,7 +165,23 @@ pub fn discover(root: &Path, exclude: &Path) -> Result<Vec<ClipEntry>, StudyErro
             "no clips found (video files or folders of frame images)".into(),
         ));
     }
-    Ok(clips)
+    Ok(Discovered {
+        root: root.canonicalize().map_err(|e| root_error(e.to_string()))?,
+        clips,
+        skipped: walk.skipped,
+    })
+}
+
+/// What [`discover`] found below a footage root.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Discovered {
+    /// The root's real path (symbolic links resolved): which footage a shard was
+    /// made from.
+    pub root: PathBuf,
+    /// The clips, in natural order of their relative paths.
+    pub clips: Vec<ClipEntry>,
+    /// Why folders were left out (symbolic-link loops), one message each.
+    pub skipped: Vec<String>,
 }
 
 /// The state of [`discover`]'s walk: every folder and clip reached so far by its
@@ -171,6 +191,8 @@ struct Walk {
     /// (canonical path, path as reached).
     seen: Vec<(PathBuf, PathBuf)>,
     clips: Vec<PathBuf>,
+    /// Symbolic-link loops left out, one message each.
+    skipped: Vec<String>,
 }
 
 /// File names that mark a folder as eulerdisk output rather than footage.
@@ -202,11 +224,14 @@ impl Walk {
             .canonicalize()
             .map_err(|e| format!("{}: {e}", dir.display()))?;
         if ancestry.contains(&real) {
-            return Err(format!(
-                "{}: a symbolic-link loop (it leads back to {}); remove the link",
+            // A loop holds nothing the walk has not reached already: skipping it
+            // loses no clip.
+            self.skipped.push(format!(
+                "{}: a symbolic-link loop (it leads back to {}); skipped",
                 dir.display(),
                 real.display()
             ));
+            return Ok(());
         }
         if self.exclude.as_ref() == Some(&real)
             || OUTPUT_MARKERS.iter().any(|m| dir.join(m).is_file())
@@ -446,21 +471,25 @@ impl StudyRun {
 /// # Errors
 /// `study.json` cannot be written.
 pub fn run(
-    clips: Vec<ClipEntry>,
+    footage: Discovered,
     out: &output::OutputLock,
     options: RunOptions,
     analyser: &dyn ClipAnalyser,
     events: &(dyn Fn(StudyEvent) + Sync),
 ) -> Result<StudyRun, StudyError> {
     let out = out.folder();
+    output::remove_stale(&out.join("experiments"));
+    let study_clips: Vec<String> = footage.clips.iter().map(|c| c.relative.clone()).collect();
     let clips = match options.shard {
-        Some(shard) => shard.select(clips),
-        None => clips,
+        Some(shard) => shard.select(footage.clips),
+        None => footage.clips,
     };
     let shard = options.shard.map(|s| ShardRecord {
         k: s.k,
         n: s.n,
         clips: clips.iter().map(|c| c.relative.clone()).collect(),
+        footage: footage.root,
+        study_clips,
     });
     events(StudyEvent::Started { clips: clips.len() });
     let outcomes: Vec<Result<ExperimentSummary, Box<ClipFailure>>> = clips
@@ -578,8 +607,9 @@ enum Failed {
 
 /// Combine the `study.json` of shard output folders into one [`StudyResults`],
 /// identical to what a single run over all clips writes. Every shard must be
-/// there: each records its K/N and the clips it owns, and merge refuses a set
-/// that lacks a K, repeats one, mixes N, or has a clip without a result.
+/// there: each records its K/N, the clips it owns, the footage root and the whole
+/// study's clips, and merge refuses a set that lacks a K, repeats one, mixes N,
+/// mixes footage or clip lists, or has a clip without a result.
 ///
 /// # Errors
 /// A shard folder without `study.json`, an unreadable one, one not written by
@@ -592,6 +622,8 @@ pub fn merge(shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
     };
     let mut ks = BTreeSet::new();
     let mut total = None;
+    // The footage and the clip list of the first shard, which every other must share.
+    let mut first_study: Option<(PathBuf, Vec<String>)> = None;
     for dir in shard_dirs {
         let path = dir.join(STUDY_FILE);
         let bad = |reason: String| StudyError::Merge {
@@ -611,6 +643,29 @@ pub fn merge(shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
                 "not a shard: written by a `study` run without --shard".into()
             ));
         };
+        let study =
+            first_study.get_or_insert_with(|| (record.footage.clone(), record.study_clips.clone()));
+        if study.1 != record.study_clips {
+            return Err(bad(format!(
+                "shard {}/{} was made from a study of {} clips, the other shards from one of \
+                 {} (clips added or removed between the runs?); run every shard on the same \
+                 footage",
+                record.k,
+                record.n,
+                record.study_clips.len(),
+                study.1.len()
+            )));
+        }
+        if study.0 != record.footage {
+            return Err(bad(format!(
+                "shard {}/{} was made from the footage in {}, the other shards from {}; \
+                 give the shards of one study",
+                record.k,
+                record.n,
+                record.footage.display(),
+                study.0.display()
+            )));
+        }
         if *total.get_or_insert(record.n) != record.n {
             return Err(bad(format!(
                 "shard {}/{} does not belong with shards of {}",
@@ -670,6 +725,38 @@ pub fn merge(shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
     }
     merged.sort();
     Ok(merged)
+}
+
+/// Copies each analysed clip's folder from the shard folder that holds it into
+/// `out/experiments/`, as a single run writes it, so the merged report's links lead
+/// to the clips' pages (hard links where the file system allows: no bytes are
+/// copied).
+///
+/// # Errors
+/// An analysed clip whose folder no shard holds (its page would be missing), or a
+/// folder that cannot be copied.
+pub fn gather_experiments(
+    shard_dirs: &[PathBuf],
+    results: &StudyResults,
+    out: &output::OutputLock,
+) -> Result<(), StudyError> {
+    for e in &results.experiments {
+        let from = shard_dirs
+            .iter()
+            .map(|dir| dir.join("experiments").join(&e.clip))
+            .find(|dir| dir.join(SUMMARY_FILE).is_file())
+            .ok_or_else(|| StudyError::Merge {
+                path: shard_dirs.first().cloned().unwrap_or_default(),
+                reason: format!(
+                    "no shard folder holds experiments/{}/ (the clip's page); give the \
+                     shards' output folders as the shard runs wrote them",
+                    e.clip
+                ),
+            })?;
+        let to = out.folder().join("experiments").join(&e.clip);
+        output::write_folder(&to, |staging| output::copy_tree(&from, staging))?;
+    }
+    Ok(())
 }
 
 /// A study's per-clip work: configs inherited from the study root, one
@@ -771,7 +858,7 @@ mod tests {
             touch(root.path(), rel);
         }
         let clips = discover(root.path(), Path::new("/o")).unwrap();
-        let names: Vec<&str> = clips.iter().map(|c| c.relative.as_str()).collect();
+        let names: Vec<&str> = clips.clips.iter().map(|c| c.relative.as_str()).collect();
         assert_eq!(
             names,
             [
@@ -780,14 +867,14 @@ mod tests {
                 "euler/steel/run10.mp4"
             ]
         );
-        assert_eq!(clips[0].meta.run.as_deref(), Some("run1"));
+        assert_eq!(clips.clips[0].meta.run.as_deref(), Some("run1"));
         let out = Path::new("/o");
         assert_eq!(
-            clips[1].experiment_dir(out),
+            clips.clips[1].experiment_dir(out),
             Path::new("/o/experiments/euler/steel/run2.mp4")
         );
         assert_eq!(
-            clips[0].experiment_dir(out),
+            clips.clips[0].experiment_dir(out),
             Path::new("/o/experiments/euler/glass/run1")
         );
     }
@@ -802,8 +889,8 @@ mod tests {
         )
         .unwrap();
         let clips = discover(root.path(), Path::new("/o")).unwrap();
-        assert_eq!(clips[0].meta.material.as_deref(), Some("glass"));
-        assert_eq!(clips[0].meta.run.as_deref(), Some("3"));
+        assert_eq!(clips.clips[0].meta.material.as_deref(), Some("glass"));
+        assert_eq!(clips.clips[0].meta.run.as_deref(), Some("3"));
         std::fs::write(
             root.path().join("study.csv"),
             "path,material\nb.mp4,glass\n",
@@ -968,8 +1055,8 @@ mod tests {
     }
 
     /// Runs a study of `clips` into `out` with `options`.
-    fn study(clips: &[ClipEntry], out: &Path, options: RunOptions, fake: &Fake) -> StudyRun {
-        run(clips.to_vec(), &lock(out), options, fake, &quiet).unwrap()
+    fn study(clips: &Discovered, out: &Path, options: RunOptions, fake: &Fake) -> StudyRun {
+        run(clips.clone(), &lock(out), options, fake, &quiet).unwrap()
     }
 
     fn experiments_of(run: &StudyRun) -> Vec<&str> {
@@ -991,8 +1078,8 @@ mod tests {
         let clips = discover(root.path(), Path::new("/o")).unwrap();
         let out = tempfile::tempdir().unwrap();
         assert_ne!(
-            clips[0].experiment_dir(out.path()),
-            clips[1].experiment_dir(out.path())
+            clips.clips[0].experiment_dir(out.path()),
+            clips.clips[1].experiment_dir(out.path())
         );
         let fake = Fake::new();
         study(&clips, out.path(), RunOptions::default(), &fake);
@@ -1012,17 +1099,31 @@ mod tests {
         assert_eq!(again.results.experiments.len(), 2);
     }
 
-    /// Issue 13.2: a symlink loop counted one clip 41 times. A loop is refused,
-    /// naming the link; a second path to one clip is refused too.
+    /// Issue 13.2: a symlink loop counted one clip 41 times; issue 73.12: refusing
+    /// the whole study for it lost every other clip. A loop is skipped with a
+    /// warning naming the link, and the rest is analysed; a second path to one clip
+    /// is refused.
     #[test]
-    fn a_symlink_loop_or_a_clip_reached_twice_is_refused() {
+    fn a_symlink_loop_is_skipped_and_a_clip_reached_twice_is_refused() {
         let root = tempfile::tempdir().unwrap();
         touch(root.path(), "oak/run1.mp4");
+        touch(root.path(), "pine/run2.mp4");
+        std::os::unix::fs::symlink("..", root.path().join("oak/loop")).unwrap();
+        let found = discover(root.path(), Path::new("/o")).unwrap();
+        let names: Vec<&str> = found.clips.iter().map(|c| c.relative.as_str()).collect();
+        assert_eq!(names, ["oak/run1.mp4", "pine/run2.mp4"]);
+        assert_eq!(found.skipped.len(), 1, "{:?}", found.skipped);
+        assert!(
+            found.skipped[0].contains("loop") && found.skipped[0].contains("oak/loop"),
+            "{:?}",
+            found.skipped
+        );
+        std::fs::remove_file(root.path().join("oak/loop")).unwrap();
         std::os::unix::fs::symlink(root.path().join("oak"), root.path().join("oak/again")).unwrap();
-        let err = discover(root.path(), Path::new("/o"))
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("loop") && err.contains("oak/again"), "{err}");
+        assert_eq!(
+            discover(root.path(), Path::new("/o")).unwrap().clips.len(),
+            2
+        );
         std::fs::remove_file(root.path().join("oak/again")).unwrap();
         std::os::unix::fs::symlink(
             root.path().join("oak/run1.mp4"),
@@ -1042,8 +1143,8 @@ mod tests {
         touch(elsewhere.path(), "run9.mp4");
         std::os::unix::fs::symlink(elsewhere.path(), root.path().join("glass")).unwrap();
         let clips = discover(root.path(), Path::new("/o")).unwrap();
-        let names: Vec<&str> = clips.iter().map(|c| c.relative.as_str()).collect();
-        assert_eq!(names, ["glass/run9.mp4", "oak/run1.mp4"]);
+        let names: Vec<&str> = clips.clips.iter().map(|c| c.relative.as_str()).collect();
+        assert_eq!(names, ["glass/run9.mp4", "oak/run1.mp4", "pine/run2.mp4"]);
     }
 
     /// Issue 13.2: `study .` twice took its own output (plots are PNG frames) for
@@ -1102,6 +1203,95 @@ mod tests {
         study(&clips, &whole, RunOptions::default(), &fake);
         let err = merge(&[whole]).unwrap_err().to_string();
         assert!(err.contains("not a shard"), "{err}");
+    }
+
+    /// Issue 73.2: `merge` took shard 1/2 of one footage folder and shard 2/2 of
+    /// another, and left out the clips of both missing halves. Each shard records
+    /// its footage and the whole study's clips; shards that differ are refused.
+    #[test]
+    fn merge_refuses_shards_of_another_footage() {
+        let fake = Fake::new();
+        let out = tempfile::tempdir().unwrap();
+        let shard = |root: &Path, k: usize, name: &str| {
+            let dir = out.path().join(name);
+            let options = RunOptions {
+                shard: Some(Shard { k, n: 2 }),
+                ..RunOptions::default()
+            };
+            study(
+                &discover(root, Path::new("/o")).unwrap(),
+                &dir,
+                options,
+                &fake,
+            );
+            dir
+        };
+        let [a, b, same_names] = [(); 3].map(|()| tempfile::tempdir().unwrap());
+        for rel in ["a.mp4", "b.mp4", "c.mp4"] {
+            touch(a.path(), rel);
+            touch(same_names.path(), rel);
+        }
+        for rel in ["x.mp4", "y.mp4"] {
+            touch(b.path(), rel);
+        }
+        let first = shard(a.path(), 1, "a1");
+        for (other, name, words) in [
+            (&b, "b2", "a study of 2 clips"),
+            (&same_names, "same2", "made from the footage in"),
+        ] {
+            let second = shard(other.path(), 2, name);
+            let err = merge(&[first.clone(), second]).unwrap_err().to_string();
+            assert!(err.contains(words), "{err}");
+        }
+        let second = shard(a.path(), 2, "a2");
+        assert_eq!(merge(&[first, second]).unwrap().experiments.len(), 3);
+    }
+
+    /// Issue 73.8: kill -9 left `.NAME.staging-*` folders and `.NAME.lock` files
+    /// that a resume kept, and every run left a `.NAME.lock` beside each output. A
+    /// run leaves no lock, staging or replaced folder in the output tree or beside
+    /// it, and removes those a killed run left.
+    #[test]
+    fn a_run_leaves_no_lock_or_staging_and_removes_a_killed_runs() {
+        let root = tempfile::tempdir().unwrap();
+        for rel in ["m1/a.mp4", "m1/b.mp4"] {
+            touch(root.path(), rel);
+        }
+        let clips = discover(root.path(), Path::new("/o")).unwrap();
+        let top = tempfile::tempdir().unwrap();
+        let out = top.path().join("out");
+        let fake = Fake::new();
+        study(&clips, &out, RunOptions::default(), &fake);
+        // What kill -9 leaves while a.mp4 is written again.
+        let m1 = out.join("experiments/m1");
+        touch(&m1, ".a.mp4.staging-x1y2/frames.csv");
+        touch(&m1, ".a.mp4.replaced-4242/result.json");
+        touch(&m1, ".a.mp4.lock");
+        touch(&m1, ".c.mp4.staging-zz/result.json");
+        let resumed = RunOptions {
+            resume: true,
+            ..RunOptions::default()
+        };
+        study(&clips, &out, resumed, &fake);
+        let mut left = Vec::new();
+        let mut folders = vec![top.path().to_path_buf()];
+        while let Some(dir) = folders.pop() {
+            for entry in std::fs::read_dir(&dir).unwrap() {
+                let path = entry.unwrap().path();
+                let name = path.file_name().unwrap().to_string_lossy().into_owned();
+                if name.contains(".lock")
+                    || name.contains(".staging-")
+                    || name.contains(".replaced-")
+                {
+                    left.push(path.clone());
+                }
+                if path.is_dir() {
+                    folders.push(path);
+                }
+            }
+        }
+        assert!(left.is_empty(), "left behind: {left:?}");
+        assert!(m1.join("a.mp4/summary.json").is_file());
     }
 
     /// Issue 13.2: a typo in the root `eulerdisk.toml` made every clip fail and the
@@ -1179,6 +1369,7 @@ mod tests {
         for _ in 0..3 {
             // Each good clip not yet done writes 2 files: kill somewhere among them.
             let to_do = clips
+                .clips
                 .iter()
                 .filter(|c| !c.relative.contains("bad"))
                 .filter(|c| !c.experiment_dir(out.path()).join(SUMMARY_FILE).is_file())

@@ -90,7 +90,8 @@ pub struct StudyResults {
     pub shard: Option<ShardRecord>,
 }
 
-/// What a shard's `study.json` records about the share it ran.
+/// What a shard's `study.json` records about the share it ran, and about the
+/// whole study it is a share of.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ShardRecord {
     pub k: usize,
@@ -98,6 +99,11 @@ pub struct ShardRecord {
     /// The clips of this share (relative paths), each of which must appear among
     /// its experiments or failures.
     pub clips: Vec<String>,
+    /// The footage root's real path: shards of one study share it.
+    pub footage: std::path::PathBuf,
+    /// Every clip of the whole study (relative paths, sorted): shards of one study
+    /// share the list, and together own every clip of it.
+    pub study_clips: Vec<String>,
 }
 
 impl StudyResults {
@@ -133,5 +139,40 @@ pub fn summary(
             _ => None,
         },
         warnings: experiment.warnings.clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 73.7: a resumed or merged clip's r² differed by one ulp from the
+    /// uninterrupted run's, because `summary.json` was read back by a parser that
+    /// does not round every decimal correctly. Every number of a summary reads back
+    /// as the value written, bit for bit.
+    #[test]
+    fn a_summary_reads_back_bit_for_bit() {
+        let mut rng = crate::rng::SplitMix64::new(73);
+        for _ in 0..20_000 {
+            let n = rng.range(0.1, 2.0);
+            let summary = ExperimentSummary {
+                clip: "oak/run1.mp4".into(),
+                meta: ClipMeta::default(),
+                resume_key: String::new(),
+                n,
+                n_ci95: [n - rng.uniform() * 1e-2, n + rng.uniform() * 1e-2],
+                t0_s: rng.range(-1e-3, 1e-3),
+                r_squared: 1.0 - rng.uniform() * 1e-3,
+                points: 20,
+                fps: 480.0,
+                fps_source: "Config".into(),
+                phi_vs_precession: Some(rng.range(-0.1, 0.1)),
+                n_turn_timing: Some((n, [n - 1e-3, n + 1e-3])),
+                warnings: vec![],
+            };
+            let text = serde_json::to_string_pretty(&summary).unwrap();
+            let back: ExperimentSummary = serde_json::from_str(&text).unwrap();
+            assert_eq!(back, summary, "{text}");
+        }
     }
 }

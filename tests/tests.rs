@@ -10,6 +10,7 @@ mod cli;
 mod compare;
 mod determinism;
 mod docs_reference;
+mod integrity;
 mod long_clip;
 mod overlay;
 mod phone_footage;

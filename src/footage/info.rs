@@ -179,6 +179,11 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
             ext,
         });
     }
+    // Size and orientation as `analyse` decodes them (FFmpeg's display matrix,
+    // mirror flips included), so that the two commands agree. Opened first: it
+    // silences FFmpeg's log, so an unreadable file is one error naming it, never
+    // a raw FFmpeg line from OpenCV's open before it.
+    let mut decoder = VideoDecoder::open(path)?;
     let cv = |e| opencv_error(path, e);
     let mut cap = open_capture(path)?;
     let mut first = Mat::default();
@@ -209,9 +214,6 @@ fn probe_video(path: &Path) -> Result<ClipInfo, FootageError> {
         n
     };
     let container_fps = (stored_fps.is_finite() && stored_fps > 0.0).then_some(stored_fps);
-    // Size and orientation as `analyse` decodes them (FFmpeg's display matrix,
-    // mirror flips included), so that the two commands agree.
-    let mut decoder = VideoDecoder::open(path)?;
     let (width, height) = decoder.size();
     let orientation = decoder.orientation();
     let signal = Some(decoder.signal().clone());

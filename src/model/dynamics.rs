@@ -53,11 +53,14 @@ pub const Y: usize = 8;
 /// Index of ẏ.
 pub const Y_DOT: usize = 9;
 
-/// Contact mode of the disk (§4.2.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+/// Contact mode of the disk (§4.2.1). The default is rolling, the thesis's initial
+/// state (eq. 4.43); it gives a [`Sample`](super::simulate::Sample) its default,
+/// whose field names head an empty CSV table.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Mode {
     /// Rolling without slip: the contact point is at rest (eq. 4.6).
+    #[default]
     Rolling,
     /// Slipping: Coulomb friction −μN V̂_P opposes the slip (eq. 4.11).
     Slipping,

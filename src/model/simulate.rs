@@ -174,7 +174,7 @@ pub enum EndReason {
 }
 
 /// One output sample, SI.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
 pub struct Sample {
     /// Time \[s\].
     pub t: f64,

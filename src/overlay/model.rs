@@ -88,7 +88,7 @@ pub struct ModelOverlay {
     pub edge_error: Option<EdgeError>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Default)]
 struct ErrorRow {
     index: usize,
     t_s: f64,

@@ -21,7 +21,7 @@ use super::RenderError;
 use crate::model::closed_form::{balancing_angle, stationary_divergence_angle, stationary_rolling};
 use crate::model::dynamics::strip_angle;
 use crate::model::params::DiskParams;
-use crate::model::simulate::{Sample, Trajectory};
+use crate::model::simulate::{EndReason, Sample, Trajectory};
 use std::f64::consts::PI;
 
 /// State of the disk at one frame (SI; t relative to the halt).
@@ -581,7 +581,8 @@ pub(super) fn hermite(t0: f64, y0: f64, d0: f64, t1: f64, y1: f64, d1: f64, t: f
 }
 
 /// A simulated trajectory at the frames of a clip: the halt is the trajectory's end
-/// (fallen flat or on the discontinuity set), clip time = simulation time, and
+/// (fallen flat or on the discontinuity set; a trajectory that ended otherwise, the
+/// disk still rolling, is refused), clip time = simulation time, and
 /// `after_halt` seconds of flat disk follow. Angles are interpolated by cubic Hermite
 /// polynomials with their rates; the centre of mass integrates eq. (4.15) by the
 /// trapezoidal rule on the samples and is placed so that it rests at the origin. The
@@ -604,6 +605,20 @@ pub fn trajectory_motion(
         return Err(RenderError::invalid(format!(
             "the trajectory must start at t = 0, starts at {} s",
             first.t
+        )));
+    }
+    // The clip's halt is the trajectory's end: one that stopped while the disk
+    // still rolls would show it jump to flat, and its truth would give a halt and
+    // an n the footage does not hold.
+    if !matches!(
+        trajectory.end_reason,
+        EndReason::FallenFlat | EndReason::DiscontinuitySet
+    ) {
+        return Err(RenderError::invalid(format!(
+            "the simulated disk did not halt: the simulation ended ({:?}) at t = {:.3} s \
+             with φ = {:.3e} rad still rolling; give a larger η so that it halts within \
+             the simulated time",
+            trajectory.end_reason, last.t, last.phi
         )));
     }
     let timing = Timing {
@@ -889,5 +904,24 @@ mod tests {
                 assert!((s.beta_dot - (-2.8 * (1.0 - s.t / t_beta))).abs() < 1e-12);
             }
         }
+    }
+
+    /// Issue 73.3: a model that had not halted by the simulation's end was rendered
+    /// with the disk rolling to the last frame and then flat, and a truth giving a
+    /// halt and n. Such a trajectory is refused.
+    #[test]
+    fn a_trajectory_that_does_not_halt_is_refused() {
+        use crate::model::dissipation::{Dissipation, ModelKind};
+        use crate::model::simulate::{SimulationSpec, simulate};
+        let params = Preset::EulerDisk.params();
+        let mut spec =
+            SimulationSpec::thesis_default(params, Dissipation::new(ModelKind::Contour), 1e-12);
+        spec.t_end = 0.05;
+        let trajectory = simulate(&spec).unwrap();
+        assert_eq!(trajectory.end_reason, EndReason::TimeLimit);
+        let err = trajectory_motion(&params, &trajectory, 0.3, 0.134, 480.0, 0.02, Some(1.0))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("did not halt") && err.contains("η"), "{err}");
     }
 }

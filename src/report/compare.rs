@@ -438,7 +438,7 @@ pub fn write_comparison(
     Ok(vec![summary, csv, svg_path, png_path, html_path])
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Default)]
 struct RankRow {
     rank: usize,
     model: String,

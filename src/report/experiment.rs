@@ -30,7 +30,7 @@ use crate::overlay::{KeptFrames, OverlayIndex, OverlaySpec, write_measurement_ov
 use crate::precession;
 use crate::turn_timing::TurnTimingFit;
 
-#[derive(Serialize)]
+#[derive(Serialize, Default)]
 struct FrameRow {
     index: usize,
     t_s: f64,
@@ -45,7 +45,7 @@ struct FrameRow {
     beta_dot_rad_s: Option<f64>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Default)]
 struct PeakRow {
     t_s: f64,
     z_rim_m: f64,
@@ -57,7 +57,7 @@ struct PeakRow {
     energy_eq_3_8_j: Option<f64>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Default)]
 struct StateRow {
     index: usize,
     t_s: f64,
@@ -70,10 +70,11 @@ struct StateRow {
     residual_rms_m: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Default)]
 struct FlagRow {
     index: usize,
     t_s: f64,
+    kind: &'static str,
     reason: String,
 }
 
@@ -194,7 +195,8 @@ pub fn write_experiment(
         .map(|f| FlagRow {
             index: f.index,
             t_s: f.t,
-            reason: format!("{:?}", f.reason),
+            kind: f.reason.kind(),
+            reason: f.reason.label(),
         })
         .collect();
     write_csv(&dir.join("flags.csv"), &flag_rows)?;

@@ -88,6 +88,17 @@ pub fn table(
     rows: &[Vec<String>],
     highlight: impl Fn(usize, usize) -> bool,
 ) -> Markup {
+    linked_table(header, rows, &[], highlight)
+}
+
+/// [`table`] whose row `i` has its first cell link to `links[i]` (rows past the
+/// end of `links` are not linked).
+pub fn linked_table(
+    header: &[&str],
+    rows: &[Vec<String>],
+    links: &[String],
+    highlight: impl Fn(usize, usize) -> bool,
+) -> Markup {
     html! {
         table {
             tr {
@@ -103,7 +114,10 @@ pub fn table(
                             (false, true) => Some("significant"),
                             (false, false) => None,
                         };
-                        td class=[class] { (cell) }
+                        @match links.get(i).filter(|_| j == 0) {
+                            Some(href) => td class=[class] { a href=(href) { (cell) } },
+                            None => td class=[class] { (cell) },
+                        }
                     }
                 }
             }
@@ -111,9 +125,46 @@ pub fn table(
     }
 }
 
+/// A relative path as a URL path: every byte outside RFC 3986's unreserved set
+/// (and `/`) percent-encoded, so a name with a space, `#`, `%`, `?` or any non-ASCII
+/// letter links to its own file.
+pub fn url_path(path: &str) -> String {
+    let mut url = String::with_capacity(path.len());
+    for byte in path.bytes() {
+        if byte.is_ascii_alphanumeric() || b"-._~/".contains(&byte) {
+            url.push(char::from(byte));
+        } else {
+            url.push_str(&format!("%{byte:02X}"));
+        }
+    }
+    url
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A clip's path with every awkward character survives as a link: decoding the
+    /// URL path gives the name back, and nothing in it ends the path early.
+    #[test]
+    fn a_url_path_decodes_to_the_name() {
+        let name = "oak, old/say \"hi\"/ébène #1 100%?.mp4";
+        let url = url_path(name);
+        assert!(!url.contains([' ', '#', '?', '"', ',']), "{url}");
+        let mut bytes = Vec::new();
+        let mut rest = url.as_bytes();
+        while let Some((&b, tail)) = rest.split_first() {
+            if b == b'%' {
+                let hex = std::str::from_utf8(&tail[..2]).unwrap();
+                bytes.push(u8::from_str_radix(hex, 16).unwrap());
+                rest = &tail[2..];
+            } else {
+                bytes.push(b);
+                rest = tail;
+            }
+        }
+        assert_eq!(String::from_utf8(bytes).unwrap(), name);
+    }
 
     #[test]
     fn text_is_escaped_and_svg_prolog_dropped() {

@@ -13,13 +13,13 @@ use std::path::Path;
 use maud::{Markup, html};
 
 use super::ReportError;
-use super::html::{page, svg_figure, table};
+use super::html::{linked_table, page, svg_figure, table, url_path};
 use super::study_plots::{BoxPlot, BoxSeries, box_plot_svg, trend_plot_svg};
-use crate::output::write_atomic;
+use crate::output::{write_atomic, write_csv_rows};
 use crate::stats::{
     self, Correction, Group, MaterialProperty, PValueMatrix, THESIS_ALPHA, Trend, VarianceModel,
 };
-use crate::summary::StudyResults;
+use crate::summary::{ExperimentSummary, StudyResults};
 
 /// Choices of the statistics in a study report.
 #[derive(Debug, Clone, Copy)]
@@ -130,6 +130,57 @@ fn matrix_section(m: &PValueMatrix, what: &str) -> Markup {
     }
 }
 
+/// The columns of `tables/exponents.csv`.
+const EXPONENT_COLUMNS: [&str; 17] = [
+    "clip",
+    "disk",
+    "material",
+    "orientation",
+    "run",
+    "n",
+    "n_ci_low",
+    "n_ci_high",
+    "t0_s",
+    "r_squared",
+    "points",
+    "fps",
+    "fps_source",
+    "phi_vs_precession",
+    "n_turn_timing",
+    "n_turn_timing_ci_low",
+    "n_turn_timing_ci_high",
+];
+
+/// One clip's row of `tables/exponents.csv` ([`EXPONENT_COLUMNS`]): numbers in
+/// their shortest exact form, missing values empty.
+fn exponent_row(e: &ExperimentSummary) -> Vec<String> {
+    let m = &e.meta;
+    let text = |s: &Option<String>| s.clone().unwrap_or_default();
+    let (timing_n, timing_low, timing_high) =
+        e.n_turn_timing.map_or_else(Default::default, |(n, ci)| {
+            (n.to_string(), ci[0].to_string(), ci[1].to_string())
+        });
+    vec![
+        e.clip.clone(),
+        text(&m.disk),
+        text(&m.material),
+        text(&m.orientation),
+        text(&m.run),
+        e.n.to_string(),
+        e.n_ci95[0].to_string(),
+        e.n_ci95[1].to_string(),
+        e.t0_s.to_string(),
+        e.r_squared.to_string(),
+        e.points.to_string(),
+        e.fps.to_string(),
+        e.fps_source.clone(),
+        e.phi_vs_precession.map_or(String::new(), |d| d.to_string()),
+        timing_n,
+        timing_low,
+        timing_high,
+    ]
+}
+
 /// Write `OUT/index.html`, `OUT/tables/*` and `OUT/plots/*` for a study.
 ///
 /// # Errors
@@ -172,32 +223,8 @@ pub fn write_study_report(
             ]
         })
         .collect();
-    let mut csv = String::from(
-        "clip,disk,material,orientation,run,n,n_ci_low,n_ci_high,t0_s,r_squared,points,fps,fps_source,phi_vs_precession,n_turn_timing,n_turn_timing_ci_low,n_turn_timing_ci_high\n",
-    );
-    for e in &results.experiments {
-        let m = &e.meta;
-        csv += &format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-            e.clip,
-            m.disk.as_deref().unwrap_or(""),
-            m.material.as_deref().unwrap_or(""),
-            m.orientation.as_deref().unwrap_or(""),
-            m.run.as_deref().unwrap_or(""),
-            e.n,
-            e.n_ci95[0],
-            e.n_ci95[1],
-            e.t0_s,
-            e.r_squared,
-            e.points,
-            e.fps,
-            e.fps_source,
-            e.phi_vs_precession.map_or(String::new(), |d| d.to_string()),
-            e.n_turn_timing
-                .map_or(",,".into(), |(n, ci)| format!("{n},{},{}", ci[0], ci[1]))
-        );
-    }
-    write_atomic(&tables.join("exponents.csv"), csv.as_bytes())?;
+    let exponents: Vec<Vec<String>> = results.experiments.iter().map(exponent_row).collect();
+    write_csv_rows(&tables.join("exponents.csv"), &EXPONENT_COLUMNS, &exponents)?;
 
     // Per-material summaries.
     let summary_rows: Vec<Vec<String>> = summaries
@@ -342,6 +369,12 @@ pub fn write_study_report(
         }
     }
 
+    // Each clip's page, as the study (or merge) writes it below the report.
+    let clip_pages: Vec<String> = results
+        .experiments
+        .iter()
+        .map(|e| format!("experiments/{}/index.html", url_path(&e.clip)))
+        .collect();
     let failure_rows: Vec<Vec<String>> = results
         .failures
         .iter()
@@ -355,9 +388,10 @@ pub fn write_study_report(
             code { "tables/" } ", plots as SVG in " code { "plots/" } "."
         }
         h2 { "Exponents" }
-        (table(
+        (linked_table(
             &["clip", "disk", "material", "n", "95 % CI", "R²", "points", "fps (source)", "φ vs precession %", "n from the turns' timing (95 % CI)", "warnings"],
             &experiment_rows,
+            &clip_pages,
             |_, _| false,
         ))
         p class="note" {
@@ -368,7 +402,7 @@ pub fn write_study_report(
              alone, with no height, scale or zero in it (a check of n, never combined with it; a \
              warning where the two intervals are disjoint)."
         }
-        p class="note" { "Each clip's own page: " code { "experiments/<clip>/index.html" } "." }
+        p class="note" { "Each clip's name links to its own page." }
         h2 { "Per material" }
         (table(&summary_header, &summary_rows, |_, _| false))
         @if let Some(svg) = &box_svg {
@@ -537,5 +571,43 @@ mod tests {
             (timing[2] - 0.503).abs() < 1e-9 && (timing[0] - 0.513).abs() < 1e-9,
             "{first}"
         );
+    }
+
+    /// Names with every character a table can trip on.
+    const AWKWARD: [&str; 4] = ["oak, old", "say \"hi\"", "ébène # 100%", "two  spaces"];
+
+    /// Issue 73.1: exponents.csv's fields were not quoted, so a material "oak, old"
+    /// gave 19 fields under a 17-field header. Read back by the `csv` crate with its
+    /// header, every row has the header's width and every name comes back as written.
+    #[test]
+    fn exponents_csv_reads_back_with_awkward_names() {
+        let mut results = StudyResults::default();
+        for (run, material) in AWKWARD.into_iter().enumerate() {
+            let mut e = experiment(material, run, 0.5);
+            e.meta.disk = Some(format!("{material} disk"));
+            e.n_turn_timing = None;
+            results.experiments.push(e);
+        }
+        let out = tempfile::tempdir().unwrap();
+        write_study_report(out.path(), &results, StudyReportOptions::default()).unwrap();
+        let mut reader = csv::Reader::from_path(out.path().join("tables/exponents.csv")).unwrap();
+        let header = reader.headers().unwrap().clone();
+        assert_eq!(header.len(), EXPONENT_COLUMNS.len());
+        let rows: Vec<csv::StringRecord> = reader.records().map(Result::unwrap).collect();
+        assert_eq!(rows.len(), AWKWARD.len());
+        for (row, e) in rows.iter().zip(&results.experiments) {
+            assert_eq!(row.len(), header.len(), "{row:?}");
+            assert_eq!(&row[0], e.clip);
+            assert_eq!(Some(&row[1]), e.meta.disk.as_deref());
+            assert_eq!(Some(&row[2]), e.meta.material.as_deref());
+            assert_eq!(row[9].parse::<f64>().unwrap(), e.r_squared);
+        }
+        // Issue 73.13: the page named no clip as a link. Each clip links to its page,
+        // its path percent-encoded.
+        let html = std::fs::read_to_string(out.path().join("index.html")).unwrap();
+        for e in &results.experiments {
+            let href = format!("href=\"experiments/{}/index.html\"", url_path(&e.clip));
+            assert!(html.contains(&href), "{href}");
+        }
     }
 }

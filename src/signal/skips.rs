@@ -65,6 +65,18 @@ pub enum SkipReason {
 }
 
 impl SkipReason {
+    /// The flag's kind, as `result.json` tags it (`timestamp-gap`, …): a name a
+    /// table can be filtered by.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            SkipReason::TimestampGap { .. } => "timestamp-gap",
+            SkipReason::StripAngleStep { .. } => "strip-angle-step",
+            SkipReason::RimPhaseStep { .. } => "rim-phase-step",
+            SkipReason::DuplicatedFrame { .. } => "duplicated-frame",
+            SkipReason::InterpolatedFrame { .. } => "interpolated-frame",
+        }
+    }
+
     /// A short description for a person looking at the frame.
     pub fn label(&self) -> String {
         match self {

@@ -1912,3 +1912,38 @@ fn a_frame_missing_from_the_clock_is_a_phase_step_clear_of_the_halt() {
     // than two windows (24 frames) before the halt, 356 a frame more.
     assert_eq!(counted, vec![100, 356]);
 }
+
+/// Issue 73.10: flags.csv held the reason's Rust debug text. Its `kind` column is
+/// the tag `result.json` gives the flag, for every kind.
+#[test]
+fn a_flag_kind_is_its_result_json_tag() {
+    let reasons = [
+        SkipReason::TimestampGap {
+            gap_s: 0.004,
+            nominal_s: 0.002,
+            missing_frames: 1,
+        },
+        SkipReason::StripAngleStep {
+            step: 0.1,
+            frame_turn: 0.1,
+            sigma: 0.01,
+        },
+        SkipReason::RimPhaseStep {
+            phase_step: 0.8,
+            statistic: 600.0,
+        },
+        SkipReason::DuplicatedFrame {
+            step: 0.1,
+            neighbours: 4.0,
+        },
+        SkipReason::InterpolatedFrame {
+            residual: 0.1,
+            neighbours: 4.0,
+        },
+    ];
+    for reason in reasons {
+        let json = serde_json::to_value(&reason).unwrap();
+        assert_eq!(json["kind"], reason.kind(), "{reason:?}");
+        assert!(!reason.label().contains('{'), "{}", reason.label());
+    }
+}
