@@ -58,7 +58,8 @@ pub(super) struct MeasuredFrames {
     pub(super) highest: Option<(f64, f64, OwnedFrame)>,
     pub(super) rim: RimHeights,
     /// Duplicated and interpolated frames, and their readings (z_rim \[px\], β) set
-    /// aside until the halt is known.
+    /// aside until the halt is known; after the signal stage only those in the
+    /// motion, nothing set aside (`series::signal_stage`).
     pub(super) repeated: Vec<RepeatedFrame>,
     pub(super) set_aside: Vec<(Option<f64>, Option<f64>)>,
     pub(super) top_rim_leaning: Option<TopRimLeaning>,
