@@ -8,7 +8,6 @@ use super::checks::Fitted;
 use super::diagnostics;
 use super::measure::MeasuredFrames;
 use super::open::OpenedClip;
-use super::series::MeasuredSpan;
 use super::views::OwnedFrame;
 use super::{
     AnalyseError, DecodedSpan, Diagnostics, Experiment, ExperimentPlan, TopRimLeaning,
@@ -41,12 +40,7 @@ pub(super) fn experiment(
         precession,
         zero_px,
     } = fitted;
-    let MeasuredSpan {
-        mut measured,
-        series,
-        zero,
-        ..
-    } = span;
+    let mut measured = span.measured;
     let frames = std::mem::take(&mut measured.frames);
     let warnings = std::mem::take(&mut measured.warnings);
     let calibration = as_scaled(&rest.calibration, measured.top_rim_leaning.as_ref());
@@ -61,13 +55,13 @@ pub(super) fn experiment(
         calibration,
         measured,
         frames.len(),
-        zero,
+        span.zero,
         zero_px,
     )?;
     Ok(Experiment {
         plan,
         frames,
-        series,
+        series: span.series,
         peaks_fit: fits.peaks,
         frames_fit: fits.frames,
         full_state_fit: fits.full_state,

@@ -45,20 +45,13 @@ pub(super) fn finish_fits(
         plan,
         ..
     } = settled;
-    span.measured
-        .warnings
-        .extend(halt_sighting_disagrees(&fits.peaks));
+    let halt_sighting = halt_sighting_disagrees(&fits.peaks);
     let halt = plan.halt(&span.series, bounded, fits.turns.as_ref().ok());
     let (start, end) = span.series.peaks.window;
     let skips = signal::flags_within(&span.series.flags, start, end);
     let skips_in_window = skips.len();
-    span.measured.warnings.extend(flagged_in_window(&skips));
     let zero_px = zero_uncertainty_px(config, &span);
     let fits = with_zero_errors(fits, &span, params, zero_px, plan.window_s, halt);
-    span.measured
-        .warnings
-        .extend(unsteady_states(&span.series, params));
-    span.measured.warnings.extend(unread_peaks(&span.series));
     // φ from the heights against φ from the precession rate (crate::precession): a
     // check of the scale and the zero that shares neither; reported, never applied.
     let precession = precession::precession_check(
@@ -67,12 +60,13 @@ pub(super) fn finish_fits(
         span.series.peaks.window,
         signal_config(plan.window_s, span.measured.metres_per_px).state_window_periods,
     );
-    span.measured
-        .warnings
-        .extend(precession_disagrees(precession.as_ref()));
-    span.measured
-        .warnings
-        .extend(timing_disagrees(&fits.turns, &fits.peaks));
+    let warnings = &mut span.measured.warnings;
+    warnings.extend(halt_sighting);
+    warnings.extend(flagged_in_window(&skips));
+    warnings.extend(unsteady_states(&span.series, params));
+    warnings.extend(unread_peaks(&span.series));
+    warnings.extend(precession_disagrees(precession.as_ref()));
+    warnings.extend(timing_disagrees(&fits.turns, &fits.peaks));
     Fitted {
         span,
         fits,

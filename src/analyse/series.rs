@@ -263,9 +263,23 @@ pub(super) fn signal_series(
         series.halt.rest_level = 0.0;
         series = signal::with_zero_moved(&t, &z, &series, 0.0, model, config)?;
     }
-    // The flags found before the stage ([`known_flags`]), on its time axis. A frame
-    // missing where the timestamps show none is flagged by the rim's phase step that
-    // showed it, not by the gap its count left in the capture times.
+    merge_known_flags(&mut series, known_flags, frames);
+    for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
+        record.t = *shifted;
+    }
+    Ok((series, zero))
+}
+
+/// Adds the flags found before the stage (`known_flags`, [`known_flags`]) to the
+/// `series`' flags, on its time axis, in frame order. A frame missing where the
+/// timestamps show none is flagged by the rim's phase step that showed it, not by
+/// the gap its count left in the capture times. Every flag then carries the clip's
+/// frame number (a span's positions in `frames` are not).
+fn merge_known_flags(
+    series: &mut StateSeries,
+    known_flags: &[signal::FrameFlag],
+    frames: &[FrameRecord],
+) {
     let missing =
         |f: &signal::FrameFlag| matches!(f.reason, signal::SkipReason::RimPhaseStep { .. });
     let counted = |f: &signal::FrameFlag| {
@@ -283,14 +297,9 @@ pub(super) fn signal_series(
             ..k.clone()
         }));
     series.flags.sort_by_key(|f| f.index);
-    // Flags carry the clip's frame numbers (a span's positions are not).
     for flag in &mut series.flags {
         flag.index = frames[flag.index].index;
     }
-    for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
-        record.t = *shifted;
-    }
-    Ok((series, zero))
 }
 
 /// The repeated frames (`repeated`, their readings taken out of `frames` and kept in
