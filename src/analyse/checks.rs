@@ -45,28 +45,28 @@ pub(super) fn finish_fits(
         plan,
         ..
     } = settled;
-    span.warnings.extend(halt_sighting_disagrees(&fits.peaks));
+    let halt_sighting = halt_sighting_disagrees(&fits.peaks);
     let halt = plan.halt(&span.series, bounded, fits.turns.as_ref().ok());
     let (start, end) = span.series.peaks.window;
     let skips = signal::flags_within(&span.series.flags, start, end);
     let skips_in_window = skips.len();
-    span.warnings.extend(flagged_in_window(&skips));
     let zero_px = zero_uncertainty_px(config, &span);
     let fits = with_zero_errors(fits, &span, params, zero_px, plan.window_s, halt);
-    span.warnings.extend(unsteady_states(&span.series, params));
-    span.warnings.extend(unread_peaks(&span.series));
     // φ from the heights against φ from the precession rate (crate::precession): a
     // check of the scale and the zero that shares neither; reported, never applied.
     let precession = precession::precession_check(
         &span.series.states,
         params,
         span.series.peaks.window,
-        signal_config(plan.window_s, span.metres_per_px).state_window_periods,
+        signal_config(plan.window_s, span.measured.metres_per_px).state_window_periods,
     );
-    span.warnings
-        .extend(precession_disagrees(precession.as_ref()));
-    span.warnings
-        .extend(timing_disagrees(&fits.turns, &fits.peaks));
+    let warnings = &mut span.measured.warnings;
+    warnings.extend(halt_sighting);
+    warnings.extend(flagged_in_window(&skips));
+    warnings.extend(unsteady_states(&span.series, params));
+    warnings.extend(unread_peaks(&span.series));
+    warnings.extend(precession_disagrees(precession.as_ref()));
+    warnings.extend(timing_disagrees(&fits.turns, &fits.peaks));
     Fitted {
         span,
         fits,
@@ -83,8 +83,10 @@ fn zero_uncertainty_px(config: &ExperimentConfig, span: &MeasuredSpan) -> f64 {
     config
         .rim_zero_uncertainty_px()
         .unwrap_or_else(|| match &span.zero {
-            Some(z) => RimReading::motion_zero_uncertainty_px(z.zero.se / span.metres_per_px),
-            None => span.reading.zero_uncertainty_px(),
+            Some(z) => {
+                RimReading::motion_zero_uncertainty_px(z.zero.se / span.measured.metres_per_px)
+            }
+            None => span.measured.rim.reading.zero_uncertainty_px(),
         })
 }
 
@@ -137,16 +139,16 @@ fn zero_moved_series(
     zero_px: f64,
     window_s: f64,
 ) -> [Option<StateSeries>; 2] {
-    let model = rim_model(&span.scale, params);
-    let (t, z) = rim_series(&span.frames);
+    let model = rim_model(&span.measured.scale, params);
+    let (t, z) = rim_series(&span.measured.frames);
     [-1.0, 1.0].map(|sign| {
         signal::with_zero_moved(
             &t,
             &z,
             &span.series,
-            sign * zero_px * span.metres_per_px,
+            sign * zero_px * span.measured.metres_per_px,
             model.as_ref(),
-            &signal_config(window_s, span.metres_per_px),
+            &signal_config(window_s, span.measured.metres_per_px),
         )
         .ok()
     })

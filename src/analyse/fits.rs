@@ -48,9 +48,9 @@ impl<'a> FitPlan<'a> {
             params,
             halt_choice: config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default(),
             rest_above_zero_m: span.zero.map_or(0.0, |z| -z.zero.offset),
-            frame_s: 1.0 / span.fps.fps,
-            frame_times: span.frame_times.clone(),
-            clip_end: span.frames.last().map_or(0.0, |f| f.t_capture),
+            frame_s: 1.0 / span.measured.fps.fps,
+            frame_times: span.measured.frame_times.clone(),
+            clip_end: span.measured.frames.last().map_or(0.0, |f| f.t_capture),
             rest_tail_s: span.rest_tail_s,
             window_s: config.window_s(),
         }

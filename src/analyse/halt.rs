@@ -61,9 +61,14 @@ pub(super) fn settle<'a>(
     span: MeasuredSpan,
 ) -> Result<Settled<'a>, AnalyseError> {
     let plan = FitPlan::new(clip, config, params, &span);
-    let signal = SignalPlan::new(rest.two_view, config.rim_zero(), &span.scale, params);
+    let signal = SignalPlan::new(
+        rest.two_view,
+        config.rim_zero(),
+        &span.measured.scale,
+        params,
+    );
     let fits = plan.fit(&span.series, false)?;
-    let signal_config = signal_config(plan.window_s, span.metres_per_px);
+    let signal_config = signal_config(plan.window_s, span.measured.metres_per_px);
     let mut settled = Settled {
         span,
         fits,
@@ -107,9 +112,9 @@ impl Settled<'_> {
     /// moves within its standard error as its window does; the zero row follows).
     fn take(&mut self, pass: Pass) {
         let span = &mut self.span;
-        (span.frames, span.series, self.fits) = (pass.frames, pass.series, pass.fits);
+        (span.measured.frames, span.series, self.fits) = (pass.frames, pass.series, pass.fits);
         if let Some(again) = pass.zero {
-            span.rim_zero_row_px -= again.shift_m / span.metres_per_px;
+            span.measured.rim.zero_row_px -= again.shift_m / span.measured.metres_per_px;
             span.zero = Some(match span.zero {
                 Some(z) => ZeroFromMotion {
                     shift_m: z.shift_m + again.shift_m,
@@ -132,7 +137,7 @@ impl Settled<'_> {
         config.motion_until = Some(series.halt.t_phi + bound.bound);
         let Some(pass) = self.again(
             signal,
-            &self.span.frames,
+            &self.span.measured.frames,
             &self.span.known_flags,
             &config,
             true,
@@ -155,7 +160,7 @@ impl Settled<'_> {
             series.halt.index - pass.series.halt.index,
             pass.series.halt.t_phi,
         );
-        self.span.warnings.push(warning);
+        self.span.measured.warnings.push(warning);
         self.take(pass);
         self.bounded = true;
         self.signal_config = config;
@@ -167,7 +172,7 @@ impl Settled<'_> {
     /// clock without them.
     fn withdraw_drops(&mut self, signal: &SignalPlan) {
         let span = &self.span;
-        let (mut frames, mut flags) = (span.frames.clone(), span.known_flags.clone());
+        let (mut frames, mut flags) = (span.measured.frames.clone(), span.known_flags.clone());
         let period = self.plan.frame_s;
         let withdrawn =
             withdraw_hidden_drops(&mut frames, &mut flags, &span.series.halt.shifted_t, period);
@@ -184,7 +189,7 @@ impl Settled<'_> {
         };
         let at: Vec<String> = withdrawn
             .iter()
-            .map(|&i| span.frames[i].index.to_string())
+            .map(|&i| span.measured.frames[i].index.to_string())
             .collect();
         let warning = format!(
             "the rim's phase step at frame(s) {} lies within its test's reach of the halt \
@@ -192,7 +197,7 @@ impl Settled<'_> {
              times after it are no longer counted a frame later (signal::missing_frames)",
             at.join(", ")
         );
-        self.span.warnings.push(warning);
+        self.span.measured.warnings.push(warning);
         self.take(pass);
         (self.span.known_flags, self.signal_config) = (flags, config);
     }
@@ -212,7 +217,7 @@ impl Settled<'_> {
         let span = &self.span;
         match self.again(
             signal,
-            &span.frames,
+            &span.measured.frames,
             &span.known_flags,
             &self.signal_config,
             self.bounded,
@@ -221,7 +226,7 @@ impl Settled<'_> {
                 self.take(pass);
                 self.halt_placement = Some(placement.shifted(offset));
             }
-            None => self.span.warnings.push(format!(
+            None => self.span.measured.warnings.push(format!(
                 "the laws place the halt {:+.1} ms from the last motion seen, but the signal \
                  stage or the fits failed on that clock: t_φ is the last motion seen",
                 1e3 * offset

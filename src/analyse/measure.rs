@@ -18,9 +18,11 @@ use super::{
     TopRimLeaning,
 };
 use crate::config::ExperimentConfig;
-use crate::footage::{self, CaptureFps, FrameTiming, FrameView, RepeatedFrame};
+use crate::footage::{
+    self, CaptureFps, FootageError, Frame, FrameSource, FrameTiming, FrameView, RepeatedFrame,
+};
 use crate::model::params::DiskParams;
-use crate::vision::{self, BandWindow, GapSample, RimHeight, StripFinder};
+use crate::vision::{self, BandWindow, GapSample, RimHeight, Strip, StripFinder};
 
 /// Every second pixel of every second row is compared with the neighbouring
 /// frames' to find duplicated and interpolated frames (footage::RepeatGauge).
@@ -28,6 +30,13 @@ const REPEAT_SAMPLE_STEP: usize = 2;
 
 /// A frame's rim height \[px\] and its edge's row \[px\].
 type RimCrest = (f64, f64);
+
+/// A repeated frame's readings, set aside: z_rim \[px\] and β \[rad\].
+pub(super) type SetAside = (Option<f64>, Option<f64>);
+
+/// What one frame gave: its z_rim \[px\], its rim's height and edge row when the
+/// highest so far, and its strip (two-view).
+type FrameRead = (Option<f64>, Option<RimCrest>, Option<Strip>);
 
 /// What pass 2 read of a span, frame by frame.
 pub(super) struct FrameReadings {
@@ -58,9 +67,10 @@ pub(super) struct MeasuredFrames {
     pub(super) highest: Option<(f64, f64, OwnedFrame)>,
     pub(super) rim: RimHeights,
     /// Duplicated and interpolated frames, and their readings (z_rim \[px\], β) set
-    /// aside until the halt is known.
+    /// aside until the halt is known; after the signal stage only those in the
+    /// motion, nothing set aside (`series::signal_stage`).
     pub(super) repeated: Vec<RepeatedFrame>,
-    pub(super) set_aside: Vec<(Option<f64>, Option<f64>)>,
+    pub(super) set_aside: Vec<SetAside>,
     pub(super) top_rim_leaning: Option<TopRimLeaning>,
     pub(super) scale: ScaleReport,
     pub(super) metres_per_px: f64,
@@ -99,28 +109,11 @@ pub(super) fn measure_frames<K: FrameKeeping>(
         warnings.extend(rim_heights::resolve_gap(&mut frames, gauge, &gaps));
     }
     let rim = rim_heights::remeasure(&mut frames, &windows, rest, fps.fps);
-    // Duplicated and interpolated frames show no capture of their own: no rim
-    // height or strip angle from them reaches the fits. Their readings are set
-    // aside until the halt is known (the signal stage).
-    let repeated = repeats.repeated(REST_FRAMES);
-    drop(repeats);
-    let set_aside: Vec<(Option<f64>, Option<f64>)> = repeated
-        .iter()
-        .map(|r| {
-            let record = &mut frames[r.index];
-            (record.z_rim_px.take(), record.beta_raw.take())
-        })
-        .collect();
+    let (repeated, set_aside) = set_repeats_aside(&mut frames, repeats);
     let top_rim_leaning = top_rim_leaning(&frames, &profiles, rest);
     drop(profiles);
     let scale = scale(rest, &rim, top_rim_leaning.as_ref(), config, params);
-    let metres_per_px = scale.metres_per_px();
-    if !scale.at_near_rim() {
-        warnings.push(format!("scale from the {}", scale.used));
-    }
-    for record in &mut frames {
-        record.z_rim_m = record.z_rim_px.map(|z| z * metres_per_px);
-    }
+    warnings.extend(in_metres(&mut frames, &scale));
     warnings.extend(frames_without_edge(clip, no_edge, frames.len(), rest)?);
     let frame_times = set_capture_times(&mut frames, plan_span, first, &mut fps);
     warnings.splice(0..0, fps.warnings.iter().cloned());
@@ -134,10 +127,39 @@ pub(super) fn measure_frames<K: FrameKeeping>(
         repeated,
         set_aside,
         top_rim_leaning,
+        metres_per_px: scale.metres_per_px(),
         scale,
-        metres_per_px,
     };
     Ok((measured, kept))
+}
+
+/// Sets the repeated frames of the span aside: duplicated and interpolated frames
+/// show no capture of their own, so no rim height or strip angle from them reaches
+/// the fits. Returns them, and their readings (z_rim \[px\], β), kept until the
+/// halt is known (the signal stage).
+fn set_repeats_aside(
+    frames: &mut [FrameRecord],
+    repeats: footage::RepeatGauge,
+) -> (Vec<RepeatedFrame>, Vec<SetAside>) {
+    let repeated = repeats.repeated(REST_FRAMES);
+    let set_aside = repeated
+        .iter()
+        .map(|r| {
+            let record = &mut frames[r.index];
+            (record.z_rim_px.take(), record.beta_raw.take())
+        })
+        .collect();
+    (repeated, set_aside)
+}
+
+/// Converts every height z_rim to metres at the `scale` (once, after every
+/// correction of z_rim in px); a warning when the scale is not the near rim's.
+fn in_metres(frames: &mut [FrameRecord], scale: &ScaleReport) -> Option<String> {
+    let metres_per_px = scale.metres_per_px();
+    for record in frames {
+        record.z_rim_m = record.z_rim_px.map(|z| z * metres_per_px);
+    }
+    (!scale.at_near_rim()).then(|| format!("scale from the {}", scale.used))
 }
 
 /// A warning when `no_edge` of the span's `frames` showed no rim edge.
@@ -183,15 +205,8 @@ fn read_frames<K: FrameKeeping>(
         path: clip.to_path_buf(),
         error,
     };
-    let (roi, split) = (rest.roi, rest.split());
     let source = &mut opened.source;
-    match &plan_span.index {
-        Some(index) if first > 0 => source.seek_frame(first, index)?,
-        _ => source.seek(0)?,
-    }
-    if split.is_none() {
-        source.convert_only_columns(Some(band_columns(rest)))?;
-    }
+    seek_span(source, plan_span, first, rest)?;
     let mut strip_finder = rest
         .colour_thresholds
         .as_ref()
@@ -205,23 +220,9 @@ fn read_frames<K: FrameKeeping>(
         if first > 0 {
             plan_span.check_frame(clip, index, frame.container_time_s)?;
         }
-        let (side, plan) = side_view(&frame.view, roi, split, index).map_err(vision_err)?;
-        let (z_rim_px, new_highest) = readings.read_side(&side, index, rest).map_err(vision_err)?;
-        let strip = match (&mut strip_finder, plan) {
-            (Some(finder), Some(plan)) => finder.measure(&plan, index).ok(),
-            _ => None,
-        };
-        readings.frames.push(FrameRecord {
-            index,
-            // Set from the container's timestamps once every frame is read.
-            t_capture: f64::NAN,
-            t: f64::NAN,
-            container_time_s: frame.container_time_s,
-            picture_type: frame.picture_type,
-            z_rim_px,
-            z_rim_m: None,
-            beta_raw: strip.map(|s| s.beta),
-        });
+        let (z_rim_px, new_highest, strip) = readings
+            .read_frame(frame, rest, strip_finder.as_mut())
+            .map_err(vision_err)?;
         if index % 256 == 0 {
             progress(index - first, Some(span_frames));
         }
@@ -243,12 +244,34 @@ fn read_frames<K: FrameKeeping>(
         if let Some((z_rim_px, edge_row)) = new_highest {
             // The diagnostic shows the whole side view: convert the other columns.
             let whole = source.whole_frame()?;
-            let side = side_view(&whole, roi, split, index).map_err(vision_err)?.0;
-            readings.highest = Some((z_rim_px, edge_row, OwnedFrame::copy(index, &side)));
+            let side = side_view(&whole, rest.roi, rest.split(), index).map_err(vision_err)?;
+            readings.highest = Some((z_rim_px, edge_row, OwnedFrame::copy(index, &side.0)));
         }
     }
     progress(readings.frames.len(), Some(span_frames));
     Ok((readings, keeper.and_then(KeepFrames::finish)))
+}
+
+/// Puts the clip's `source` at the span's `first` frame (by the container's index,
+/// `plan_span`), or at the clip's start. A side view reads only the band of columns
+/// about the centre line, so only that band is converted to colour.
+///
+/// # Errors
+/// The seek fails.
+fn seek_span(
+    source: &mut FrameSource,
+    plan_span: &SpanPlan,
+    first: usize,
+    rest: &RestCalibration,
+) -> Result<(), FootageError> {
+    match &plan_span.index {
+        Some(index) if first > 0 => source.seek_frame(first, index)?,
+        _ => source.seek(0)?,
+    }
+    if rest.split().is_none() {
+        source.convert_only_columns(Some(band_columns(rest)))?;
+    }
+    Ok(())
 }
 
 /// The frame's columns a side view's gauges read: the rim gauge's band and the gap
@@ -277,6 +300,37 @@ impl FrameReadings {
             no_edge: 0,
             highest: None,
         }
+    }
+
+    /// Reads one `frame`: its side view with every gauge ([`Self::read_side`]) and,
+    /// in a two-view clip, the strip on its plan view with the `strip_finder`; adds
+    /// its record (times still unset). Returns its z_rim \[px\], its rim's height
+    /// and edge row when the highest so far, and its strip.
+    fn read_frame(
+        &mut self,
+        frame: Frame,
+        rest: &RestCalibration,
+        strip_finder: Option<&mut StripFinder>,
+    ) -> Result<FrameRead, vision::VisionError> {
+        let index = frame.index;
+        let (side, plan) = side_view(&frame.view, rest.roi, rest.split(), index)?;
+        let (z_rim_px, new_highest) = self.read_side(&side, index, rest)?;
+        let strip = match (strip_finder, plan) {
+            (Some(finder), Some(plan)) => finder.measure(&plan, index).ok(),
+            _ => None,
+        };
+        self.frames.push(FrameRecord {
+            index,
+            // Set from the container's timestamps once every frame is read.
+            t_capture: f64::NAN,
+            t: f64::NAN,
+            container_time_s: frame.container_time_s,
+            picture_type: frame.picture_type,
+            z_rim_px,
+            z_rim_m: None,
+            beta_raw: strip.map(|s| s.beta),
+        });
+        Ok((z_rim_px, new_highest, strip))
     }
 
     /// Reads one frame's side view with every gauge: returns its z_rim \[px\] (0 at

@@ -14,7 +14,8 @@ use crate::vision::{self, BandWindow, GapGauge, GapSample, RimReading};
 pub(super) struct RimHeights {
     /// How z_rim was measured, for the plan.
     pub(super) description: String,
-    /// The side view's row where z_rim = 0 \[px\]: the model's edge at rest, else z_base.
+    /// The side view's row where z_rim = 0 \[px\]: the model's edge at rest, else
+    /// z_base; moved with the zero the motion places (the signal stage).
     pub(super) zero_row_px: f64,
     /// z_b of eq. 3.10: the plate line where the mirror-edge model finds the rim
     /// meets its mirror image (ScaleReport), else z_base.

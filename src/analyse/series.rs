@@ -6,41 +6,29 @@
 use std::path::Path;
 
 use super::measure::MeasuredFrames;
-use super::views::OwnedFrame;
-use super::{AnalyseError, FrameRecord, ScaleReport, TopRimLeaning, ZeroFromMotion};
+use super::{AnalyseError, FrameRecord, ScaleReport, ZeroFromMotion};
 use crate::config::{ExperimentConfig, RimZeroChoice};
-use crate::footage::{self, CaptureFps, FrameTiming};
+use crate::footage::{self, CaptureFps};
 use crate::model::params::DiskParams;
 use crate::signal::{
     self, RimModel, SideViewRim, SignalConfig, SignalError, StateSeries, ThesisRim,
 };
-use crate::vision::RimReading;
 
 /// Pass 2's measurements of one span, through the signal analysis.
 pub(super) struct MeasuredSpan {
-    pub(super) frames: Vec<FrameRecord>,
+    /// The span as measured, after the signal stage: each frame's time set from the
+    /// halt and z_rim from the zero the motion places, the rim's zero row moved with
+    /// it, and the repeated frames only those in the motion.
+    pub(super) measured: MeasuredFrames,
     pub(super) series: StateSeries,
-    pub(super) fps: CaptureFps,
-    pub(super) frame_times: FrameTiming,
-    pub(super) warnings: Vec<String>,
-    pub(super) highest: Option<(f64, f64, OwnedFrame)>,
-    pub(super) rim: String,
-    pub(super) rim_zero_row_px: f64,
-    /// How the rim's heights were read, which decides how well their zero is known
-    /// when the motion does not place it.
-    pub(super) reading: RimReading,
     /// The zero the motion placed.
     pub(super) zero: Option<ZeroFromMotion>,
-    pub(super) scale: ScaleReport,
-    pub(super) metres_per_px: f64,
     /// Width of the local fits' window [turns of the rim].
     pub(super) local_fit_periods: f64,
     /// The rest tail's length \[s\] (SignalConfig::rest_tail_s).
     pub(super) rest_tail_s: f64,
-    /// Flags found before the signal stage ([`known_flags`]), positions in `frames`.
+    /// Flags found before the signal stage ([`known_flags`]), positions in the frames.
     pub(super) known_flags: Vec<signal::FrameFlag>,
-    /// The near top rim from the frames leaning towards the camera, when read.
-    pub(super) top_rim_leaning: Option<TopRimLeaning>,
 }
 
 /// How the signal stage reads a clip's heights: the layout, the rim's profile for
@@ -90,84 +78,93 @@ impl SignalPlan {
 /// The signal stage on a measured span: the repeated frames in the motion left out
 /// ([`repeats_in_motion`]), the frames missing where the timestamps show none
 /// counted ([`hidden_drops`]), then [`signal_series`]; the zero the motion places
-/// moves the rim's zero row.
+/// moves the rim's zero row ([`move_rim_zero`]).
 ///
 /// # Errors
 /// The signal stage fails (no halt, too few peaks; [`signal_error`]).
 pub(super) fn signal_stage(
     clip: &Path,
-    measured: MeasuredFrames,
+    mut measured: MeasuredFrames,
     two_view: bool,
     config: &ExperimentConfig,
     params: &DiskParams,
 ) -> Result<MeasuredSpan, AnalyseError> {
-    let MeasuredFrames {
-        mut frames,
-        fps,
-        frame_times,
-        mut warnings,
-        highest,
-        rim,
-        repeated,
-        set_aside,
-        top_rim_leaning,
-        scale,
-        metres_per_px,
-    } = measured;
-    let signal_config = signal_config(config.window_s(), metres_per_px);
-    let repeated = repeats_in_motion(
-        &mut frames,
-        repeated,
-        set_aside,
-        &signal_config,
-        metres_per_px,
-    );
-    warnings.extend(repeats_warning(&frames, &repeated));
-    let plan = SignalPlan::new(two_view, config.rim_zero(), &scale, params);
+    let signal_config = signal_config(config.window_s(), measured.metres_per_px);
+    keep_repeats_in_motion(&mut measured, &signal_config);
+    let plan = SignalPlan::new(two_view, config.rim_zero(), &measured.scale, params);
     if config.rim_zero() == RimZeroChoice::Motion && plan.profile.is_none() {
-        warnings.push(
+        measured.warnings.push(
             "the camera's elevation is not known (the silhouette's top was not found above \
              the top face): the zero of z_rim stays the still disk's edge"
                 .into(),
         );
     }
-    let hidden = hidden_drops(
-        &mut frames,
-        &repeated,
-        two_view,
-        &signal_config,
-        plan.model.as_ref(),
-        1.0 / fps.fps,
-    );
-    warnings.extend(hidden_drops_warning(&frames, &hidden));
-    let known_flags = known_flags(&repeated, hidden);
+    let known_flags = count_hidden_drops(&mut measured, &plan, &signal_config);
     let (series, zero) = plan
-        .series(&mut frames, &known_flags, &signal_config)
-        .map_err(|error| signal_error(clip, &fps, error))?;
-    let mut rim_zero_row_px = rim.zero_row_px;
-    let mut description = rim.description;
+        .series(&mut measured.frames, &known_flags, &signal_config)
+        .map_err(|error| signal_error(clip, &measured.fps, error))?;
     if let Some(zero) = &zero {
-        rim_zero_row_px -= zero.shift_m / metres_per_px;
-        description += &zero_description(zero, metres_per_px, rim_zero_row_px, &scale);
+        move_rim_zero(&mut measured, zero);
     }
     Ok(MeasuredSpan {
-        frames,
+        measured,
         series,
-        fps,
-        frame_times,
-        warnings,
-        highest,
-        rim: description,
-        rim_zero_row_px,
-        reading: rim.reading,
         zero,
-        scale,
-        metres_per_px,
         local_fit_periods: signal_config.state_window_periods,
         rest_tail_s: signal_config.rest_tail_s,
         known_flags,
-        top_rim_leaning,
     })
+}
+
+/// Narrows the span's repeated frames to those in the motion ([`repeats_in_motion`]):
+/// the readings of the others go back to their frames, and a warning names the ones
+/// left out of the fits.
+fn keep_repeats_in_motion(measured: &mut MeasuredFrames, config: &SignalConfig) {
+    let repeated = std::mem::take(&mut measured.repeated);
+    let set_aside = std::mem::take(&mut measured.set_aside);
+    measured.repeated = repeats_in_motion(
+        &mut measured.frames,
+        repeated,
+        set_aside,
+        config,
+        measured.metres_per_px,
+    );
+    let warning = repeats_warning(&measured.frames, &measured.repeated);
+    measured.warnings.extend(warning);
+}
+
+/// Counts the frames missing where the timestamps show none ([`hidden_drops`], one
+/// nominal period each on the capture clock) and warns of them; returns the flags
+/// known before the signal stage ([`known_flags`]).
+fn count_hidden_drops(
+    measured: &mut MeasuredFrames,
+    plan: &SignalPlan,
+    config: &SignalConfig,
+) -> Vec<signal::FrameFlag> {
+    let hidden = hidden_drops(
+        &mut measured.frames,
+        &measured.repeated,
+        plan.two_view,
+        config,
+        plan.model.as_ref(),
+        1.0 / measured.fps.fps,
+    );
+    let warning = hidden_drops_warning(&measured.frames, &hidden);
+    measured.warnings.extend(warning);
+    known_flags(&measured.repeated, hidden)
+}
+
+/// Moves the rim's zero row by the shift of the zero the motion placed, so that the
+/// row still reads z_rim = 0, and adds to the rim's description where it now lies.
+fn move_rim_zero(measured: &mut MeasuredFrames, zero: &ZeroFromMotion) {
+    let rim = &mut measured.rim;
+    rim.zero_row_px -= zero.shift_m / measured.metres_per_px;
+    rim.description += &zero_description(
+        zero,
+        measured.metres_per_px,
+        rim.zero_row_px,
+        &measured.scale,
+    );
 }
 
 /// How far the motion moved the zero of z_rim from the still disk's edge, to the row
@@ -266,9 +263,23 @@ pub(super) fn signal_series(
         series.halt.rest_level = 0.0;
         series = signal::with_zero_moved(&t, &z, &series, 0.0, model, config)?;
     }
-    // The flags found before the stage ([`known_flags`]), on its time axis. A frame
-    // missing where the timestamps show none is flagged by the rim's phase step that
-    // showed it, not by the gap its count left in the capture times.
+    merge_known_flags(&mut series, known_flags, frames);
+    for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
+        record.t = *shifted;
+    }
+    Ok((series, zero))
+}
+
+/// Adds the flags found before the stage (`known_flags`, [`known_flags`]) to the
+/// `series`' flags, on its time axis, in frame order. A frame missing where the
+/// timestamps show none is flagged by the rim's phase step that showed it, not by
+/// the gap its count left in the capture times. Every flag then carries the clip's
+/// frame number (a span's positions in `frames` are not).
+fn merge_known_flags(
+    series: &mut StateSeries,
+    known_flags: &[signal::FrameFlag],
+    frames: &[FrameRecord],
+) {
     let missing =
         |f: &signal::FrameFlag| matches!(f.reason, signal::SkipReason::RimPhaseStep { .. });
     let counted = |f: &signal::FrameFlag| {
@@ -286,14 +297,9 @@ pub(super) fn signal_series(
             ..k.clone()
         }));
     series.flags.sort_by_key(|f| f.index);
-    // Flags carry the clip's frame numbers (a span's positions are not).
     for flag in &mut series.flags {
         flag.index = frames[flag.index].index;
     }
-    for (record, shifted) in frames.iter_mut().zip(&series.halt.shifted_t) {
-        record.t = *shifted;
-    }
-    Ok((series, zero))
 }
 
 /// The repeated frames (`repeated`, their readings taken out of `frames` and kept in

@@ -194,7 +194,7 @@ impl SpanPlan {
                     [p0, p1, ..] => widest + (m.local_fit_periods + LEAD_PERIODS) * (p1.t - p0.t),
                     _ => f64::INFINITY,
                 };
-                let span_start = m.frames.first().map_or(f64::INFINITY, |f| f.t);
+                let span_start = m.measured.frames.first().map_or(f64::INFINITY, |f| f.t);
                 if span_start <= -needed {
                     return None;
                 }
@@ -294,7 +294,7 @@ pub(super) fn measure_spans<K: FrameKeeping>(
     let plan = SpanPlan::new(opened.index.take(), decoding, opened.expected, &opened.fps);
     let mut first = plan.first_span();
     let mut attempts = 1;
-    let (measured, kept) = loop {
+    let (span, kept) = loop {
         let result = measure::measure_frames(
             clip, opened, rest, &plan, first, config, params, keeping, progress,
         )
@@ -316,6 +316,6 @@ pub(super) fn measure_spans<K: FrameKeeping>(
             None => break result?,
         }
     };
-    let decoded = plan.decoded(first, attempts, measured.frames.len());
-    Ok((measured, decoded, kept))
+    let decoded = plan.decoded(first, attempts, span.measured.frames.len());
+    Ok((span, decoded, kept))
 }
