@@ -230,26 +230,40 @@ fn read_frames<K: FrameKeeping>(
             .repeats
             .push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
         if let Some(keeper) = &mut keeper {
-            // The strip as measured, with its mask for the outline (made
-            // only for the frames kept).
-            let mark = || {
-                let finder = strip_finder.as_mut()?;
-                Some(StripMark {
-                    strip: strip?,
-                    mask: finder.strip_mask(),
-                })
-            };
-            keeper.offer(readings.frames.len() - 1, z_rim_px, source, mark)?;
+            let position = readings.frames.len() - 1;
+            let finder = strip_finder.as_mut();
+            offer(keeper, position, z_rim_px, source, finder, strip)?;
         }
-        if let Some((z_rim_px, edge_row)) = new_highest {
-            // The diagnostic shows the whole side view: convert the other columns.
-            let whole = source.whole_frame()?;
-            let side = side_view(&whole, rest.roi, rest.split(), index).map_err(vision_err)?;
-            readings.highest = Some((z_rim_px, edge_row, OwnedFrame::copy(index, &side.0)));
+        if let Some(crest) = new_highest {
+            readings.keep_highest(clip, source, rest, index, crest)?;
         }
     }
     progress(readings.frames.len(), Some(span_frames));
     Ok((readings, keeper.and_then(KeepFrames::finish)))
+}
+
+/// Offers the frame just read (at `position` in the span) to the span's `keeper`,
+/// with its raw z_rim \[px\] and the strip as measured; the strip's mask for the
+/// outline is made only when the keeper keeps the frame.
+///
+/// # Errors
+/// The frame cannot be lent whole.
+fn offer<Keeper: KeepFrames>(
+    keeper: &mut Keeper,
+    position: usize,
+    z_rim_px: Option<f64>,
+    source: &mut FrameSource,
+    strip_finder: Option<&mut StripFinder>,
+    strip: Option<Strip>,
+) -> Result<(), FootageError> {
+    let mark = || {
+        let finder = strip_finder?;
+        Some(StripMark {
+            strip: strip?,
+            mask: finder.strip_mask(),
+        })
+    };
+    keeper.offer(position, z_rim_px, source, mark)
 }
 
 /// Puts the clip's `source` at the span's `first` frame (by the container's index,
@@ -300,6 +314,31 @@ impl FrameReadings {
             no_edge: 0,
             highest: None,
         }
+    }
+
+    /// Keeps the frame whose rim is the highest so far (`crest`), for the threshold
+    /// diagnostic: its whole side view, so the columns outside the band are
+    /// converted too.
+    ///
+    /// # Errors
+    /// The frame cannot be converted whole, or its side view cannot be cut.
+    fn keep_highest(
+        &mut self,
+        clip: &Path,
+        source: &mut FrameSource,
+        rest: &RestCalibration,
+        index: usize,
+        (z_rim_px, edge_row): RimCrest,
+    ) -> Result<(), AnalyseError> {
+        let whole = source.whole_frame()?;
+        let side = side_view(&whole, rest.roi, rest.split(), index)
+            .map_err(|error| AnalyseError::Vision {
+                path: clip.to_path_buf(),
+                error,
+            })?
+            .0;
+        self.highest = Some((z_rim_px, edge_row, OwnedFrame::copy(index, &side)));
+        Ok(())
     }
 
     /// Reads one `frame`: its side view with every gauge ([`Self::read_side`]) and,
