@@ -53,7 +53,7 @@ pub(crate) trait Problem {
 /// How far the search may go.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Limits {
-    /// Most iterations (accepted or refused steps of the damping).
+    /// Most iterations (each ends in an accepted step or a stop).
     pub max_iterations: usize,
     /// Largest change of any parameter in one step (the initial trust radius); it
     /// shrinks when clamped steps predict the reduction badly.
