@@ -174,19 +174,10 @@ fn awkward_footage(root: &Path) {
 
 /// `merge`'s `%XX` escapes decoded.
 fn percent_decoded(url: &str) -> String {
-    let mut bytes = Vec::new();
-    let mut rest = url.as_bytes();
-    while let Some((&b, tail)) = rest.split_first() {
-        if b == b'%' {
-            let hex = std::str::from_utf8(&tail[..2]).unwrap();
-            bytes.push(u8::from_str_radix(hex, 16).unwrap());
-            rest = &tail[2..];
-        } else {
-            bytes.push(b);
-            rest = tail;
-        }
-    }
-    String::from_utf8(bytes).unwrap()
+    percent_encoding::percent_decode_str(url)
+        .decode_utf8()
+        .unwrap()
+        .into_owned()
 }
 
 /// Every CSV below `dir` reads back with the `csv` crate, each row as wide as its

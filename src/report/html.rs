@@ -7,6 +7,7 @@
 
 use base64::Engine;
 use maud::{DOCTYPE, Markup, PreEscaped, html};
+use percent_encoding::{AsciiSet, NON_ALPHANUMERIC, utf8_percent_encode};
 
 /// The style shared by every page: readable tables, figures that fit the window.
 const STYLE: &str = "
@@ -125,24 +126,25 @@ pub fn linked_table(
     }
 }
 
+/// Bytes a URL path keeps as they are: RFC 3986's unreserved set and `/`.
+const URL_PATH_KEEPS: &AsciiSet = &NON_ALPHANUMERIC
+    .remove(b'-')
+    .remove(b'.')
+    .remove(b'_')
+    .remove(b'~')
+    .remove(b'/');
+
 /// A relative path as a URL path: every byte outside RFC 3986's unreserved set
 /// (and `/`) percent-encoded, so a name with a space, `#`, `%`, `?` or any non-ASCII
 /// letter links to its own file.
 pub fn url_path(path: &str) -> String {
-    let mut url = String::with_capacity(path.len());
-    for byte in path.bytes() {
-        if byte.is_ascii_alphanumeric() || b"-._~/".contains(&byte) {
-            url.push(char::from(byte));
-        } else {
-            url.push_str(&format!("%{byte:02X}"));
-        }
-    }
-    url
+    utf8_percent_encode(path, URL_PATH_KEEPS).to_string()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use percent_encoding::percent_decode_str;
 
     /// A clip's path with every awkward character survives as a link: decoding the
     /// URL path gives the name back, and nothing in it ends the path early.
@@ -151,19 +153,7 @@ mod tests {
         let name = "oak, old/say \"hi\"/ébène #1 100%?.mp4";
         let url = url_path(name);
         assert!(!url.contains([' ', '#', '?', '"', ',']), "{url}");
-        let mut bytes = Vec::new();
-        let mut rest = url.as_bytes();
-        while let Some((&b, tail)) = rest.split_first() {
-            if b == b'%' {
-                let hex = std::str::from_utf8(&tail[..2]).unwrap();
-                bytes.push(u8::from_str_radix(hex, 16).unwrap());
-                rest = &tail[2..];
-            } else {
-                bytes.push(b);
-                rest = tail;
-            }
-        }
-        assert_eq!(String::from_utf8(bytes).unwrap(), name);
+        assert_eq!(percent_decode_str(&url).decode_utf8().unwrap(), name);
     }
 
     #[test]
