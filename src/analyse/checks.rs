@@ -63,6 +63,7 @@ pub(super) fn finish_fits(
     let warnings = &mut span.measured.warnings;
     warnings.extend(halt_sighting);
     warnings.extend(flagged_in_window(&skips));
+    warnings.extend(suspected_skips(&span.series.suspected_skips));
     warnings.extend(unsteady_states(&span.series, params));
     warnings.extend(unread_peaks(&span.series));
     warnings.extend(precession_disagrees(precession.as_ref()));
@@ -196,6 +197,24 @@ fn flagged_in_window(in_window: &[&signal::FrameFlag]) -> Option<String> {
     Some(format!(
         "{} flagged frame(s) (skips, jumps or repeated frames) inside the fit window{gaps}",
         in_window.len()
+    ))
+}
+
+/// The rim phase steps the turns' timing did not confirm (`signal::TimingStep`):
+/// a frame may be missing there, but none was counted.
+fn suspected_skips(suspected: &[signal::FrameFlag]) -> Option<String> {
+    if suspected.is_empty() {
+        return None;
+    }
+    let at: Vec<String> = suspected
+        .iter()
+        .map(|f| format!("{} (t = {:.4} s: {})", f.index, f.t, f.reason.label()))
+        .collect();
+    Some(format!(
+        "the rim's phase steps at frame(s) {} as after a dropped frame, but the turns' \
+         timing does not confirm a frame missing there (a φ oscillating about stationary \
+         rolling can do this): nothing was added to the capture clock",
+        at.join("; ")
     ))
 }
 

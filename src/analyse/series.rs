@@ -290,6 +290,7 @@ fn merge_known_flags(
             )
     };
     series.flags.retain(|f| !counted(f));
+    series.suspected_skips.retain(|f| !counted(f));
     series
         .flags
         .extend(known_flags.iter().map(|k| signal::FrameFlag {
@@ -297,7 +298,7 @@ fn merge_known_flags(
             ..k.clone()
         }));
     series.flags.sort_by_key(|f| f.index);
-    for flag in &mut series.flags {
+    for flag in series.flags.iter_mut().chain(&mut series.suspected_skips) {
         flag.index = frames[flag.index].index;
     }
 }
@@ -558,6 +559,12 @@ mod tests {
             reason: signal::SkipReason::RimPhaseStep {
                 phase_step: 1.0,
                 statistic: 100.0,
+                timing: Some(signal::TimingStep {
+                    step_s: -period,
+                    se_s: 0.1 * period,
+                    points: 24,
+                    confirmed: true,
+                }),
             },
         };
         let duplicate = signal::FrameFlag {

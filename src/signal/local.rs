@@ -227,6 +227,11 @@ impl PhaseTrack {
         interpolate(&self.psi, t)
     }
 
+    /// The (t, ψ) knots, sorted by time: the turning points with their counted ψ.
+    pub(crate) fn psi_knots(&self) -> &[(f64, f64)] {
+        &self.psi
+    }
+
     /// φ and φ̇ at `t`.
     pub(crate) fn phi_at(&self, t: f64) -> Option<(f64, f64)> {
         interpolate(&self.phi, t)

@@ -131,7 +131,8 @@ pub use peaks::{
 };
 pub use rim::{RimModel, SideViewRim, ThesisRim};
 pub use skips::{
-    FrameFlag, SkipReason, flags_within, missing_frames, strip_angle_steps, timestamp_gaps,
+    FrameFlag, SkipReason, TimingStep, flags_within, missing_frames, strip_angle_steps,
+    timestamp_gaps,
 };
 pub use strip::{
     StripSeries, StripStop, derivative, moving_average, strip_series, strip_stop_time,
@@ -560,8 +561,13 @@ pub struct StateSeries {
     pub states: Vec<FrameState>,
     /// β analysis, for two-view clips.
     pub strip: Option<StripAnalysis>,
-    /// Frame-skip flags over the whole clip, timed with the halt at 0.
+    /// Frame-skip flags over the whole clip, timed with the halt at 0: frames missing
+    /// beyond doubt ([`SkipReason::confirmed`]).
     pub flags: Vec<FrameFlag>,
+    /// Rim phase steps the turns' timing does not confirm: reported, never counted
+    /// as a frame missing from the capture clock.
+    #[serde(default)]
+    pub suspected_skips: Vec<FrameFlag>,
 }
 
 /// Runs the whole stage on one clip: `t` \[s\], `z_rim` \[m\] (NaN: no edge) and, for
@@ -608,12 +614,14 @@ pub fn analyse(
     for flag in &mut flags {
         flag.t = halt.shifted_t[flag.index];
     }
+    let (flags, suspected_skips) = flags.into_iter().partition(|f| f.reason.confirmed());
     Ok(StateSeries {
         halt,
         peaks,
         states,
         strip,
         flags,
+        suspected_skips,
     })
 }
 

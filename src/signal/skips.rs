@@ -45,6 +45,11 @@ pub enum SkipReason {
         phase_step: f64,
         /// (SSR without − SSR with the step) / (residual variance with it).
         statistic: f64,
+        /// The step the turns' timing shows there ([`timing_step`]); `None` with too
+        /// few turning points on either side, and in results written before it was
+        /// measured.
+        #[serde(default)]
+        timing: Option<TimingStep>,
     },
     /// The frame repeats the previous one (`footage::RepeatGauge`): its capture is
     /// missing, and the frame is left out of the fits.
@@ -77,6 +82,15 @@ impl SkipReason {
         }
     }
 
+    /// Whether the flag shows a frame missing beyond doubt: every kind does but a rim
+    /// phase step, which does when the turns' timing confirms it ([`TimingStep`]).
+    pub fn confirmed(&self) -> bool {
+        match self {
+            SkipReason::RimPhaseStep { timing, .. } => timing.is_some_and(|s| s.confirmed),
+            _ => true,
+        }
+    }
+
     /// A short description for a person looking at the frame.
     pub fn label(&self) -> String {
         match self {
@@ -94,10 +108,22 @@ impl SkipReason {
                     step.to_degrees()
                 )
             }
-            SkipReason::RimPhaseStep { phase_step, .. } => format!(
-                "the rim's phase jumps by {:.2}° (dropped frame?)",
-                phase_step.to_degrees()
-            ),
+            SkipReason::RimPhaseStep {
+                phase_step, timing, ..
+            } => {
+                let timing = match timing {
+                    Some(s) => format!(
+                        "; the turns' timing steps by {:.2} ± {:.2} ms",
+                        1e3 * s.step_s,
+                        1e3 * s.se_s
+                    ),
+                    None => "; too few turns either side to time".to_string(),
+                };
+                format!(
+                    "the rim's phase jumps by {:.2}° (dropped frame?){timing}",
+                    phase_step.to_degrees()
+                )
+            }
             SkipReason::DuplicatedFrame { step, neighbours } => format!(
                 "a copy of the frame before (changed {step:.2} grey levels, its neighbours \
                  {neighbours:.2})"
@@ -426,25 +452,136 @@ pub(crate) fn rim_phase_steps(
         })
         .collect();
     // Keep the strongest of candidates closer than a period.
-    let mut flags = Vec::new();
-    for &(k, statistic, step, m) in &candidates {
-        let strongest = candidates
-            .iter()
-            .filter(|&&(j, ..)| j.abs_diff(k) < m)
-            .all(|&(j, s, ..)| s < statistic || (s == statistic && j >= k));
-        if strongest {
-            let i = idx[k];
-            flags.push(FrameFlag {
-                index: i,
-                t: t[i],
+    let kept: Vec<(usize, f64, f64)> = candidates
+        .iter()
+        .filter(|&&(k, statistic, _, m)| {
+            candidates
+                .iter()
+                .filter(|&&(j, ..)| j.abs_diff(k) < m)
+                .all(|&(j, s, ..)| s < statistic || (s == statistic && j >= k))
+        })
+        .map(|&(k, statistic, step, _)| (k, statistic, step))
+        .collect();
+    // Each step is timed on the turning points between its neighbours, so that one
+    // skip's step does not bend the law another's is measured against.
+    let at = |j: Option<usize>, beyond: f64| j.map_or(beyond, |j| st[kept[j].0]);
+    kept.iter()
+        .enumerate()
+        .map(|(j, &(k, statistic, step))| {
+            let between = (
+                at(j.checked_sub(1), f64::NEG_INFINITY),
+                at(Some(j + 1).filter(|&j| j < kept.len()), f64::INFINITY),
+            );
+            let knots: Vec<(f64, f64)> = track
+                .psi_knots()
+                .iter()
+                .filter(|knot| knot.0 >= between.0 && knot.0 < between.1)
+                .copied()
+                .collect();
+            FrameFlag {
+                index: idx[k],
+                t: t[idx[k]],
                 reason: SkipReason::RimPhaseStep {
                     phase_step: step,
                     statistic,
+                    timing: timing_step(&knots, st[k], frame),
                 },
-            });
-        }
+            }
+        })
+        .collect()
+}
+
+/// The step in the turning points' times at a suspected dropped frame: the times of
+/// the peaks and troughs (the phase track's knots) on either side, each turn at its
+/// counted ψ, fitted as one smooth law t(ψ) (a cubic over [`TIMING_TURNS`] turns on
+/// each side) plus a step δ from the suspected frame on.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TimingStep {
+    /// δ \[s\]: the later turning points' times minus the law's through the earlier
+    /// ones. A capture missing before a frame whose timestamp follows on makes it one
+    /// frame period early, −Δt.
+    pub step_s: f64,
+    /// δ's standard error from the law's residuals \[s\].
+    pub se_s: f64,
+    /// Turning points fitted.
+    pub points: usize,
+    /// A frame missing (δ = −Δt) is [`MIN_LOG_ODDS`] likelier than none (δ = 0), and δ
+    /// lies within [`CONSISTENT_SIGMAS`] errors of −Δt.
+    pub confirmed: bool,
+}
+
+/// Turns on each side of a suspected skip whose turning points time it: 6, twelve
+/// points a side, so the law's cubic is held by as many points as the step.
+const TIMING_TURNS: f64 = 6.0;
+
+/// Fewest turning points on each side for a timing step: one turn's. The law's
+/// cubic is held by the side with more; near the clip's start or the halt the
+/// step's error grows with the side that has fewer.
+const MIN_TIMING_POINTS: usize = 2;
+
+/// Fewest degrees of freedom of the timing law's residuals (points − 5), for an
+/// error of the step worth the name.
+const MIN_TIMING_DOF: usize = 4;
+
+/// ln 100: a frame missing must be a hundred times likelier than none, given the
+/// timing step, before the capture clock counts it (the local fit that suspected it
+/// already made it a fair guess).
+const MIN_LOG_ODDS: f64 = 4.605_170_185_988_092;
+
+/// The timing step at `t_c` (halt-shifted, between the frames either side of the
+/// suspected skip) from the `knots` (t, ψ) of the phase track, for frames `frame_s`
+/// apart. A dropped frame moves every later turning point by one frame, whatever the
+/// rim's shape does; a φ oscillating about stationary rolling, which a local fit of
+/// the heights can take for a phase step, moves the turns' times by a wobble the
+/// smooth law leaves in its residuals, not by a frame.
+pub(crate) fn timing_step(knots: &[(f64, f64)], t_c: f64, frame_s: f64) -> Option<TimingStep> {
+    let psi_at = |t: f64| knots.iter().find(|k| k.0 >= t).map(|k| k.1);
+    let split = knots.partition_point(|k| k.0 < t_c);
+    let per_side = (2.0 * TIMING_TURNS) as usize;
+    let (before, after) = (
+        &knots[split.saturating_sub(per_side)..split],
+        &knots[split..(split + per_side).min(knots.len())],
+    );
+    if before.len() < MIN_TIMING_POINTS || after.len() < MIN_TIMING_POINTS {
+        return None;
     }
-    flags
+    let psi_c = psi_at(t_c)?;
+    let span = before
+        .iter()
+        .chain(after)
+        .map(|k| (k.1 - psi_c).abs())
+        .fold(0.0, f64::max);
+    // t = c0 + c1 u + c2 u² + c3 u³ + δ [after], u = (ψ − ψ_c)/span.
+    let rows: Vec<[f64; 5]> = before
+        .iter()
+        .map(|k| (k, 0.0))
+        .chain(after.iter().map(|k| (k, 1.0)))
+        .map(|(k, h)| {
+            let u = (k.1 - psi_c) / span;
+            [1.0, u, u * u, u * u * u, h]
+        })
+        .collect();
+    let times: Vec<f64> = before.iter().chain(after).map(|k| k.0 - t_c).collect();
+    let x = nalgebra::DMatrix::from_fn(rows.len(), 5, |i, j| rows[i][j]);
+    let y = nalgebra::DVector::from_column_slice(&times);
+    let normal = (x.transpose() * &x).cholesky()?;
+    let coef = normal.solve(&(x.transpose() * &y));
+    let dof = rows.len().checked_sub(5).filter(|&d| d >= MIN_TIMING_DOF)? as f64;
+    let variance = (&y - &x * &coef).norm_squared() / dof;
+    let se_s = (variance * normal.inverse()[(4, 4)]).sqrt();
+    let step_s = coef[4];
+    // The two simple hypotheses, δ = −Δt (a frame missing) and δ = 0 (none), by their
+    // likelihood ratio under the step's normal error; and δ no farther from −Δt than a
+    // drop's own step would stand.
+    let log_ratio = (step_s.powi(2) - (step_s + frame_s).powi(2)) / (2.0 * se_s * se_s);
+    let confirmed =
+        log_ratio >= MIN_LOG_ODDS && (step_s + frame_s).abs() <= CONSISTENT_SIGMAS * se_s;
+    Some(TimingStep {
+        step_s,
+        se_s,
+        points: rows.len(),
+        confirmed,
+    })
 }
 
 /// Whether two consecutive frame times in `t` lie more than `gap_factor` frame
@@ -462,7 +599,8 @@ const WINDOW_PERIODS: f64 = 1.5;
 
 /// The frames missing from a clip whose timestamps show no gap (a camera or an
 /// encoder that drops a capture and stamps the next frame a period on): the rim
-/// phase steps among `flags` (halt-shifted times) at no timestamp gap and at no
+/// phase steps among `flags` (halt-shifted times) that the turns' timing confirms
+/// ([`TimingStep`]), at no timestamp gap and at no
 /// duplicated or interpolated frame or beside one (`repeated`: file positions of
 /// frames kept without a capture of their own), whose test window of
 /// [`WINDOW_PERIODS`] oscillations on each side ends at least one more window before
@@ -491,7 +629,7 @@ pub fn missing_frames(flags: &[FrameFlag], frame_s: f64, repeated: &[usize]) -> 
                 .any(|&r| r + 1 >= f.index && r <= f.index + 1);
             // The test's window: WINDOW_PERIODS periods of 2π/phase_step frames.
             let window_s = WINDOW_PERIODS * 2.0 * PI / phase_step * frame_s;
-            !gap && !beside_repeated && f.t <= -2.0 * window_s
+            f.reason.confirmed() && !gap && !beside_repeated && f.t <= -2.0 * window_s
         })
         .cloned()
         .collect()
@@ -500,3 +638,63 @@ pub fn missing_frames(flags: &[FrameFlag], frame_s: f64, repeated: &[usize]) -> 
 /// Below this many frames per oscillation the local fits of the phase-step test are
 /// too short to be trusted (the last few oscillations before the halt).
 const MIN_FRAMES_PER_PERIOD: usize = 6;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    const FRAME: f64 = 1.0 / 480.0;
+
+    /// Turning points half a turn apart on the stationary-rolling timing law
+    /// t = −c (ψ_end − ψ)^q (n = 0.6; about 11 frames a half-turn at the start, the
+    /// whole over 1 s), each time with a 0.1 ms error, and `shift(t)` added to the
+    /// times.
+    fn knots(seed: u64, shift: impl Fn(f64) -> f64) -> Vec<(f64, f64)> {
+        let (q, c, psi_end) = (1.0 / 0.7, 5.5e-4, 61.0 * PI);
+        let mut rng = SplitMix64::new(seed);
+        (0..60)
+            .map(|k| {
+                let psi = k as f64 * PI;
+                let t = -c * (psi_end - psi).powf(q);
+                (t + shift(t) + 1e-4 * rng.gaussian(), psi)
+            })
+            .collect()
+    }
+
+    /// A frame missing at t_c moves every later turning point a frame early: the
+    /// timing step reads −Δt and confirms it, for any noise seed.
+    #[test]
+    fn a_dropped_frame_steps_the_turns_timing_by_a_frame() {
+        let t_c = -0.6;
+        for seed in 1..=20 {
+            let knots = knots(seed, |t| if t >= t_c { -FRAME } else { 0.0 });
+            let step = timing_step(&knots, t_c, FRAME).expect("enough turns");
+            assert!(step.confirmed, "seed {seed}: {step:?}");
+            assert!((step.step_s + FRAME).abs() < 4.0 * step.se_s, "{step:?}");
+            assert_eq!(step.points, 24);
+        }
+    }
+
+    /// With no frame missing the step is noise, and a wobble of the turns' times
+    /// (a φ oscillating about stationary rolling: ±0.5 ms every 2.7 turns, which a
+    /// local fit of the heights can take for a phase step) confirms no drop.
+    #[test]
+    fn no_frame_missing_confirms_no_drop_under_a_wobble() {
+        for seed in 1..=20 {
+            for wobble in [0.0, 5e-4] {
+                let knots = knots(seed, |t| wobble * (2.0 * PI * t / 0.06).sin());
+                let step = timing_step(&knots, -0.6, FRAME).expect("enough turns");
+                assert!(!step.confirmed, "seed {seed}, wobble {wobble}: {step:?}");
+            }
+        }
+    }
+
+    /// Without a turn on one side (the clip's first frames) there is no step to time.
+    #[test]
+    fn no_timing_without_turns_on_both_sides() {
+        let knots = knots(1, |_| 0.0);
+        let first = knots[0].0;
+        assert_eq!(timing_step(&knots, first + 0.5 * FRAME, FRAME), None);
+    }
+}

@@ -1885,6 +1885,12 @@ fn a_frame_missing_from_the_clock_is_a_phase_step_clear_of_the_halt() {
         reason: SkipReason::RimPhaseStep {
             phase_step: 2.0 * PI / 8.0,
             statistic: 600.0,
+            timing: Some(TimingStep {
+                step_s: -frame,
+                se_s: 0.1 * frame,
+                points: 24,
+                confirmed: true,
+            }),
         },
     };
     let gap = FrameFlag {
@@ -1931,6 +1937,7 @@ fn a_flag_kind_is_its_result_json_tag() {
         SkipReason::RimPhaseStep {
             phase_step: 0.8,
             statistic: 600.0,
+            timing: None,
         },
         SkipReason::DuplicatedFrame {
             step: 0.1,
