@@ -25,6 +25,7 @@ use eulerdisk::render::{
 };
 use eulerdisk::report::compare::{comparison_dir, write_comparison};
 use eulerdisk::report::experiment::write_experiment;
+use eulerdisk::report::failure::write_failure;
 use eulerdisk::report::simulation::{TrajectoryWriter, write_simulation};
 use eulerdisk::report::study::{StudyReportOptions, write_published_report, write_study_report};
 use eulerdisk::stats::VarianceModel;
@@ -623,6 +624,26 @@ fn run(cli: Cli) -> Result<Status> {
     }
 }
 
+/// The error of a refused clip, with its failure page written to `out`
+/// ([`write_failure`]) unless `out` holds an earlier result, which is kept.
+fn explain_failure(clip: &Path, out: &Path, failure: &analyse::Failure) -> anyhow::Error {
+    let why = &failure.error;
+    if out.join("result.json").is_file() {
+        return anyhow::anyhow!(
+            "{why}\n{} is kept: it holds an earlier result, which a failure page does not \
+             replace",
+            out.display()
+        );
+    }
+    match eulerdisk::output::write_folder(out, |dir| write_failure(dir, clip, failure)) {
+        Ok(()) => anyhow::anyhow!(
+            "{why}\nnot measured: the reason, what to try and what was found are on {}",
+            out.join("index.html").display()
+        ),
+        Err(e) => anyhow::anyhow!("{why}\nnot measured, and its failure page failed: {e}"),
+    }
+}
+
 /// A progress bar on a terminal; `None` (plain log lines) otherwise, e.g. in Slurm logs.
 fn progress_bar(len: u64, what: &str) -> Option<ProgressBar> {
     if !std::io::stderr().is_terminal() {
@@ -662,7 +683,7 @@ fn run_analyse(
         );
     }
     let bar = progress_bar(0, "frames");
-    let (experiment, kept) = analyse::analyse_clip_keeping(
+    let analysed = analyse::analyse_clip_explaining(
         clip,
         &config,
         decoding,
@@ -673,10 +694,14 @@ fn run_analyse(
                 bar.set_position(done as u64);
             }
         },
-    )?;
+    );
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
+    let (experiment, kept) = match analysed {
+        Ok(analysed) => analysed,
+        Err(failure) => return Err(explain_failure(clip, &out, &failure)),
+    };
     eulerdisk::output::write_folder(&out, |dir| {
         write_experiment(dir, &experiment, overlay.as_ref(), kept.as_ref())
     })?;

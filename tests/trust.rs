@@ -93,6 +93,57 @@ fn a_clip_stored_at_playback_rate_is_blamed_on_its_frame_rate() {
         err.contains("slow.mp4: probably the frame rate") && err.contains("set `fps`"),
         "{err}"
     );
+    // Issue 72 §6: the refusal explains itself on a page of its own, with the rest
+    // frame and the heights as measured, and says where it is.
+    let page = dir.path().join("out/slow.mp4");
+    assert!(err.contains("out/slow.mp4/index.html"), "{err}");
+    let record: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(page.join("failure.json")).unwrap()).unwrap();
+    assert_eq!(record["stage"], "the signal stage and the fits", "{record}");
+    assert!(
+        record["reason"]
+            .as_str()
+            .unwrap()
+            .contains("probably the frame rate"),
+        "{record}"
+    );
+    assert!(!record["try_next"].as_array().unwrap().is_empty());
+    let html = std::fs::read_to_string(page.join("index.html")).unwrap();
+    assert!(
+        html.contains("not measured") && html.contains("<svg"),
+        "{html}"
+    );
+    for file in ["calibration.png", "heights.svg", "heights.png"] {
+        assert!(page.join(file).is_file(), "{file}");
+    }
+    assert!(!page.join("result.json").exists());
+
+    // A failure page never replaces an earlier result: the clip measured at its true
+    // rate into a folder, then the slowed one forced into the same folder.
+    std::fs::copy(fixture("side-dark-n050.mp4"), dir.path().join("good.mp4")).unwrap();
+    let out = eulerdisk(dir.path(), &["analyse", "good.mp4", "-o", "kept"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let before = std::fs::read(dir.path().join("kept/result.json")).unwrap();
+    let out = eulerdisk(
+        dir.path(),
+        &["analyse", "slow.mp4", "-o", "kept", "--force"],
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("kept is kept: it holds an earlier result"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(dir.path().join("kept/result.json")).unwrap(),
+        before
+    );
+    assert!(!dir.path().join("kept/failure.json").exists());
 }
 
 /// Issue 13, property: random bytes and random TOML never panic. Configs built from

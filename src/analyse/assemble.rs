@@ -174,6 +174,15 @@ fn experiment_plan(
 
 /// PNG bytes of a diagnostic image; empty if encoding fails (the images are for
 /// looking at, never an input to a number).
+/// The rest frame with the points the rest frames found (fig. 3.3), as PNG: for a
+/// failure page, before the scale's own calibration report exists.
+pub(super) fn calibration_png(rest: &RestCalibration) -> Vec<u8> {
+    png(&diagnostics::calibration_image(
+        &rest.rest_side.view(),
+        &rest.calibration.calibration,
+    ))
+}
+
 fn png(image: &image::RgbImage) -> Vec<u8> {
     crate::output::png_bytes(image).unwrap_or_default()
 }

@@ -134,11 +134,6 @@ pub fn analyse_clip_decoding(
 /// makes (the measurement overlay keeps its pictures, so that it need not decode the
 /// clip again), and returning what the last span's keeper kept.
 ///
-/// The thesis's chain: open, calibrate on the rest frames, measure every frame and
-/// run the signal stage (on a span grown back as the fits need), fit the energy
-/// while the laws settle the halt, then the zero's share of the intervals, the
-/// checks and the result.
-///
 /// # Errors
 /// As [`analyse_clip`].
 pub fn analyse_clip_keeping<K: FrameKeeping>(
@@ -148,10 +143,51 @@ pub fn analyse_clip_keeping<K: FrameKeeping>(
     keeping: Option<&K>,
     progress: &dyn Fn(usize, Option<usize>),
 ) -> Result<(Experiment, Option<K::Kept>), AnalyseError> {
+    analyse_clip_explaining(clip, config, decoding, keeping, progress).map_err(|f| f.error)
+}
+
+/// What the chain had found when a stage refused the clip: the failure page's
+/// evidence (issue 72 §6).
+#[derive(Debug, Default)]
+pub struct Partial {
+    /// The rest frame with the calibration points (PNG), once the clip was calibrated.
+    pub calibration_png: Option<Vec<u8>>,
+    /// The rim heights as measured, once every frame was read: (capture time \[s\],
+    /// z_rim \[px\], NaN where no edge was found) per frame.
+    pub heights: Option<(Vec<f64>, Vec<f64>)>,
+}
+
+/// A clip the chain refused: why, and what it had found before.
+#[derive(Debug)]
+pub struct Failure {
+    pub error: AnalyseError,
+    pub partial: Partial,
+}
+
+/// [`analyse_clip_keeping`], keeping on a refusal what the stages before it found.
+///
+/// The thesis's chain: open, calibrate on the rest frames, measure every frame and
+/// run the signal stage (on a span grown back as the fits need), fit the energy
+/// while the laws settle the halt, then the zero's share of the intervals, the
+/// checks and the result.
+///
+/// # Errors
+/// As [`analyse_clip`], with the [`Partial`] evidence.
+pub fn analyse_clip_explaining<K: FrameKeeping>(
+    clip: &Path,
+    config: &ExperimentConfig,
+    decoding: Decoding,
+    keeping: Option<&K>,
+    progress: &dyn Fn(usize, Option<usize>),
+) -> Result<(Experiment, Option<K::Kept>), Box<Failure>> {
+    let mut partial = Partial::default();
+    let refused = |error, partial| Box::new(Failure { error, partial });
     let params = config.disk_params();
-    let mut opened = open::open_clip(clip, config)?;
-    let rest = calibrate::calibrate(clip, &mut opened, config, &params)?;
-    let (measured, decoded, kept) = span::measure_spans(
+    let mut opened = open::open_clip(clip, config).map_err(|e| refused(e, Partial::default()))?;
+    let rest = calibrate::calibrate(clip, &mut opened, config, &params)
+        .map_err(|e| refused(e, Partial::default()))?;
+    partial.calibration_png = Some(assemble::calibration_png(&rest));
+    let measured = span::measure_spans(
         clip,
         &mut opened,
         &rest,
@@ -160,10 +196,19 @@ pub fn analyse_clip_keeping<K: FrameKeeping>(
         decoding,
         keeping,
         progress,
-    )?;
-    let settled = halt::settle(clip, config, &params, &rest, measured)?;
+        &mut partial,
+    );
+    let (measured, decoded, kept) = match measured {
+        Ok(m) => m,
+        Err(error) => return Err(refused(error, partial)),
+    };
+    let settled = match halt::settle(clip, config, &params, &rest, measured) {
+        Ok(s) => s,
+        Err(error) => return Err(refused(error, partial)),
+    };
     let fitted = checks::finish_fits(config, &params, settled);
-    let experiment = assemble::experiment(clip, config, params, &opened, rest, decoded, fitted)?;
+    let experiment = assemble::experiment(clip, config, params, &opened, rest, decoded, fitted)
+        .map_err(|error| refused(error, partial))?;
     Ok((experiment, kept))
 }
 

@@ -485,6 +485,16 @@ pub(super) fn rim_series(frames: &[FrameRecord]) -> (Vec<f64>, Vec<f64>) {
     (t, z)
 }
 
+/// Each frame's capture time \[s\] and z_rim \[px\] (NaN with no edge).
+pub(super) fn rim_series_px(frames: &[FrameRecord]) -> (Vec<f64>, Vec<f64>) {
+    let t = frames.iter().map(|f| f.t_capture).collect();
+    let z = frames
+        .iter()
+        .map(|f| f.z_rim_px.unwrap_or(f64::NAN))
+        .collect();
+    (t, z)
+}
+
 /// The signal stage's settings for a clip measured at `metres_per_px`.
 pub(super) fn signal_config(window_s: f64, metres_per_px: f64) -> SignalConfig {
     SignalConfig {

@@ -289,6 +289,7 @@ pub(super) fn measure_spans<K: FrameKeeping>(
     decoding: Decoding,
     keeping: Option<&K>,
     progress: &dyn Fn(usize, Option<usize>),
+    partial: &mut super::Partial,
 ) -> Result<(MeasuredSpan, DecodedSpan, Option<K::Kept>), AnalyseError> {
     let window_s = config.window_s();
     let plan = SpanPlan::new(opened.index.take(), decoding, opened.expected, &opened.fps);
@@ -299,6 +300,7 @@ pub(super) fn measure_spans<K: FrameKeeping>(
             clip, opened, rest, &plan, first, config, params, keeping, progress,
         )
         .and_then(|(frames, kept)| {
+            partial.heights = Some(series::rim_series_px(&frames.frames));
             series::signal_stage(clip, frames, rest.two_view, config, params).map(|m| (m, kept))
         });
         let earlier = match &result {

@@ -4,6 +4,7 @@
 
 pub mod compare;
 pub mod experiment;
+pub mod failure;
 pub mod html;
 pub mod plot;
 pub mod simulation;
