@@ -776,10 +776,8 @@ fn run_study(args: &StudyArgs) -> Result<Status> {
         eprintln!("warning: {skipped}");
     }
     let out = OutputLock::acquire(&args.out)?;
-    let analyser = study::StudyAnalyser {
-        root: root.clone(),
-        overlay: (!args.no_overlay).then(OverlaySpec::default),
-    };
+    let analyser =
+        study::StudyAnalyser::new(root.clone(), (!args.no_overlay).then(OverlaySpec::default));
     let bar = progress_bar(0, "clips");
     let done = std::sync::atomic::AtomicUsize::new(0);
     let events = |event: StudyEvent| match event {

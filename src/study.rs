@@ -410,6 +410,15 @@ pub trait ClipAnalyser: Sync {
     /// A message naming the file, the frame where relevant, and the reason.
     fn analyse(&self, clip: &ClipEntry, dir: &Path, key: &str)
     -> Result<ExperimentSummary, String>;
+
+    /// Writes into `dir` the failure page of a clip [`Self::analyse`] refused, from
+    /// what it had found (issue 72 §6); `Ok(false)` when there is none to write.
+    ///
+    /// # Errors
+    /// A message naming the file that could not be written.
+    fn explain(&self, _clip: &ClipEntry, _dir: &Path) -> Result<bool, String> {
+        Ok(false)
+    }
 }
 
 /// Something a study tells its caller while it runs (the CLI shows it).
@@ -591,9 +600,32 @@ fn analyse_one(
             .map_err(Failed::Clip)?;
         output::write_json(&staging.join(SUMMARY_FILE), &summary)?;
         Ok::<_, Failed>(summary)
-    })
-    .map_err(|e| fail(e.to_string()))?;
-    Ok((summary, false))
+    });
+    match summary {
+        Ok(summary) => Ok((summary, false)),
+        Err(Failed::Clip(reason)) => {
+            explain_refusal(clip, &dir, analyser);
+            Err(fail(reason))
+        }
+        Err(e) => Err(fail(e.to_string())),
+    }
+}
+
+/// The failure page of a refused clip in its folder `dir`, unless the folder holds an
+/// earlier result, which a failure page never replaces. A page that cannot be
+/// written leaves the folder as it was: the study's report names the reason anyway.
+fn explain_refusal(clip: &ClipEntry, dir: &Path, analyser: &dyn ClipAnalyser) {
+    if dir.join(SUMMARY_FILE).is_file() {
+        return;
+    }
+    let written = output::write_folder(dir, |staging| match analyser.explain(clip, staging) {
+        Ok(true) => Ok(()),
+        Ok(false) => Err(Failed::Clip("no failure page".into())),
+        Err(reason) => Err(Failed::Clip(reason)),
+    });
+    if let Err(Failed::Write(e)) = written {
+        eprintln!("warning: {}: its failure page: {e}", clip.path.display());
+    }
 }
 
 /// Why one clip's folder was not written: the analysis, or the writing.
@@ -763,9 +795,22 @@ pub fn gather_experiments(
 /// [`analyse::analyse_clip`] and [`write_experiment`](crate::report::experiment::write_experiment)
 /// per clip.
 pub struct StudyAnalyser {
-    pub root: PathBuf,
+    root: PathBuf,
     /// The overlays each clip gets (`None`: none).
-    pub overlay: Option<crate::overlay::OverlaySpec>,
+    overlay: Option<crate::overlay::OverlaySpec>,
+    /// What each refused clip's analysis had found, for its failure page.
+    refused: std::sync::Mutex<std::collections::HashMap<PathBuf, Box<analyse::Failure>>>,
+}
+
+impl StudyAnalyser {
+    /// The analyser of the clips below `root`, with the overlays of `overlay`.
+    pub fn new(root: PathBuf, overlay: Option<crate::overlay::OverlaySpec>) -> Self {
+        StudyAnalyser {
+            root,
+            overlay,
+            refused: Default::default(),
+        }
+    }
 }
 
 impl ClipAnalyser for StudyAnalyser {
@@ -783,14 +828,23 @@ impl ClipAnalyser for StudyAnalyser {
     ) -> Result<ExperimentSummary, String> {
         let config =
             analyse::config_for(&self.root, &clip.path, None).map_err(|e| e.to_string())?;
-        let (experiment, kept) = analyse::analyse_clip_keeping(
+        let analysed = analyse::analyse_clip_explaining(
             &clip.path,
             &config,
             analyse::Decoding::NearTheEnd,
             self.overlay.as_ref(),
             &|_, _| {},
-        )
-        .map_err(|e| e.to_string())?;
+        );
+        let (experiment, kept) = match analysed {
+            Ok(analysed) => analysed,
+            Err(failure) => {
+                let reason = failure.error.to_string();
+                if let Ok(mut refused) = self.refused.lock() {
+                    refused.insert(clip.path.clone(), failure);
+                }
+                return Err(reason);
+            }
+        };
         crate::report::experiment::write_experiment(
             dir,
             &experiment,
@@ -803,6 +857,20 @@ impl ClipAnalyser for StudyAnalyser {
         meta.disk = meta.disk.or(config.disk_name.clone());
         meta.orientation = meta.orientation.or(config.orientation.clone());
         Ok(summary(&experiment, &clip.relative, meta, key))
+    }
+
+    fn explain(&self, clip: &ClipEntry, dir: &Path) -> Result<bool, String> {
+        let failure = self
+            .refused
+            .lock()
+            .ok()
+            .and_then(|mut refused| refused.remove(&clip.path));
+        match failure {
+            Some(failure) => crate::report::failure::write_failure(dir, &clip.path, &failure)
+                .map(|()| true)
+                .map_err(|e| e.to_string()),
+            None => Ok(false),
+        }
     }
 }
 

@@ -96,6 +96,25 @@ fn study_survives_bad_clips_resumes_and_merges_shards() {
     assert!(page.contains("no disk in view"));
     let clip_page = dir.path().join("full/experiments/euler/oak/run1.mp4");
     assert!(clip_page.join("index.html").is_file());
+    // Issue 72 §6: each refused clip has a failure page in its folder, naming the
+    // stage and the reason; the clip of black frames was refused at calibration.
+    for clip in ["corrupt.mp4", "truncated.mp4", "nodisk"] {
+        let folder = dir.path().join("full/experiments/euler/oak").join(clip);
+        let record: Value =
+            serde_json::from_slice(&std::fs::read(folder.join("failure.json")).unwrap()).unwrap();
+        assert_eq!(record["reason"].as_str().unwrap(), reason(clip), "{record}");
+        assert!(folder.join("index.html").is_file(), "{clip}");
+        assert!(!folder.join("summary.json").exists(), "{clip}");
+    }
+    let nodisk: Value = serde_json::from_slice(
+        &std::fs::read(
+            dir.path()
+                .join("full/experiments/euler/oak/nodisk/failure.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    assert_eq!(nodisk["stage"], "opening and calibration");
     // The turns' timing: its plot beside the energy's, and its n within its interval in
     // the exponents table (the last three columns: rsplitn gives the high end, the low
     // end, then n).
