@@ -993,7 +993,81 @@ pub fn compare(
     dir: &Path,
     options: &CompareOptions,
 ) -> Result<Comparison, CompareError> {
-    let model = options.model;
+    check_options(experiment, dir, options)?;
+    let (model, lead) = (options.model, options.lead_s);
+    let mut warnings = Vec::new();
+    let initial = estimate_initial_state(experiment, dir, lead)?;
+    let measured = measured_window(experiment, dir, lead, &mut warnings)?;
+    let (mu, mu_source, mu_warning) = match options.mu {
+        Some(mu) => (mu, "given".to_string(), None),
+        None => friction_for(experiment.plan.config.material.as_deref()),
+    };
+    warnings.extend(mu_warning);
+    let params = experiment.plan.disk;
+    let mut dissipation = Dissipation::new(model);
+    dissipation.augmented_exponent = options.augmented_exponent;
+    let base = SimulationSpec {
+        params,
+        mu,
+        eta: eta_guess(model),
+        dissipation,
+        initial: initial.state,
+        t_end: 2.0 * lead,
+        output_interval: OUTPUT_INTERVAL_S,
+        flat_angle: FLAT_ANGLE,
+        beta0: 0.0,
+    };
+    let fitted = fit_eta(base, &measured, dir, options, &mut warnings)?;
+    dissipation.augmented_exponent = fitted.p;
+    let trajectory = fitted.trajectory;
+    let (cost, errors, sampled) = misfit(&measured, &trajectory, lead);
+    let end_time_s = model_end_time(&trajectory, fitted.eta, &mut warnings);
+    let residual = Residual::at_end(&trajectory, &measured);
+    let post_flat = post_flat_prediction(
+        &params,
+        mu,
+        &measured,
+        residual.beta_dot,
+        concave_plate(experiment),
+        options.contact_gap_m,
+    );
+    Ok(Comparison {
+        experiment: dir.to_path_buf(),
+        clip: experiment.plan.clip.clone(),
+        eulerdisk_version: env!("CARGO_PKG_VERSION"),
+        options: *options,
+        dissipation,
+        equation: dissipation.equation().into(),
+        eta: fitted.eta,
+        tuned_eta: fitted.tuned_eta,
+        mu,
+        mu_source,
+        initial,
+        misfit: cost,
+        errors,
+        end_time_s,
+        end_time_error_s: end_time_s - lead,
+        observable_end_s: observable_end(&trajectory, &params, &measured),
+        energy_exponent: simulated_exponent(&trajectory),
+        analytic_exponent: dissipation.analytic_exponent(),
+        residual,
+        post_flat,
+        simulations: fitted.simulations,
+        warnings,
+        measured,
+        sampled,
+        trajectory,
+    })
+}
+
+/// Refuses options no comparison can run with: a lead that is no positive time, a
+/// contact gap outside (0, R), a friction coefficient that is not positive, or the
+/// model `none`, which never halts (Coulomb friction alone, §4.3).
+fn check_options(
+    experiment: &Experiment,
+    dir: &Path,
+    options: &CompareOptions,
+) -> Result<(), CompareError> {
     let opt_err = |reason: String| CompareError::Options {
         dir: dir.to_path_buf(),
         reason,
@@ -1020,14 +1094,23 @@ pub fn compare(
             "--mu must be a positive friction coefficient, got {mu}"
         )));
     }
-    if model == ModelKind::None {
+    if options.model == ModelKind::None {
         return Err(opt_err(
             "model `none` never halts (Coulomb friction alone, §4.3): nothing to tune".into(),
         ));
     }
-    let lead = options.lead_s;
-    let mut warnings = Vec::new();
-    let initial = estimate_initial_state(experiment, dir, lead)?;
+    Ok(())
+}
+
+/// The measured series within `lead` seconds of the halt: at least two peaks to
+/// compare with, β̇ turned to the thesis's sense (with a warning when the disk
+/// precessed the other way).
+fn measured_window(
+    experiment: &Experiment,
+    dir: &Path,
+    lead: f64,
+    warnings: &mut Vec<String>,
+) -> Result<Measured, CompareError> {
     let measured = Measured::from_experiment(experiment, lead);
     if measured.phi.len() < 2 {
         return Err(CompareError::Data {
@@ -1045,182 +1128,203 @@ pub fn compare(
                 .into(),
         );
     }
-    let (mu, mu_source, mu_warning) = match options.mu {
-        Some(mu) => (mu, "given".to_string(), None),
-        None => friction_for(experiment.plan.config.material.as_deref()),
+    Ok(measured)
+}
+
+/// η and the augmented exponent p as the options' method fixes them, with the
+/// model's trajectory for them.
+struct FittedEta {
+    eta: f64,
+    /// η tuned to the halt, if the tuning succeeded.
+    tuned_eta: Option<f64>,
+    p: f64,
+    trajectory: Trajectory,
+    /// Simulations run, the tuning's included.
+    simulations: usize,
+}
+
+/// η by the options' method. η is tuned to the halt first: that is the answer of the
+/// tuned method and the start of the least-squares fit (which starts from the
+/// model's guess, with a warning, when the tuning fails).
+fn fit_eta(
+    base: SimulationSpec,
+    measured: &Measured,
+    dir: &Path,
+    options: &CompareOptions,
+    warnings: &mut Vec<String>,
+) -> Result<FittedEta, CompareError> {
+    let model = options.model;
+    let (tuned, tuning_simulations) =
+        match tune_eta(&base, options.lead_s, eta_guess(model), TUNE_TOLERANCE_S) {
+            Ok(t) => {
+                let simulations = t.simulations;
+                (Some(t), simulations)
+            }
+            Err(source) if options.method == EtaMethod::TunedToHalt => {
+                return Err(CompareError::Tuning {
+                    dir: dir.to_path_buf(),
+                    model,
+                    source,
+                });
+            }
+            Err(e) => {
+                warnings.push(format!(
+                    "η could not be tuned to the halt ({e}); the fit starts from η = {:.3e}",
+                    eta_guess(model)
+                ));
+                (None, 0)
+            }
+        };
+    let tuned_eta = tuned.as_ref().map(|t| t.eta);
+    let mut fitted = match options.method {
+        EtaMethod::TunedToHalt => {
+            let Some(t) = tuned else {
+                return Err(CompareError::Options {
+                    dir: dir.to_path_buf(),
+                    reason: "η tuning produced no trajectory".into(),
+                });
+            };
+            FittedEta {
+                eta: t.eta,
+                tuned_eta,
+                p: options.augmented_exponent,
+                trajectory: t.trajectory,
+                simulations: 0,
+            }
+        }
+        EtaMethod::LeastSquares => {
+            let start = tuned_eta.unwrap_or(eta_guess(model)).ln();
+            least_squares_eta(base, measured, dir, options, start, tuned_eta)?
+        }
     };
-    warnings.extend(mu_warning);
-    let params = experiment.plan.disk;
-    let mut dissipation = Dissipation::new(model);
-    dissipation.augmented_exponent = options.augmented_exponent;
-    let base = SimulationSpec {
-        params,
-        mu,
-        eta: eta_guess(model),
-        dissipation,
-        initial: initial.state,
-        t_end: 2.0 * lead,
-        output_interval: OUTPUT_INTERVAL_S,
-        flat_angle: FLAT_ANGLE,
-        beta0: 0.0,
+    fitted.simulations += tuning_simulations;
+    Ok(fitted)
+}
+
+/// η, and p for the augmented contour, that minimise the misfit to the measured
+/// series, from ln η = `start`: Nelder–Mead on (ln η, p) with p kept within
+/// [−0.5, 2.5], or a bracketed 1-D search on ln η that looks downwards first (larger
+/// η end the motion before the halt). The trajectory is then run on past the data
+/// (to 3 leads, at least the lead and 0.5 s) to show where the model ends.
+fn least_squares_eta(
+    base: SimulationSpec,
+    measured: &Measured,
+    dir: &Path,
+    options: &CompareOptions,
+    start: f64,
+    tuned_eta: Option<f64>,
+) -> Result<FittedEta, CompareError> {
+    let (model, lead) = (options.model, options.lead_s);
+    let mut objective = Objective {
+        base,
+        measured,
+        lead,
+        evaluations: 0,
     };
-    let sim_err = |source| CompareError::Simulation {
+    let (ln_eta, p, cost) = if model == ModelKind::AugmentedContour {
+        let (x, cost) = nelder_mead_2d(
+            |x| {
+                if (-0.5..=2.5).contains(&x[1]) {
+                    objective.cost(x[0], x[1])
+                } else {
+                    f64::INFINITY
+                }
+            },
+            [start, options.augmented_exponent],
+            [-0.3, 0.1],
+            [1e-3, 1e-3],
+            120,
+        );
+        (x[0], x[1], cost)
+    } else {
+        let (x, cost) = minimise_1d(
+            |x| objective.cost(x, options.augmented_exponent),
+            start,
+            -0.2,
+            1e-3,
+        );
+        (x, options.augmented_exponent, cost)
+    };
+    if !cost.is_finite() {
+        return Err(CompareError::Fit {
+            dir: dir.to_path_buf(),
+            model,
+            reason: "every simulation tried failed or had an infinite misfit".into(),
+        });
+    }
+    let mut spec = base;
+    spec.eta = ln_eta.exp();
+    spec.dissipation.augmented_exponent = p;
+    spec.t_end = (3.0 * lead).max(lead + 0.5);
+    let trajectory = simulate(&spec).map_err(|source| CompareError::Simulation {
         dir: dir.to_path_buf(),
         model,
         source,
-    };
+    })?;
+    Ok(FittedEta {
+        eta: spec.eta,
+        tuned_eta,
+        p,
+        trajectory,
+        simulations: objective.evaluations + 1,
+    })
+}
 
-    // η tuned to the halt: the answer of the tuned method, the start of the fit.
-    let mut simulations = 0;
-    let tuned = match tune_eta(&base, lead, eta_guess(model), TUNE_TOLERANCE_S) {
-        Ok(t) => {
-            simulations += t.simulations;
-            Some(t)
-        }
-        Err(source) if options.method == EtaMethod::TunedToHalt => {
-            return Err(CompareError::Tuning {
-                dir: dir.to_path_buf(),
-                model,
-                source,
-            });
-        }
-        Err(e) => {
-            warnings.push(format!(
-                "η could not be tuned to the halt ({e}); the fit starts from η = {:.3e}",
-                eta_guess(model)
-            ));
-            None
-        }
-    };
-    let tuned_eta = tuned.as_ref().map(|t| t.eta);
-    let (eta, p, trajectory) = match options.method {
-        EtaMethod::TunedToHalt => {
-            let Some(t) = tuned else {
-                return Err(opt_err("η tuning produced no trajectory".into()));
-            };
-            (t.eta, options.augmented_exponent, t.trajectory)
-        }
-        EtaMethod::LeastSquares => {
-            let mut objective = Objective {
-                base,
-                measured: &measured,
-                lead,
-                evaluations: 0,
-            };
-            let start = tuned_eta.unwrap_or(eta_guess(model)).ln();
-            let (ln_eta, p, cost) = if model == ModelKind::AugmentedContour {
-                let (x, cost) = nelder_mead_2d(
-                    |x| {
-                        if (-0.5..=2.5).contains(&x[1]) {
-                            objective.cost(x[0], x[1])
-                        } else {
-                            f64::INFINITY
-                        }
-                    },
-                    [start, options.augmented_exponent],
-                    [-0.3, 0.1],
-                    [1e-3, 1e-3],
-                    120,
-                );
-                (x[0], x[1], cost)
-            } else {
-                // Downwards first: larger η end the motion before the halt.
-                let (x, cost) = minimise_1d(
-                    |x| objective.cost(x, options.augmented_exponent),
-                    start,
-                    -0.2,
-                    1e-3,
-                );
-                (x, options.augmented_exponent, cost)
-            };
-            simulations += objective.evaluations;
-            if !cost.is_finite() {
-                return Err(CompareError::Fit {
-                    dir: dir.to_path_buf(),
-                    model,
-                    reason: "every simulation tried failed or had an infinite misfit".into(),
-                });
-            }
-            let mut spec = base;
-            spec.eta = ln_eta.exp();
-            spec.dissipation.augmented_exponent = p;
-            spec.t_end = (3.0 * lead).max(lead + 0.5);
-            simulations += 1;
-            (spec.eta, p, simulate(&spec).map_err(sim_err)?)
-        }
-    };
-    dissipation.augmented_exponent = p;
-    let (cost, errors, sampled) = misfit(&measured, &trajectory, lead);
-    let end_time_s = match trajectory.end_reason {
-        EndReason::TimeLimit => f64::INFINITY,
-        _ => trajectory.end_time(),
-    };
+/// When the model ends \[s\]: ∞ for a run that had not halted by its time limit
+/// (with a warning naming `eta`).
+fn model_end_time(trajectory: &Trajectory, eta: f64, warnings: &mut Vec<String>) -> f64 {
     if trajectory.end_reason == EndReason::TimeLimit {
         warnings.push(format!(
             "the model with η = {eta:.3e} has not halted by t = {:.3} s",
             trajectory.end_time()
         ));
+        return f64::INFINITY;
     }
-    let observable_end_s = trajectory
+    trajectory.end_time()
+}
+
+/// The last time \[s\] at which the model's rim stands higher above the plate (2R sin φ)
+/// than the measurement's halt threshold: the end a camera would see.
+fn observable_end(
+    trajectory: &Trajectory,
+    params: &DiskParams,
+    measured: &Measured,
+) -> Option<f64> {
+    trajectory
         .samples
         .iter()
         .rev()
         .find(|s| 2.0 * params.radius * s.phi.sin() > measured.halt_threshold_m)
-        .map(|s| s.t);
-    let energy_exponent = simulated_exponent(&trajectory);
-    let end = trajectory.end;
-    let residual = Residual {
-        end_reason: trajectory.end_reason,
-        phi: end.phi,
-        psi_dot: end.psi_dot,
-        theta_dot: end.theta_dot,
-        beta_dot: end.beta_dot,
-        omega_z: end.omega_z,
-        measured_beta_dot: measured.beta_dot_at_halt,
-        thesis_model: THESIS_MODEL_RESIDUAL,
-        thesis_measured: THESIS_MEASURED_RESIDUAL,
-    };
-    let concave = experiment
+        .map(|s| s.t)
+}
+
+/// Whether the experiment's plate is concave (its material says so), for the
+/// post-flat prediction (§4.8).
+fn concave_plate(experiment: &Experiment) -> bool {
+    experiment
         .plan
         .config
         .material
         .as_deref()
-        .is_some_and(|m| m.to_lowercase().contains("concave"));
-    let post_flat = post_flat_prediction(
-        &params,
-        mu,
-        &measured,
-        residual.beta_dot,
-        concave,
-        options.contact_gap_m,
-    );
-    Ok(Comparison {
-        experiment: dir.to_path_buf(),
-        clip: experiment.plan.clip.clone(),
-        eulerdisk_version: env!("CARGO_PKG_VERSION"),
-        options: *options,
-        dissipation,
-        equation: dissipation.equation().into(),
-        eta,
-        tuned_eta,
-        mu,
-        mu_source,
-        initial,
-        misfit: cost,
-        errors,
-        end_time_s,
-        end_time_error_s: end_time_s - lead,
-        observable_end_s,
-        energy_exponent,
-        analytic_exponent: dissipation.analytic_exponent(),
-        residual,
-        post_flat,
-        simulations,
-        warnings,
-        measured,
-        sampled,
-        trajectory,
-    })
+        .is_some_and(|m| m.to_lowercase().contains("concave"))
+}
+
+impl Residual {
+    /// The residual spin at the end of `trajectory`, beside the `measured` β̇.
+    fn at_end(trajectory: &Trajectory, measured: &Measured) -> Self {
+        let end = trajectory.end;
+        Residual {
+            end_reason: trajectory.end_reason,
+            phi: end.phi,
+            psi_dot: end.psi_dot,
+            theta_dot: end.theta_dot,
+            beta_dot: end.beta_dot,
+            omega_z: end.omega_z,
+            measured_beta_dot: measured.beta_dot_at_halt,
+            thesis_model: THESIS_MODEL_RESIDUAL,
+            thesis_measured: THESIS_MEASURED_RESIDUAL,
+        }
+    }
 }
 
 /// n of E = A_e (t0 − t)^n fitted to the simulated energy (eq. 4.94) over the whole

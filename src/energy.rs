@@ -670,6 +670,9 @@ fn interval_quantile(dof: usize, bandwidth: f64, points: usize) -> Result<f64, F
         + fixed_b_excess(bandwidth / points as f64))
 }
 
+/// The least-squares power law of [`fit_power_law`] with the search stopped after
+/// `max_iterations`, its covariance estimated over the samples and, where they span
+/// [`LEAST_TURN_BLOCKS`] of the `turns`, over those too (module docs).
 fn fit_with_limit(
     t: &[f64],
     energy: &[f64],
@@ -677,14 +680,63 @@ fn fit_with_limit(
     max_iterations: usize,
     turns: &[f64],
 ) -> Result<PowerLawFit, FitError> {
+    let parameters = check_samples(t, energy, halt)?;
+    let free = parameters == 3;
+    let scaled = ScaledSeries::new(t, energy, halt)?;
+    let solution = scaled.solve(max_iterations)?;
+    let (n, points) = (solution.n, scaled.tail.len());
+    let jac = scaled.jacobian(&solution);
+    let dof = points - parameters;
+    let ssr_scaled = solution.outcome.ssr;
+    let s2 = ssr_scaled / dof as f64;
+    let bread = inverse_normal_matrix(&jac)?;
+    let residuals = &solution.outcome.residuals;
+    let long_run = LongRun::over_samples_or_turns(t, &scaled.tail, residuals, &jac, &bread, turns)?;
+    let se_n_uncorrelated = (bread[(1, 1)] * s2).sqrt();
+    let a_e = scaled.e_scale * solution.amp * scaled.span.powf(-n);
+    let se = scaled.standard_errors(&long_run.cov_scaled, a_e, n)?;
+    let (t0, quantile) = (solution.t0, long_run.quantile);
+    let ci = |value: f64, se: f64| (value - quantile * se, value + quantile * se);
+    let ssr = ssr_scaled * scaled.e_scale * scaled.e_scale;
+    Ok(PowerLawFit {
+        a_e,
+        n,
+        t0,
+        se_a_e: se[0],
+        se_n: se[1],
+        se_n_uncorrelated,
+        bandwidth: long_run.bandwidth,
+        se_t0: free.then(|| se[2]),
+        ci95_a_e: ci(a_e, se[0]),
+        se_n_zero: 0.0,
+        ci95_n: ci(n, se[1]),
+        ci95_t0: free.then(|| ci(t0, se[2])),
+        halt_sighting: None,
+        r_squared: 1.0 - ssr / scaled.sst,
+        residual_rms: (ssr / points as f64).sqrt(),
+        points,
+        blocks: long_run.blocks,
+        dof,
+        iterations: solution.outcome.iterations,
+    })
+}
+
+/// The number of parameters of the fit (A_e and n, and t0 unless `halt` fixes it),
+/// once the samples are fit to give them: as many times as energies, more samples
+/// than parameters, a finite fixed t0, and every sample finite, with E > 0 and, for a
+/// fixed t0, before it.
+fn check_samples(t: &[f64], energy: &[f64], halt: HaltTime) -> Result<usize, FitError> {
     if t.len() != energy.len() {
         return Err(FitError::LengthMismatch {
             times: t.len(),
             energies: energy.len(),
         });
     }
-    let free = !matches!(halt, HaltTime::Fixed(_));
-    let parameters = if free { 3 } else { 2 };
+    let parameters = if matches!(halt, HaltTime::Fixed(_)) {
+        2
+    } else {
+        3
+    };
     if t.len() < parameters + 1 {
         return Err(FitError::TooFewPoints {
             needed: parameters + 1,
@@ -717,153 +769,179 @@ fn fit_with_limit(
             return Err(FitError::SampleAtOrAfterHalt { index, t: ti, t0 });
         }
     }
+    Ok(parameters)
+}
 
-    // Scaled problem: time in units of the data span T, measured back from the last
-    // sample; energy in units of its root mean square. Then y = a u^n with
-    // u = (t0 − t)/T = tail + d, d = (t0 − t_last)/T, and E = e_scale · a · (τ/T)^n.
-    let t_last = t.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let t_first = t.iter().copied().fold(f64::INFINITY, f64::min);
-    let span = t_last - t_first;
-    // The samples are finite here, so the span is too.
-    if span <= 0.0 {
-        return Err(FitError::degenerate(
-            "all samples are at the same time, so there is no decay to fit",
-        ));
-    }
-    let points = t.len();
-    let mean_energy = energy.iter().sum::<f64>() / points as f64;
-    let sst: f64 = energy.iter().map(|e| (e - mean_energy).powi(2)).sum();
-    if energy.iter().all(|&e| e == energy[0]) {
-        return Err(FitError::degenerate(
-            "the energy is the same in every sample, so it does not decay",
-        ));
-    }
-    let e_scale = (energy.iter().map(|e| e * e).sum::<f64>() / points as f64).sqrt();
-    let tail: Vec<f64> = t.iter().map(|ti| (t_last - ti) / span).collect();
-    let y = DVector::from_iterator(points, energy.iter().map(|e| e / e_scale));
-    let problem = Projection {
-        tail: &tail,
-        y: &y,
-        offset: match halt {
-            HaltTime::Fixed(t0) => Offset::Fixed((t0 - t_last) / span),
-            HaltTime::Free | HaltTime::Sighted(_) => Offset::Free,
-        },
-    };
+/// The samples in the units of the search: time in units of the data span T,
+/// measured back from the last sample; energy in units of its root mean square. Then
+/// y = a u^n with u = (t0 − t)/T = tail + d, d = (t0 − t_last)/T, and
+/// E = e_scale · a · (τ/T)^n.
+struct ScaledSeries {
+    /// The last sample's time \[s\].
+    t_last: f64,
+    /// The data span T \[s\].
+    span: f64,
+    /// The energies' root mean square \[J\].
+    e_scale: f64,
+    /// Σ (E − mean E)², for R² \[J²\].
+    sst: f64,
+    /// (t_last − t)/T of each sample.
+    tail: Vec<f64>,
+    /// E/e_scale of each sample.
+    y: DVector<f64>,
+    /// d, or free.
+    offset: Offset,
+}
 
-    let start = problem.starting_values();
-    let limits = Limits {
-        max_iterations,
-        max_step: MAX_STEP,
-    };
-    let outcome = lsq::minimise(&problem, start, limits).ok_or_else(|| {
-        FitError::degenerate(
-            "the starting power law is not finite (energies span too many decades)",
-        )
-    })?;
-    let p = &outcome.params;
-    let n = p[0];
-    let d = problem.offset(p.as_slice());
-    let t0 = t_last + d * span;
-    if free && d < PINNED_OFFSET {
-        return Err(FitError::HaltAtLastSample { t_last, n });
+/// The solution of the scaled problem.
+struct Solution {
+    /// The exponent n.
+    n: f64,
+    /// d = (t0 − t_last)/T.
+    d: f64,
+    /// t0 \[s\].
+    t0: f64,
+    /// a of y = a u^n.
+    amp: f64,
+    /// The search's outcome (residuals, ssr, iterations).
+    outcome: lsq::LsqFit,
+}
+
+impl ScaledSeries {
+    /// The scaled samples; an error if they span no time or the energy does not vary.
+    fn new(t: &[f64], energy: &[f64], halt: HaltTime) -> Result<Self, FitError> {
+        let t_last = t.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let t_first = t.iter().copied().fold(f64::INFINITY, f64::min);
+        let span = t_last - t_first;
+        // The samples are finite here, so the span is too.
+        if span <= 0.0 {
+            return Err(FitError::degenerate(
+                "all samples are at the same time, so there is no decay to fit",
+            ));
+        }
+        let points = t.len();
+        let mean_energy = energy.iter().sum::<f64>() / points as f64;
+        let sst: f64 = energy.iter().map(|e| (e - mean_energy).powi(2)).sum();
+        if energy.iter().all(|&e| e == energy[0]) {
+            return Err(FitError::degenerate(
+                "the energy is the same in every sample, so it does not decay",
+            ));
+        }
+        let e_scale = (energy.iter().map(|e| e * e).sum::<f64>() / points as f64).sqrt();
+        Ok(ScaledSeries {
+            t_last,
+            span,
+            e_scale,
+            sst,
+            tail: t.iter().map(|ti| (t_last - ti) / span).collect(),
+            y: DVector::from_iterator(points, energy.iter().map(|e| e / e_scale)),
+            offset: match halt {
+                HaltTime::Fixed(t0) => Offset::Fixed((t0 - t_last) / span),
+                HaltTime::Free | HaltTime::Sighted(_) => Offset::Free,
+            },
+        })
     }
-    if !outcome.converged {
-        return Err(FitError::NotConverged {
-            iterations: outcome.iterations,
+
+    /// Whether t0 is a parameter of the fit.
+    fn free(&self) -> bool {
+        matches!(self.offset, Offset::Free)
+    }
+
+    /// The Levenberg–Marquardt search of the projected problem from its starting
+    /// values, with the amplitude rescaled from (u/u_max)^n to u^n. Errors: t0 pinned
+    /// to the last sample, no convergence, or no positive finite amplitude.
+    fn solve(&self, max_iterations: usize) -> Result<Solution, FitError> {
+        let problem = Projection {
+            tail: &self.tail,
+            y: &self.y,
+            offset: self.offset,
+        };
+        let start = problem.starting_values();
+        let limits = Limits {
+            max_iterations,
+            max_step: MAX_STEP,
+        };
+        let outcome = lsq::minimise(&problem, start, limits).ok_or_else(|| {
+            FitError::degenerate(
+                "the starting power law is not finite (energies span too many decades)",
+            )
+        })?;
+        let p = &outcome.params;
+        let n = p[0];
+        let d = problem.offset(p.as_slice());
+        let t0 = self.t_last + d * self.span;
+        if self.free() && d < PINNED_OFFSET {
+            return Err(FitError::HaltAtLastSample {
+                t_last: self.t_last,
+                n,
+            });
+        }
+        if !outcome.converged {
+            return Err(FitError::NotConverged {
+                iterations: outcome.iterations,
+                n,
+                t0,
+            });
+        }
+        let amp = problem.amplitude(p.as_slice()) * (1.0 + d).powf(-n);
+        if !(amp.is_finite() && amp > 0.0) {
+            return Err(FitError::degenerate(
+                "the fitted amplitude is not a positive finite number",
+            ));
+        }
+        Ok(Solution {
             n,
+            d,
             t0,
-        });
+            amp,
+            outcome,
+        })
     }
 
-    // Statistics in the scaled parameters (a, n[, d]) of y = a u^n, then mapped to
-    // (A_e, n[, t0]). The search's amplitude refers to (u/u_max)^n; rescale it.
-    let amp = problem.amplitude(p.as_slice()) * (1.0 + d).powf(-n);
-    if !(amp.is_finite() && amp > 0.0) {
-        return Err(FitError::degenerate(
-            "the fitted amplitude is not a positive finite number",
-        ));
-    }
-    let mut jac = DMatrix::zeros(points, parameters);
-    for i in 0..points {
-        let u = tail[i] + d;
-        let f = u.powf(n);
-        jac[(i, 0)] = f;
-        jac[(i, 1)] = amp * f * u.ln();
-        if free {
-            jac[(i, 2)] = amp * n * f / u;
+    /// The Jacobian of y = a u^n at the solution with respect to the scaled
+    /// parameters (a, n[, d]), one row a sample.
+    fn jacobian(&self, solution: &Solution) -> DMatrix<f64> {
+        let Solution { n, d, amp, .. } = *solution;
+        let parameters = if self.free() { 3 } else { 2 };
+        let mut jac = DMatrix::zeros(self.tail.len(), parameters);
+        for (i, tail) in self.tail.iter().enumerate() {
+            let u = tail + d;
+            let f = u.powf(n);
+            jac[(i, 0)] = f;
+            jac[(i, 1)] = amp * f * u.ln();
+            if self.free() {
+                jac[(i, 2)] = amp * n * f / u;
+            }
         }
+        jac
     }
-    let dof = points - parameters;
-    let ssr_scaled = outcome.ssr;
-    let s2 = ssr_scaled / dof as f64;
-    let bread = inverse_normal_matrix(&jac)?;
-    let mut by_time: Vec<usize> = (0..points).collect();
-    by_time.sort_by(|&i, &j| tail[j].total_cmp(&tail[i]));
-    // The long-run covariance over the samples, and where the series spans enough
-    // turns over them too; the wider interval of n is kept (module docs).
-    let resid: Vec<f64> = by_time.iter().map(|&i| outcome.residuals[i]).collect();
-    let scores: Vec<DVector<f64>> = by_time
-        .iter()
-        .map(|&i| jac.row(i).transpose() * outcome.residuals[i])
-        .collect();
-    let each_sample: Vec<usize> = (0..points).collect();
-    let mut long_run = LongRun::over_blocks(&bread, &resid, &scores, &each_sample, parameters)?;
-    let turn: Vec<usize> = by_time
-        .iter()
-        .map(|&i| turns.partition_point(|&start| start <= t[i]))
-        .collect();
-    if turn[points - 1] - turn[0] + 1 >= LEAST_TURN_BLOCKS {
-        let over_turns = LongRun::over_blocks(&bread, &resid, &scores, &turn, parameters)?;
-        if over_turns.half_width_n() > long_run.half_width_n() {
-            long_run = over_turns;
+
+    /// The standard errors of (A_e, n[, t0]), mapped from the covariance `cov_scaled`
+    /// of (a, n[, d]) by their Jacobian at A_e = `a_e` and `n`; an error if one is not
+    /// finite (the parameters are not separately determined).
+    fn standard_errors(
+        &self,
+        cov_scaled: &DMatrix<f64>,
+        a_e: f64,
+        n: f64,
+    ) -> Result<Vec<f64>, FitError> {
+        let parameters = cov_scaled.nrows();
+        let mut g = DMatrix::zeros(parameters, parameters);
+        g[(0, 0)] = self.e_scale * self.span.powf(-n);
+        g[(0, 1)] = -a_e * self.span.ln();
+        g[(1, 1)] = 1.0;
+        if self.free() {
+            g[(2, 2)] = self.span;
         }
+        let cov = &g * cov_scaled * g.transpose();
+        let se: Vec<f64> = (0..parameters).map(|j| cov[(j, j)].sqrt()).collect();
+        if se.iter().any(|s| !s.is_finite()) {
+            return Err(FitError::degenerate(
+                "the parameter covariance is not finite (the parameters are not separately determined)",
+            ));
+        }
+        Ok(se)
     }
-    let LongRun {
-        cov_scaled,
-        bandwidth,
-        blocks,
-        quantile,
-    } = long_run;
-    let se_n_uncorrelated = (bread[(1, 1)] * s2).sqrt();
-    let a_e = e_scale * amp * span.powf(-n);
-    // Jacobian of (A_e, n, t0) with respect to (a, n, d).
-    let mut g = DMatrix::zeros(parameters, parameters);
-    g[(0, 0)] = e_scale * span.powf(-n);
-    g[(0, 1)] = -a_e * span.ln();
-    g[(1, 1)] = 1.0;
-    if free {
-        g[(2, 2)] = span;
-    }
-    let cov = &g * cov_scaled * g.transpose();
-    let se: Vec<f64> = (0..parameters).map(|j| cov[(j, j)].sqrt()).collect();
-    if se.iter().any(|s| !s.is_finite()) {
-        return Err(FitError::degenerate(
-            "the parameter covariance is not finite (the parameters are not separately determined)",
-        ));
-    }
-    let ci = |value: f64, se: f64| (value - quantile * se, value + quantile * se);
-    let ssr = ssr_scaled * e_scale * e_scale;
-    Ok(PowerLawFit {
-        a_e,
-        n,
-        t0,
-        se_a_e: se[0],
-        se_n: se[1],
-        se_n_uncorrelated,
-        bandwidth,
-        se_t0: free.then(|| se[2]),
-        ci95_a_e: ci(a_e, se[0]),
-        se_n_zero: 0.0,
-        ci95_n: ci(n, se[1]),
-        ci95_t0: free.then(|| ci(t0, se[2])),
-        halt_sighting: None,
-        r_squared: 1.0 - ssr / sst,
-        residual_rms: (ssr / points as f64).sqrt(),
-        points,
-        blocks,
-        dof,
-        iterations: outcome.iterations,
-    })
 }
 
 /// A prewhitened Newey–West covariance of the fit's scaled parameters, estimated over
@@ -881,6 +959,42 @@ struct LongRun {
 }
 
 impl LongRun {
+    /// The covariance over the samples, and where the series spans
+    /// [`LEAST_TURN_BLOCKS`] of the `turns` (the peaks' times \[s\]), over those too,
+    /// the one with the wider interval of n kept (module docs). The residuals and
+    /// scores g_i = J_iᵀ r_i are summed in time order: by the samples' `tail`, the
+    /// scaled time back from the last one, with `t` their times \[s\].
+    fn over_samples_or_turns(
+        t: &[f64],
+        tail: &[f64],
+        residuals: &DVector<f64>,
+        jac: &DMatrix<f64>,
+        bread: &DMatrix<f64>,
+        turns: &[f64],
+    ) -> Result<Self, FitError> {
+        let (points, parameters) = jac.shape();
+        let mut by_time: Vec<usize> = (0..points).collect();
+        by_time.sort_by(|&i, &j| tail[j].total_cmp(&tail[i]));
+        let resid: Vec<f64> = by_time.iter().map(|&i| residuals[i]).collect();
+        let scores: Vec<DVector<f64>> = by_time
+            .iter()
+            .map(|&i| jac.row(i).transpose() * residuals[i])
+            .collect();
+        let each_sample: Vec<usize> = (0..points).collect();
+        let over_samples = Self::over_blocks(bread, &resid, &scores, &each_sample, parameters)?;
+        let turn: Vec<usize> = by_time
+            .iter()
+            .map(|&i| turns.partition_point(|&start| start <= t[i]))
+            .collect();
+        if turn[points - 1] - turn[0] + 1 >= LEAST_TURN_BLOCKS {
+            let over_turns = Self::over_blocks(bread, &resid, &scores, &turn, parameters)?;
+            if over_turns.half_width_n() > over_samples.half_width_n() {
+                return Ok(over_turns);
+            }
+        }
+        Ok(over_samples)
+    }
+
     /// The covariance from residuals `resid` and scores g_i = J_iᵀ r_i in time order,
     /// summed over runs of equal `block` (a label per sample), with `bread` = (JᵀJ)⁻¹.
     fn over_blocks(

@@ -11,7 +11,7 @@ use clap::{Args, Parser, Subcommand};
 use eulerdisk::compare::CompareOptions;
 use eulerdisk::footage::Orientation;
 use eulerdisk::model::dissipation::{Dissipation, ModelKind};
-use eulerdisk::model::params::Preset;
+use eulerdisk::model::params::{DiskParams, Preset};
 use eulerdisk::model::simulate::{
     InitialState, MAX_SAMPLES, RunSummary, SimulationSpec, simulate, simulate_streaming,
 };
@@ -19,9 +19,9 @@ use eulerdisk::model::tuning::tune_eta;
 use eulerdisk::output::OutputLock;
 use eulerdisk::overlay::{OverlaySpec, write_model_overlay};
 use eulerdisk::render::{
-    CaptureJitter, ClipEncoding, DEFAULT_CRF, Effects, HdrTransfer, Nutation, Plate, PostFlatSpin,
-    PowerLaw, RenderSpec, Renderer, SampleStorage, Scenery, SlowedSection, Timing, add_nutation,
-    power_law_motion, trajectory_motion, write_clip,
+    CaptureJitter, ClipEncoding, DEFAULT_CRF, Effects, HdrTransfer, Motion, Nutation, Plate,
+    PostFlatSpin, PowerLaw, RenderSpec, Renderer, SampleStorage, Scenery, SlowedSection, Timing,
+    add_nutation, power_law_motion, trajectory_motion, write_clip,
 };
 use eulerdisk::report::compare::{comparison_dir, write_comparison};
 use eulerdisk::report::experiment::write_experiment;
@@ -977,61 +977,110 @@ fn run_render(args: &RenderArgs) -> Result<()> {
     }
     let params = args.preset.params();
     let motion = if args.simulate {
-        let eta = match (args.eta, args.model.thesis_eta()) {
-            (Some(eta), _) => eta,
-            (None, Some(eta)) => eta,
-            (None, None) => bail!("give --eta for the `{:?}` model", args.model),
-        };
-        let dissipation = Dissipation::new(args.model);
-        let mut spec = SimulationSpec::thesis_default(params, dissipation, eta);
-        spec.t_end = 5.0;
-        spec.mu = args.mu;
-        spec.beta0 = args.beta0;
-        let trajectory = simulate(&spec).context("simulation for render failed")?;
-        trajectory_motion(
-            &params,
-            &trajectory,
-            args.beta0,
-            args.mu,
-            args.fps,
-            args.after_halt,
-            dissipation.analytic_exponent(),
-        )?
+        simulated_motion(args, &params)?
     } else {
-        let law = PowerLaw {
-            n: args.n,
-            a_e: args.a_e,
-            precession_sign: -1.0,
-            beta0: args.beta0,
-            psi_halt: args.psi_halt,
-        };
-        let timing = Timing {
-            fps: args.fps,
-            halt_time: args.halt,
-            after_halt: args.after_halt,
-            jitter: args.vfr_jitter.map(|fraction| CaptureJitter {
-                fraction,
-                seed: args.seed,
-            }),
-        };
-        let spin = PostFlatSpin {
-            beta_dot0: args.beta_dot_flat,
-            mu: args.mu,
-        };
-        let mut motion = power_law_motion(&params, &law, &timing, spin)?;
-        if args.nutation > 0.0 {
-            add_nutation(
-                &mut motion,
-                Nutation {
-                    amplitude: args.nutation,
-                    ratio: args.nutation_ratio,
-                    phase: args.nutation_phase,
-                },
-            )?;
-        }
-        motion
+        prescribed_motion(args, &params)?
     };
+    let spec = render_spec(args)?;
+    let renderer = Renderer::new(&spec, &motion)?;
+    eprintln!(
+        "rendering {} frames ({} × {} px, {} fps)…",
+        renderer.frame_count(),
+        spec.width,
+        spec.height,
+        args.fps
+    );
+    let encoding = ClipEncoding {
+        crf: args.crf,
+        keyint: args.keyint,
+        bframes: args.bframes,
+    };
+    let written = write_clip(&renderer, &args.out, encoding)?;
+    let truth = renderer.truth();
+    println!(
+        "halt at clip time {:.4} s, t_β = {:.4} s after it, δ = {:.4e} m/px{}",
+        truth.halt_time,
+        truth.t_beta,
+        truth.delta,
+        written
+            .codec
+            .as_deref()
+            .map(|c| format!(", codec {c}"))
+            .unwrap_or_default()
+    );
+    println!(
+        "wrote {} ({} frames)",
+        written.clip.display(),
+        written.frames
+    );
+    println!("wrote {}", written.truth.display());
+    Ok(())
+}
 
+/// The motion of `render --simulate`: the model run from the thesis's initial state
+/// with the given (or the thesis's) η, to 5 s, and filmed at the given frame rate.
+fn simulated_motion(args: &RenderArgs, params: &DiskParams) -> Result<Motion> {
+    let eta = match (args.eta, args.model.thesis_eta()) {
+        (Some(eta), _) => eta,
+        (None, Some(eta)) => eta,
+        (None, None) => bail!("give --eta for the `{:?}` model", args.model),
+    };
+    let dissipation = Dissipation::new(args.model);
+    let mut spec = SimulationSpec::thesis_default(*params, dissipation, eta);
+    spec.t_end = 5.0;
+    spec.mu = args.mu;
+    spec.beta0 = args.beta0;
+    let trajectory = simulate(&spec).context("simulation for render failed")?;
+    Ok(trajectory_motion(
+        params,
+        &trajectory,
+        args.beta0,
+        args.mu,
+        args.fps,
+        args.after_halt,
+        dissipation.analytic_exponent(),
+    )?)
+}
+
+/// The motion of `render` by a prescribed power law E = A_e (t0 − t)^n, with the
+/// post-flat spin, the capture's jitter and, if asked, a nutation added.
+fn prescribed_motion(args: &RenderArgs, params: &DiskParams) -> Result<Motion> {
+    let law = PowerLaw {
+        n: args.n,
+        a_e: args.a_e,
+        precession_sign: -1.0,
+        beta0: args.beta0,
+        psi_halt: args.psi_halt,
+    };
+    let timing = Timing {
+        fps: args.fps,
+        halt_time: args.halt,
+        after_halt: args.after_halt,
+        jitter: args.vfr_jitter.map(|fraction| CaptureJitter {
+            fraction,
+            seed: args.seed,
+        }),
+    };
+    let spin = PostFlatSpin {
+        beta_dot0: args.beta_dot_flat,
+        mu: args.mu,
+    };
+    let mut motion = power_law_motion(params, &law, &timing, spin)?;
+    if args.nutation > 0.0 {
+        add_nutation(
+            &mut motion,
+            Nutation {
+                amplitude: args.nutation,
+                ratio: args.nutation_ratio,
+                phase: args.nutation_phase,
+            },
+        )?;
+    }
+    Ok(motion)
+}
+
+/// The render's camera, scenery, effects, frame edits and storage from the flags.
+fn render_spec(args: &RenderArgs) -> Result<RenderSpec> {
     let mut spec = RenderSpec::thesis(args.plate, args.two_view);
     if let Some(size) = &args.size {
         let parsed = size
@@ -1082,39 +1131,7 @@ fn run_render(args: &RenderArgs) -> Result<()> {
     spec.slowed_sections = args.slow_section.clone();
     spec.display_orientation = Orientation::new(args.rotation_tag, args.mirror_tag)
         .map_err(|reason| anyhow::anyhow!("--rotation-tag: {reason}"))?;
-    let renderer = Renderer::new(&spec, &motion)?;
-    eprintln!(
-        "rendering {} frames ({} × {} px, {} fps)…",
-        renderer.frame_count(),
-        spec.width,
-        spec.height,
-        args.fps
-    );
-    let encoding = ClipEncoding {
-        crf: args.crf,
-        keyint: args.keyint,
-        bframes: args.bframes,
-    };
-    let written = write_clip(&renderer, &args.out, encoding)?;
-    let truth = renderer.truth();
-    println!(
-        "halt at clip time {:.4} s, t_β = {:.4} s after it, δ = {:.4e} m/px{}",
-        truth.halt_time,
-        truth.t_beta,
-        truth.delta,
-        written
-            .codec
-            .as_deref()
-            .map(|c| format!(", codec {c}"))
-            .unwrap_or_default()
-    );
-    println!(
-        "wrote {} ({} frames)",
-        written.clip.display(),
-        written.frames
-    );
-    println!("wrote {}", written.truth.display());
-    Ok(())
+    Ok(spec)
 }
 
 fn run_compare(args: &CompareArgs) -> Result<()> {

@@ -1489,7 +1489,21 @@ fn average<const N: usize>(colours: impl Iterator<Item = [f32; N]>, n: usize) ->
     sum.map(|s| s / n as f32)
 }
 
+/// Refuses a render no camera or disk could give: every check below, in turn (the
+/// first failure is reported).
 fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
+    validate_frame_and_camera(spec, motion)?;
+    validate_scenery(&spec.scenery)?;
+    validate_effects(&spec.effects, motion.timing.fps)?;
+    validate_dropped(spec, motion)?;
+    validate_slowed_sections(spec, motion)?;
+    validate_substituted(spec, motion)
+}
+
+/// The frame size (16 × 16 px up to [`MAX_FRAME_PIXELS`]), the camera (elevation in
+/// (0°, 30°], a positive scale, a distance in [`CAMERA_DISTANCE_RANGE_M`]) and the
+/// disk's strip and rounded rims, which must fit within its radius and half-thickness.
+fn validate_frame_and_camera(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
     let fail = |m: String| Err(RenderError::Invalid(m));
     if spec.width < 16 || spec.height < 16 {
         return fail(format!(
@@ -1542,7 +1556,14 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
             motion.params.half_thickness, spec.edge_radius
         ));
     }
-    let sc = &spec.scenery;
+    Ok(())
+}
+
+/// The scenery: grey levels within [0, 255] (the paper's not black), the plate's
+/// texture contrast within [0, 1], its reflectivity within [0, 0.9], the reflection
+/// blur within [0, 20] px and the fill light above the horizon.
+fn validate_scenery(sc: &Scenery) -> Result<(), RenderError> {
+    let fail = |m: String| Err(RenderError::Invalid(m));
     let grey_ok = |g: f64| g.is_finite() && (0.0..=255.0).contains(&g);
     if !(grey_ok(sc.paper_grey) && sc.paper_grey > 0.0) {
         return fail(format!(
@@ -1586,7 +1607,14 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
             sc.fill_elevation_deg
         ));
     }
-    let fx = &spec.effects;
+    Ok(())
+}
+
+/// The camera's effects: noise, blur, flicker and exposure finite and non-negative,
+/// the flicker never putting the light out, the exposure within the frame interval
+/// 1/`fps` and averaging 1 to [`MAX_EXPOSURE_SAMPLES`] poses, and a finite drift.
+fn validate_effects(fx: &Effects, fps: f64) -> Result<(), RenderError> {
+    let fail = |m: String| Err(RenderError::Invalid(m));
     for (name, v) in [
         ("the read noise σ [grey levels]", fx.noise_sigma),
         ("the shot noise k [grey levels^½]", fx.shot_noise),
@@ -1615,7 +1643,7 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
     if !(fx.flicker_phase_100.is_finite() && fx.flicker_phase_50.is_finite()) {
         return fail("the flicker phases [rad] must be finite".into());
     }
-    let frame_s = 1.0 / motion.timing.fps;
+    let frame_s = 1.0 / fps;
     if fx.exposure_s > frame_s * (1.0 + 1e-12) {
         return fail(format!(
             "the exposure time must not exceed the frame interval 1/fps = {frame_s:.6} s, got \
@@ -1632,6 +1660,12 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
     if !fx.drift_px_per_s.is_finite() {
         return fail("the drift [px/s] must be finite".into());
     }
+    Ok(())
+}
+
+/// Dropped frames: each one captured, and not all of them.
+fn validate_dropped(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
+    let fail = |m: String| Err(RenderError::Invalid(m));
     if let Some(&bad) = spec.dropped.iter().find(|&&k| k >= motion.states.len()) {
         return fail(format!(
             "dropped frame {bad} does not exist (the clip captures {} frames, 0-based)",
@@ -1641,6 +1675,13 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
     if motion.states.len() <= spec.dropped.len() {
         return fail("every frame would be dropped".into());
     }
+    Ok(())
+}
+
+/// Slowed sections: each a finite span starting within the clip, slowed by a factor
+/// in (1, [`MAX_SLOWING`]], and none overlapping the next.
+fn validate_slowed_sections(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
+    let fail = |m: String| Err(RenderError::Invalid(m));
     let clip_s = motion.timing.halt_time + motion.timing.after_halt;
     let mut sections = spec.slowed_sections.clone();
     sections.sort_by(|a, b| a.start_s.total_cmp(&b.start_s));
@@ -1675,6 +1716,14 @@ fn validate(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
             ));
         }
     }
+    Ok(())
+}
+
+/// Duplicated and interpolated frames: each a written frame, not both, with the
+/// captured frames it is made from beside it (a duplicate repeats the capture before
+/// it; a blend needs a capture on each side).
+fn validate_substituted(spec: &RenderSpec, motion: &Motion) -> Result<(), RenderError> {
+    let fail = |m: String| Err(RenderError::Invalid(m));
     let written: Vec<usize> = (0..motion.states.len())
         .filter(|k| !spec.dropped.contains(k))
         .collect();

@@ -492,33 +492,140 @@ fn experiment_page(
     dir: &Path,
     overlay: Option<&OverlayIndex>,
 ) -> Result<String, ReportError> {
+    let plan = &e.plan;
+    let body = html! {
+        (summary_section(e))
+        (power_law_section(e, energy_svg, timing_svg))
+        (series_section(e, dir, overlay))
+        (diagnostics_section(e))
+    };
+    let title = format!(
+        "eulerdisk: {}",
+        plan.clip
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+    );
+    Ok(page(&title, body))
+}
+
+/// The result in sentences: n and its interval, the halt, the sighting, the strip
+/// stop, and the warnings.
+fn summary_section(e: &Experiment) -> maud::Markup {
+    let plan = &e.plan;
+    let strip = e.series.strip.as_ref();
+    html! {
+        p {
+            "Energy exponent "
+            strong { (format!("n = {:.3}", e.peaks_fit.fit.n)) }
+            (format!(" (95 % CI {:.3} … {:.3}) from {} peaks in the last {} s before the halt; \
+                the interval includes ± {:.3} from the zero of z_rim, known to {:.3} px{} (the fits \
+                made again with it moved by that much).",
+                e.peaks_fit.fit.ci95_n.0, e.peaks_fit.fit.ci95_n.1, e.peaks_fit.fit.points, plan.window_s,
+                1.96 * e.peaks_fit.fit.se_n_zero, plan.rim_zero_uncertainty_px, zero_source(plan)))
+        }
+        p { (halt_sentence(e)) }
+        @if let Some(s) = e.peaks_fit.fit.halt_sighting {
+            p { (sighting_sentence(&s, e.peaks_fit.fit.t0)) }
+        }
+        @if let Some(s) = strip {
+            p { (format!("Strip stop t_β − t_φ = {:.4} s ({}).", s.rotation_after_flat,
+                if s.stop.fit.is_some() { "fit of the friction stop, eq. 4.112" } else { "band method, fig. 3.22" })) }
+        }
+        @if !e.warnings.is_empty() {
+            h2 { "Warnings" }
+            ul { @for w in &e.warnings { li class="bad" { (w) } } }
+        }
+    }
+}
+
+/// The power law fitted to each energy, the turns' timing, the spin carried into
+/// the flat, the energy figure and the window sensitivity.
+fn power_law_section(e: &Experiment, energy_svg: &str, timing_svg: Option<&str>) -> maud::Markup {
+    let fit_rows: Vec<Vec<String>> = fits(e).iter().map(|f| fit_row(f)).collect();
+    let window_rows = window_rows(e);
+    html! {
+        h2 { "Power law E = A_e (t0 − t)^n" }
+        (table(&["energy", "n", "95 % CI of n", "of it ± from z_rim's zero", "A_e [J s^-n]", "t0 [s]", "R²", "points"], &fit_rows, |_, _| false))
+        @if let Some(timing) = &e.turn_timing {
+            p { (turn_timing_sentence(timing, &e.peaks_fit.fit)) }
+        }
+        @if let Some(svg) = timing_svg {
+            (svg_figure(svg, "The times of z_rim's peaks and troughs against the turns still to go (log–log), with the turns' timing law: its slope is q = 1/(1 − n/2)."))
+        }
+        @if let Some(spin) = e.full_state_fit.as_ref().and(carried_spin_energy(e)) {
+            p { (format!("Eq. 3.6 keeps the spin the disk carries into the flat: with β̇ = {:.2} rad/s at t_φ, \
+                C/2 β̇² + m/2 (R β̇)² = {:.2e} J remain at the halt, which a power law to zero does not describe. \
+                Eq. 3.8, the thesis's energy, is the one to compare.", spin.0, spin.1)) }
+        }
+        (svg_figure(energy_svg, "Energy at the peaks (eq. 3.8) with the fitted power law; the band spans n over its 95 % interval."))
+        h2 { "Window sensitivity (eq. 3.8 at peaks)" }
+        (table(&["window", "n", "95 % CI (statistical only)", "points"], &window_rows, |_, _| false))
+    }
+}
+
+/// The series plots, linked to the overlay video's frames, and the footage.
+fn series_section(e: &Experiment, dir: &Path, overlay: Option<&OverlayIndex>) -> maud::Markup {
     let read_svg = |name: &str| std::fs::read_to_string(dir.join(name)).ok();
     let series_svg = read_svg("series.svg");
     let states_svg = read_svg("states.svg");
     let frame_times: Vec<f64> = e.frames.iter().map(|f| f.t).collect();
     let state_times: Vec<f64> = e.series.states.iter().map(|s| s.t).collect();
-    let plan = &e.plan;
-    let c = &plan.calibration.calibration;
-    let fits: Vec<&EnergyFit> = std::iter::once(&e.peaks_fit)
+    html! {
+        h2 { "Series" }
+        @if overlay.is_some() {
+            p class="note" { "Click a series plot at an instant inside the overlay video's span: the video below stops at the frame nearest it." }
+        }
+        @if let Some(svg) = &series_svg {
+            (frame_linked(svg, &frame_times, overlay, "Rim height and, for two-view clips, the strip angle and its rate."))
+        }
+        @if let Some(svg) = &states_svg {
+            (frame_linked(svg, &state_times, overlay, "Per-frame φ, ψ, ψ̇ from local fits of the rim-height model, and φ against the φ that stationary rolling gives ψ̇ (eq. 2.29, the precession check)."))
+        }
+        @if let Some(overlay) = overlay {
+            (footage_section(e, overlay, dir))
+        }
+    }
+}
+
+/// The diagnostic frames, the flagged frames, and the plan and provenance.
+fn diagnostics_section(e: &Experiment) -> maud::Markup {
+    let flag_rows = flag_rows(e);
+    let plan_rows = plan_rows(e);
+    html! {
+        h2 { "Diagnostics" }
+        (png_figure(&e.diagnostics.calibration_png, "Rest frame: x_l, x_r (green), z_t (yellow), z_base (red), centre line (blue)."))
+        (png_figure(&e.diagnostics.threshold_png, "Highest-rim frame thresholded at γ: measuring band (blue) and the rim edge found (red)."))
+        h2 { "Flagged frames" }
+        @if flag_rows.is_empty() { p { "None." } } @else {
+            (table(&["frame", "t [s]", "reason"], &flag_rows, |_, _| false))
+        }
+        h2 { "Plan and provenance" }
+        (table(&["", ""], &plan_rows, |_, _| false))
+        p class="note" { "Data: frames.csv, peaks.csv, states.csv, flags.csv, result.json, plan.json in this folder." }
+    }
+}
+
+/// The energy fits made: at the peaks, and per frame and of the full state where made.
+fn fits(e: &Experiment) -> Vec<&EnergyFit> {
+    std::iter::once(&e.peaks_fit)
         .chain(e.frames_fit.as_ref())
         .chain(e.full_state_fit.as_ref())
-        .collect();
-    let fit_rows: Vec<Vec<String>> = fits.iter().map(|f| fit_row(f)).collect();
-    let window_rows: Vec<Vec<String>> = e
-        .peaks_fit
-        .windows
-        .iter()
-        .map(|(w, r)| match r {
-            Ok(f) => vec![
-                format!("{w} s"),
-                format!("{:.4}", f.n),
-                format!("{:.4} … {:.4}", f.ci95_n.0, f.ci95_n.1),
-                f.points.to_string(),
-            ],
-            Err(reason) => vec![format!("{w} s"), "–".into(), reason.clone(), "0".into()],
-        })
-        .collect();
-    let plan_rows = vec![
+        .collect()
+}
+
+/// The plan and provenance table: the clip and how it was read, the calibration and
+/// scale, and the checks, fit window and disk.
+fn plan_rows(e: &Experiment) -> Vec<Vec<String>> {
+    let mut rows = clip_rows(&e.plan);
+    rows.extend(calibration_rows(&e.plan));
+    rows.extend(fit_setup_rows(e));
+    rows
+}
+
+/// The clip, its hash, the version that read it, and how its frames were decoded,
+/// oriented, converted and timed.
+fn clip_rows(plan: &ExperimentPlan) -> Vec<Vec<String>> {
+    vec![
         vec!["clip".into(), plan.clip.display().to_string()],
         vec!["BLAKE3 of the clip".into(), plan.clip_hash.clone()],
         vec!["eulerdisk version".into(), plan.crate_version.clone()],
@@ -551,29 +658,14 @@ fn experiment_page(
             "capture fps".into(),
             format!("{} ({:?})", plan.fps.fps, plan.fps.source),
         ],
-        vec![
-            "frame times".into(),
-            plan.frame_times.as_ref().map_or_else(
-                || "not recorded".into(),
-                |f| {
-                    let sections = if f.sections.len() > 1 {
-                        format!("; sections: {}", f.sections_text())
-                    } else {
-                        String::new()
-                    };
-                    format!(
-                        "{}: {}; frame interval median {:.4} ms, spread {:.4} ms \
-                         (1.4826 × MAD), {:.4}–{:.4} ms{sections}",
-                        f.source.label(),
-                        f.detail,
-                        1e3 * f.median_interval_s,
-                        1e3 * f.interval_spread_s,
-                        1e3 * f.min_interval_s,
-                        1e3 * f.max_interval_s
-                    )
-                },
-            ),
-        ],
+        vec!["frame times".into(), frame_times_text(plan)],
+    ]
+}
+
+/// The layout and plate, the threshold, the calibration in pixels, and the scale.
+fn calibration_rows(plan: &ExperimentPlan) -> Vec<Vec<String>> {
+    let c = &plan.calibration.calibration;
+    vec![
         vec!["layout".into(), plan.layout.clone()],
         vec!["plate".into(), plan.plate.clone()],
         vec![
@@ -590,30 +682,7 @@ fn experiment_page(
                 c.x_l, c.x_r, c.z_t, c.z_base, plan.calibration.sources
             ),
         ],
-        vec![
-            "near top rim z_t".into(),
-            plan.top_rim_leaning.map_or_else(
-                || "read on the rest frames".into(),
-                |l| {
-                    format!(
-                        "{:.2} ± {:.2} px from {} frames{} in which the disk leans towards \
-                         the camera (the face up to {:.1} px tall there); the rest frames, \
-                         whose face is under {:.0} px tall, read {:.2} px",
-                        l.reading.z_t,
-                        l.reading.se,
-                        l.reading.frames,
-                        if l.reading.b_pictures_left_out {
-                            " (P and I pictures; the B pictures left out)"
-                        } else {
-                            ""
-                        },
-                        l.reading.tallest_face_px,
-                        crate::vision::THIN_AT_REST_PX,
-                        l.rest_z_t
-                    )
-                },
-            ),
-        ],
+        vec!["near top rim z_t".into(), near_top_rim_text(plan)],
         vec![
             "scale δ at the near rim".into(),
             format!(
@@ -626,52 +695,16 @@ fn experiment_page(
                     .unwrap_or_default()
             ),
         ],
-        vec![
-            "perspective".into(),
-            format!(
-                "diameter scale 2R/(x_r − x_l) = {:.4e} m/px at the disk's centre; factor {:.3}{}{}",
-                plan.scale.diameter_metres_per_px,
-                plan.scale.perspective_factor,
-                plan.scale
-                    .camera_distance_m
-                    .map(|d| if plan.scale.camera_distance_from_config {
-                        format!(", camera {d:.3} m from the near rim (config)")
-                    } else {
-                        format!(", camera ≈ {d:.2} m from the near rim")
-                    })
-                    .unwrap_or_default(),
-                match (
-                    plan.scale.near_rim_local_factor,
-                    plan.scale.principal_row_px
-                ) {
-                    (Some(f), Some(row)) => format!(
-                        "; eq. 3.10's δ (the mean over the thickness) × {f:.4} for the scale at \
-                         the near bottom rim (principal point taken at row {row:.0})"
-                    ),
-                    _ => String::new(),
-                }
-            ),
-        ],
-        vec![
-            "precession check".into(),
-            e.precession.as_ref().map_or_else(
-                || "not made (fewer than 10 states with a precession rate)".into(),
-                |check| {
-                    format!(
-                        "{} ({}; a check of the scale and the zero, not applied)",
-                        check.describe(),
-                        if check.agrees() {
-                            format!("within ±{:.0} %", 100.0 * precession::AGREEMENT)
-                        } else {
-                            format!(
-                                "beyond ±{:.0} %: see the warnings",
-                                100.0 * precession::AGREEMENT
-                            )
-                        }
-                    )
-                },
-            ),
-        ],
+        vec!["perspective".into(), perspective_text(plan)],
+    ]
+}
+
+/// The precession check, the measuring band, the fit window and the disk.
+fn fit_setup_rows(e: &Experiment) -> Vec<Vec<String>> {
+    let plan = &e.plan;
+    let c = &plan.calibration.calibration;
+    vec![
+        vec!["precession check".into(), precession_check_text(e)],
         vec![
             "band".into(),
             format!(
@@ -698,9 +731,130 @@ fn experiment_page(
                 plan.disk.inertia_c
             ),
         ],
-    ];
-    let flag_rows: Vec<Vec<String>> = e
-        .series
+    ]
+}
+
+/// How the frame times were read, and their intervals' median, spread and range.
+fn frame_times_text(plan: &ExperimentPlan) -> String {
+    plan.frame_times.as_ref().map_or_else(
+        || "not recorded".into(),
+        |f| {
+            let sections = if f.sections.len() > 1 {
+                format!("; sections: {}", f.sections_text())
+            } else {
+                String::new()
+            };
+            format!(
+                "{}: {}; frame interval median {:.4} ms, spread {:.4} ms \
+                 (1.4826 × MAD), {:.4}–{:.4} ms{sections}",
+                f.source.label(),
+                f.detail,
+                1e3 * f.median_interval_s,
+                1e3 * f.interval_spread_s,
+                1e3 * f.min_interval_s,
+                1e3 * f.max_interval_s
+            )
+        },
+    )
+}
+
+/// Where the near top rim z_t was read: on the rest frames, or on the frames in
+/// which the disk leans towards the camera.
+fn near_top_rim_text(plan: &ExperimentPlan) -> String {
+    plan.top_rim_leaning.map_or_else(
+        || "read on the rest frames".into(),
+        |l| {
+            format!(
+                "{:.2} ± {:.2} px from {} frames{} in which the disk leans towards \
+                 the camera (the face up to {:.1} px tall there); the rest frames, \
+                 whose face is under {:.0} px tall, read {:.2} px",
+                l.reading.z_t,
+                l.reading.se,
+                l.reading.frames,
+                if l.reading.b_pictures_left_out {
+                    " (P and I pictures; the B pictures left out)"
+                } else {
+                    ""
+                },
+                l.reading.tallest_face_px,
+                crate::vision::THIN_AT_REST_PX,
+                l.rest_z_t
+            )
+        },
+    )
+}
+
+/// The diameter scale at the disk's centre, the perspective factor, the camera
+/// distance and the near rim's local factor for eq. 3.10's δ.
+fn perspective_text(plan: &ExperimentPlan) -> String {
+    format!(
+        "diameter scale 2R/(x_r − x_l) = {:.4e} m/px at the disk's centre; factor {:.3}{}{}",
+        plan.scale.diameter_metres_per_px,
+        plan.scale.perspective_factor,
+        plan.scale
+            .camera_distance_m
+            .map(|d| if plan.scale.camera_distance_from_config {
+                format!(", camera {d:.3} m from the near rim (config)")
+            } else {
+                format!(", camera ≈ {d:.2} m from the near rim")
+            })
+            .unwrap_or_default(),
+        match (
+            plan.scale.near_rim_local_factor,
+            plan.scale.principal_row_px
+        ) {
+            (Some(f), Some(row)) => format!(
+                "; eq. 3.10's δ (the mean over the thickness) × {f:.4} for the scale at \
+                 the near bottom rim (principal point taken at row {row:.0})"
+            ),
+            _ => String::new(),
+        }
+    )
+}
+
+/// The precession check (a check of the scale and the zero, not applied), or why
+/// it was not made.
+fn precession_check_text(e: &Experiment) -> String {
+    e.precession.as_ref().map_or_else(
+        || "not made (fewer than 10 states with a precession rate)".into(),
+        |check| {
+            format!(
+                "{} ({}; a check of the scale and the zero, not applied)",
+                check.describe(),
+                if check.agrees() {
+                    format!("within ±{:.0} %", 100.0 * precession::AGREEMENT)
+                } else {
+                    format!(
+                        "beyond ±{:.0} %: see the warnings",
+                        100.0 * precession::AGREEMENT
+                    )
+                }
+            )
+        },
+    )
+}
+
+/// The window-sensitivity table: n and its interval for each window, or why the
+/// fit failed there.
+fn window_rows(e: &Experiment) -> Vec<Vec<String>> {
+    e.peaks_fit
+        .windows
+        .iter()
+        .map(|(w, r)| match r {
+            Ok(f) => vec![
+                format!("{w} s"),
+                format!("{:.4}", f.n),
+                format!("{:.4} … {:.4}", f.ci95_n.0, f.ci95_n.1),
+                f.points.to_string(),
+            ],
+            Err(reason) => vec![format!("{w} s"), "–".into(), reason.clone(), "0".into()],
+        })
+        .collect()
+}
+
+/// The flagged frames: index, time and reason.
+fn flag_rows(e: &Experiment) -> Vec<Vec<String>> {
+    e.series
         .flags
         .iter()
         .map(|f| {
@@ -710,77 +864,7 @@ fn experiment_page(
                 format!("{:?}", f.reason),
             ]
         })
-        .collect();
-    let strip = e.series.strip.as_ref();
-    let body = html! {
-        p {
-            "Energy exponent "
-            strong { (format!("n = {:.3}", e.peaks_fit.fit.n)) }
-            (format!(" (95 % CI {:.3} … {:.3}) from {} peaks in the last {} s before the halt; \
-                the interval includes ± {:.3} from the zero of z_rim, known to {:.3} px{} (the fits \
-                made again with it moved by that much).",
-                e.peaks_fit.fit.ci95_n.0, e.peaks_fit.fit.ci95_n.1, e.peaks_fit.fit.points, plan.window_s,
-                1.96 * e.peaks_fit.fit.se_n_zero, plan.rim_zero_uncertainty_px, zero_source(plan)))
-        }
-        p { (halt_sentence(e)) }
-        @if let Some(s) = e.peaks_fit.fit.halt_sighting {
-            p { (sighting_sentence(&s, e.peaks_fit.fit.t0)) }
-        }
-        @if let Some(s) = strip {
-            p { (format!("Strip stop t_β − t_φ = {:.4} s ({}).", s.rotation_after_flat,
-                if s.stop.fit.is_some() { "fit of the friction stop, eq. 4.112" } else { "band method, fig. 3.22" })) }
-        }
-        @if !e.warnings.is_empty() {
-            h2 { "Warnings" }
-            ul { @for w in &e.warnings { li class="bad" { (w) } } }
-        }
-        h2 { "Power law E = A_e (t0 − t)^n" }
-        (table(&["energy", "n", "95 % CI of n", "of it ± from z_rim's zero", "A_e [J s^-n]", "t0 [s]", "R²", "points"], &fit_rows, |_, _| false))
-        @if let Some(timing) = &e.turn_timing {
-            p { (turn_timing_sentence(timing, &e.peaks_fit.fit)) }
-        }
-        @if let Some(svg) = timing_svg {
-            (svg_figure(svg, "The times of z_rim's peaks and troughs against the turns still to go (log–log), with the turns' timing law: its slope is q = 1/(1 − n/2)."))
-        }
-        @if let Some(spin) = e.full_state_fit.as_ref().and(carried_spin_energy(e)) {
-            p { (format!("Eq. 3.6 keeps the spin the disk carries into the flat: with β̇ = {:.2} rad/s at t_φ, \
-                C/2 β̇² + m/2 (R β̇)² = {:.2e} J remain at the halt, which a power law to zero does not describe. \
-                Eq. 3.8, the thesis's energy, is the one to compare.", spin.0, spin.1)) }
-        }
-        (svg_figure(energy_svg, "Energy at the peaks (eq. 3.8) with the fitted power law; the band spans n over its 95 % interval."))
-        h2 { "Window sensitivity (eq. 3.8 at peaks)" }
-        (table(&["window", "n", "95 % CI (statistical only)", "points"], &window_rows, |_, _| false))
-        h2 { "Series" }
-        @if overlay.is_some() {
-            p class="note" { "Click a series plot at an instant inside the overlay video's span: the video below stops at the frame nearest it." }
-        }
-        @if let Some(svg) = &series_svg {
-            (frame_linked(svg, &frame_times, overlay, "Rim height and, for two-view clips, the strip angle and its rate."))
-        }
-        @if let Some(svg) = &states_svg {
-            (frame_linked(svg, &state_times, overlay, "Per-frame φ, ψ, ψ̇ from local fits of the rim-height model, and φ against the φ that stationary rolling gives ψ̇ (eq. 2.29, the precession check)."))
-        }
-        @if let Some(overlay) = overlay {
-            (footage_section(e, overlay, dir))
-        }
-        h2 { "Diagnostics" }
-        (png_figure(&e.diagnostics.calibration_png, "Rest frame: x_l, x_r (green), z_t (yellow), z_base (red), centre line (blue)."))
-        (png_figure(&e.diagnostics.threshold_png, "Highest-rim frame thresholded at γ: measuring band (blue) and the rim edge found (red)."))
-        h2 { "Flagged frames" }
-        @if flag_rows.is_empty() { p { "None." } } @else {
-            (table(&["frame", "t [s]", "reason"], &flag_rows, |_, _| false))
-        }
-        h2 { "Plan and provenance" }
-        (table(&["", ""], &plan_rows, |_, _| false))
-        p class="note" { "Data: frames.csv, peaks.csv, states.csv, flags.csv, result.json, plan.json in this folder." }
-    };
-    let title = format!(
-        "eulerdisk: {}",
-        plan.clip
-            .file_name()
-            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
-    );
-    Ok(page(&title, body))
+        .collect()
 }
 
 /// A series plot (SVG of [`time_panels`]) whose instants lead to the overlay

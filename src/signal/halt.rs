@@ -167,142 +167,286 @@ pub(crate) const MIN_REST_FRAMES: usize = 8;
 pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt, SignalError> {
     super::check_series(t, z_rim, "z_rim")?;
     config.validate()?;
-    let samples = finite_samples(t, z_rim);
-    let t_end = t[t.len() - 1];
-    let tail_start = t_end - config.rest_tail_s;
-    let tail: Vec<usize> = samples
-        .iter()
-        .copied()
-        .filter(|&i| t[i] >= tail_start)
-        .collect();
-    if tail.len() < MIN_REST_FRAMES {
-        return Err(SignalError::RestTailTooShort {
-            tail_s: config.rest_tail_s,
-            frames: tail.len(),
-            needed: MIN_REST_FRAMES,
+    let series = RimSeries::new(t, z_rim, config);
+    let tail = series.rest_tail()?;
+    series.check_tail_settled(&tail)?;
+    series.check_tail_not_oscillating(&tail)?;
+    let Some(first_guess) = series.last_motion(tail.rest) else {
+        return Err(SignalError::NoMotion {
+            threshold: tail.rest.threshold,
+            max_deviation: series.max_deviation(tail.rest.level),
         });
-    }
-    let (level, noise) = rest_statistics(z_rim, &tail, config.noise_floor);
-    // The band of fig. 3.22 over the later half of the tail, widened by half.
-    let later = &tail[tail.len() / 2..];
-    let band = BAND_WIDENING
-        * later
-            .iter()
-            .map(|&i| (z_rim[i] - level).abs())
-            .fold(0.0, f64::max);
-    let threshold = (config.motion_sigmas * noise).max(band);
-    // The position of each frame's reading in `samples`.
-    let mut position = vec![usize::MAX; t.len()];
-    for (n, &i) in samples.iter().enumerate() {
-        position[i] = n;
-    }
-    let still =
-        |i: usize, threshold: f64| in_still_picture(&samples, z_rim, position[i], 0.5 * threshold);
-    let risen = |i: usize, level: f64, threshold: f64| z_rim[i] - level > threshold;
-    let moving =
-        |i: usize, level: f64, threshold: f64| risen(i, level, threshold) && !still(i, threshold);
-    // After `motion_until` the energy law has the disk flat: no rise there is motion.
-    let until = config.motion_until.unwrap_or(f64::INFINITY);
-    let motion =
-        |i: usize, level: f64, threshold: f64| t[i] <= until && moving(i, level, threshold);
-    // The reading at position n of `samples` in a held picture, over the final turn p.
-    let in_held_picture = |n: usize, p: f64, level: f64, threshold: f64, noise: f64| {
-        held(
-            &samples,
+    };
+    let (motion, rest) = series.settle(first_guess, tail.rest, tail.band);
+    let index = series.follow_descent(&motion, rest);
+    let t_phi = config.halt_at.unwrap_or(t[index]);
+    Ok(Halt {
+        index,
+        t_phi,
+        rest_level: rest.level,
+        noise: rest.noise,
+        threshold: rest.threshold,
+        rest_frames: series.samples.iter().filter(|&&i| i > index).count(),
+        shifted_t: t.iter().map(|&x| x - t_phi).collect(),
+        motion_cut: motion_cut(t, z_rim, config, index),
+    })
+}
+
+/// Whether [`SignalConfig::motion_until`] cut the motion: without it, the last frame
+/// of motion found would lie after `index`.
+fn motion_cut(t: &[f64], z_rim: &[f64], config: &SignalConfig, index: usize) -> bool {
+    let unbounded = SignalConfig {
+        motion_until: None,
+        ..config.clone()
+    };
+    config.motion_until.is_some()
+        && halt_time(t, z_rim, &unbounded).is_ok_and(|free| free.index > index)
+}
+
+/// The rest about which motion is measured: a frame moves if its rim height stands
+/// more than `threshold` above `level`.
+#[derive(Debug, Clone, Copy)]
+struct Rest {
+    /// Rest level of z_rim (a median) \[m\].
+    level: f64,
+    /// Noise σ of z_rim at rest \[m\].
+    noise: f64,
+    /// Motion threshold over the rest level \[m\].
+    threshold: f64,
+}
+
+/// The rest tail at the end of the clip (step 1 of [`halt_time`]).
+struct RestTail {
+    /// Time at which the tail begins \[s\].
+    start: f64,
+    /// The frames of the tail with a rim height.
+    frames: Vec<usize>,
+    /// Its level, noise and threshold.
+    rest: Rest,
+    /// [`BAND_WIDENING`] × the band of the still disk over the later half of the tail
+    /// \[m\]: a floor of every threshold.
+    band: f64,
+}
+
+/// The last frame of motion found by one search (step 3 of [`halt_time`]).
+#[derive(Debug, Clone, Copy)]
+struct LastMotion {
+    /// The frame index of the last rise.
+    index: usize,
+    /// The span without a rise that ended the motion \[s\].
+    span: f64,
+    /// The final precession turn, once enough turns' peaks were seen \[s\].
+    period: Option<f64>,
+}
+
+/// A rim-height series and the rules that tell the rim's motion from rest in it.
+struct RimSeries<'a> {
+    t: &'a [f64],
+    z_rim: &'a [f64],
+    config: &'a SignalConfig,
+    /// The frames with a rim height, in order.
+    samples: Vec<usize>,
+    /// The position of each frame's reading in `samples` (`usize::MAX` where none).
+    position: Vec<usize>,
+    /// No frame after this time is motion: after [`SignalConfig::motion_until`] the
+    /// energy law has the disk flat.
+    until: f64,
+}
+
+impl<'a> RimSeries<'a> {
+    fn new(t: &'a [f64], z_rim: &'a [f64], config: &'a SignalConfig) -> Self {
+        let samples = finite_samples(t, z_rim);
+        let mut position = vec![usize::MAX; t.len()];
+        for (n, &i) in samples.iter().enumerate() {
+            position[i] = n;
+        }
+        RimSeries {
             t,
             z_rim,
-            n,
-            p,
-            level,
-            threshold,
-            noise,
-            config.quantum,
-        )
-    };
-    // A disk still moving at the clip's end lifts its rim once a turn, turn after turn,
-    // or holds it up: the tail is refused for rises in two runs or more, or in one
-    // run of more than [`REFRESH_FRAMES`] readings. A frame that repeats the previous
-    // frame's reading exactly is the codec's copy of that picture (a moving rim, or a
-    // still one under sensor noise, never reads the same twice), no new reading: at
-    // coarse quantisers a still disk's picture is redrawn every 20–30 frames and held,
-    // 0.25 px up or down, in between. One short run alone is such a redraw, which the
-    // halt below then measures as noise.
-    //
-    // A short run whose readings just before and just after it lie in the still band
-    // (within half the threshold of the rest level) is an impulse: the picture
-    // redrawn in one frame and back at rest in the next, as H.264 does again and again
-    // under a darker tone curve (single frames 0.2–0.3 px up, their neighbours within
-    // 0.03 px). A rim that lifts is
-    // smooth over the final turn's frames and is not back at rest in one frame;
-    // impulses are not counted among the runs.
-    let runs = rise_runs(&tail, |i| moving(i, level, threshold));
-    let readings = |run: &[usize]| {
-        run.iter()
-            .filter(|&&i| i == 0 || z_rim[i] != z_rim[i - 1])
-            .count()
-    };
-    let at_rest = |n: Option<usize>| {
-        n.and_then(|n| samples.get(n))
-            .is_some_and(|&i| (z_rim[i] - level).abs() <= 0.5 * threshold)
-    };
-    let impulse = |run: &[usize]| {
-        let (first, last) = (position[run[0]], position[run[run.len() - 1]]);
-        readings(run) <= REFRESH_FRAMES && at_rest(first.checked_sub(1)) && at_rest(Some(last + 1))
-    };
-    let lifts: Vec<&Vec<usize>> = runs.iter().filter(|run| !impulse(run)).collect();
-    if lifts.len() > 1 || runs.iter().any(|run| readings(run) > REFRESH_FRAMES) {
-        let i = *runs.last().and_then(|run| run.last()).expect("a rise");
-        return Err(SignalError::TailNotAtRest {
-            tail_start,
-            t_moving: t[i],
-            deviation: z_rim[i] - level,
-            threshold,
-        });
+            config,
+            samples,
+            position,
+            until: config.motion_until.unwrap_or(f64::INFINITY),
+        }
     }
-    // A correlated tail whose spread stays within twice the noise floor is codec
-    // or sensor texture on a still frame, not a disk still rocking.
-    let oscillating = noise > 2.0 * config.noise_floor;
-    if let Some((lag, correlation)) =
-        oscillation(z_rim, &tail, level, noise).filter(|_| oscillating)
-    {
-        let rms = (tail
+
+    /// Whether frame `i` begins or ends a still picture ([`in_still_picture`]), level
+    /// within half the threshold.
+    fn still(&self, i: usize, threshold: f64) -> bool {
+        in_still_picture(&self.samples, self.z_rim, self.position[i], 0.5 * threshold)
+    }
+
+    /// Whether frame `i` stands above the threshold over the rest level.
+    fn risen(&self, i: usize, rest: Rest) -> bool {
+        self.z_rim[i] - rest.level > rest.threshold
+    }
+
+    /// Whether frame `i` has risen and is no still picture.
+    fn moving(&self, i: usize, rest: Rest) -> bool {
+        self.risen(i, rest) && !self.still(i, rest.threshold)
+    }
+
+    /// Whether frame `i` is moving and not after [`SignalConfig::motion_until`].
+    fn motion(&self, i: usize, rest: Rest) -> bool {
+        self.t[i] <= self.until && self.moving(i, rest)
+    }
+
+    /// Whether the reading at position `n` of `samples` is in a held picture over the
+    /// final turn `period` ([`held`]).
+    fn in_held_picture(&self, n: usize, period: f64, rest: Rest) -> bool {
+        held(
+            &self.samples,
+            self.t,
+            self.z_rim,
+            n,
+            period,
+            rest.level,
+            rest.threshold,
+            rest.noise,
+            self.config.quantum,
+        )
+    }
+
+    /// The largest rise of any reading over `level` (0 if none rises) \[m\].
+    fn max_deviation(&self, level: f64) -> f64 {
+        self.samples
+            .iter()
+            .map(|&i| self.z_rim[i] - level)
+            .fold(0.0, f64::max)
+    }
+
+    /// Step 1: the last [`SignalConfig::rest_tail_s`] seconds, their level, noise and
+    /// threshold. The threshold is `motion_sigmas` σ, and at least the band of fig.
+    /// 3.22 over the later half of the tail, widened by half ([`BAND_WIDENING`]).
+    fn rest_tail(&self) -> Result<RestTail, SignalError> {
+        let (t, z_rim, config) = (self.t, self.z_rim, self.config);
+        let start = t[t.len() - 1] - config.rest_tail_s;
+        let frames: Vec<usize> = self
+            .samples
+            .iter()
+            .copied()
+            .filter(|&i| t[i] >= start)
+            .collect();
+        if frames.len() < MIN_REST_FRAMES {
+            return Err(SignalError::RestTailTooShort {
+                tail_s: config.rest_tail_s,
+                frames: frames.len(),
+                needed: MIN_REST_FRAMES,
+            });
+        }
+        let (level, noise) = rest_statistics(z_rim, &frames, config.noise_floor);
+        let later = &frames[frames.len() / 2..];
+        let band = BAND_WIDENING
+            * later
+                .iter()
+                .map(|&i| (z_rim[i] - level).abs())
+                .fold(0.0, f64::max);
+        let threshold = (config.motion_sigmas * noise).max(band);
+        Ok(RestTail {
+            start,
+            frames,
+            rest: Rest {
+                level,
+                noise,
+                threshold,
+            },
+            band,
+        })
+    }
+
+    /// Step 2, the rises: a disk still moving at the clip's end lifts its rim once a
+    /// turn, turn after turn, or holds it up, so the tail is refused for rises in two
+    /// runs or more, or in one run of more than [`REFRESH_FRAMES`] readings. A frame
+    /// that repeats the previous frame's reading exactly is the codec's copy of that
+    /// picture (a moving rim, or a still one under sensor noise, never reads the same
+    /// twice), no new reading: at coarse quantisers a still disk's picture is redrawn
+    /// every 20–30 frames and held, 0.25 px up or down, in between. One short run
+    /// alone is such a redraw, which the halt then measures as noise.
+    ///
+    /// A short run whose readings just before and just after it lie in the still band
+    /// (within half the threshold of the rest level) is an impulse: the picture
+    /// redrawn in one frame and back at rest in the next, as H.264 does again and
+    /// again under a darker tone curve (single frames 0.2–0.3 px up, their neighbours
+    /// within 0.03 px). A rim that lifts is smooth over the final turn's frames and
+    /// is not back at rest in one frame; impulses are not counted among the runs.
+    fn check_tail_settled(&self, tail: &RestTail) -> Result<(), SignalError> {
+        let (z_rim, rest) = (self.z_rim, tail.rest);
+        let runs = rise_runs(&tail.frames, |i| self.moving(i, rest));
+        let readings = |run: &[usize]| {
+            run.iter()
+                .filter(|&&i| i == 0 || z_rim[i] != z_rim[i - 1])
+                .count()
+        };
+        let at_rest = |n: Option<usize>| {
+            n.and_then(|n| self.samples.get(n))
+                .is_some_and(|&i| (z_rim[i] - rest.level).abs() <= 0.5 * rest.threshold)
+        };
+        let impulse = |run: &[usize]| {
+            let (first, last) = (self.position[run[0]], self.position[run[run.len() - 1]]);
+            readings(run) <= REFRESH_FRAMES
+                && at_rest(first.checked_sub(1))
+                && at_rest(Some(last + 1))
+        };
+        let lifts = runs.iter().filter(|run| !impulse(run)).count();
+        if lifts > 1 || runs.iter().any(|run| readings(run) > REFRESH_FRAMES) {
+            let i = *runs.last().and_then(|run| run.last()).expect("a rise");
+            return Err(SignalError::TailNotAtRest {
+                tail_start: tail.start,
+                t_moving: self.t[i],
+                deviation: z_rim[i] - rest.level,
+                threshold: rest.threshold,
+            });
+        }
+        Ok(())
+    }
+
+    /// Step 2, the oscillation ([`oscillation`]). A correlated tail whose spread stays
+    /// within twice the noise floor is codec or sensor texture on a still frame, not
+    /// a disk still rocking, and is not checked.
+    fn check_tail_not_oscillating(&self, tail: &RestTail) -> Result<(), SignalError> {
+        let (z_rim, Rest { level, noise, .. }) = (self.z_rim, tail.rest);
+        let oscillating = noise > 2.0 * self.config.noise_floor;
+        let Some((lag, correlation)) =
+            oscillation(z_rim, &tail.frames, level, noise).filter(|_| oscillating)
+        else {
+            return Ok(());
+        };
+        let frames = &tail.frames;
+        let rms = (frames
             .iter()
             .map(|&i| (z_rim[i] - level).powi(2))
             .sum::<f64>()
-            / tail.len() as f64)
+            / frames.len() as f64)
             .sqrt();
-        return Err(SignalError::TailOscillates {
-            tail_start,
+        Err(SignalError::TailOscillates {
+            tail_start: tail.start,
             lag,
             correlation,
             rms,
-        });
+        })
     }
-    // The last frame of motion: the last rise before the first span without one
-    // that is as long as the rest tail or as [`MISSED_TURNS`] turns (module docs: a
-    // disk lying flat does not rise again, and a decaying oscillation that stays below
-    // the threshold for whole turns does not rise above it again either).
-    let last_moving = |level: f64, noise: f64, threshold: f64| {
-        let first = samples.iter().position(|&i| motion(i, level, threshold))?;
+
+    /// Step 3, one search: the last frame of motion, the last rise before the first
+    /// span without one that is as long as the rest tail or as [`MISSED_TURNS`] turns
+    /// (module docs: a disk lying flat does not rise again, and a decaying oscillation
+    /// that stays below the threshold for whole turns does not rise above it again
+    /// either). `None` if no frame moves.
+    fn last_motion(&self, rest: Rest) -> Option<LastMotion> {
+        let (t, z_rim, samples) = (self.t, self.z_rim, &self.samples);
+        let first = samples.iter().position(|&i| self.motion(i, rest))?;
         // The last rise, as a position in `samples` and as a frame index.
         let (mut last_n, mut last) = (first, samples[first]);
         // The times of the turns' peaks so far: a rise higher than its neighbours that
         // stands more than the threshold above the lowest reading since the last one.
         let mut turns: Vec<f64> = Vec::new();
-        let mut low = level;
+        let mut low = rest.level;
         let span = |turns: &[f64]| {
-            turn_period(turns).map_or(config.rest_tail_s, |p| {
-                (MISSED_TURNS * p).min(config.rest_tail_s)
+            turn_period(turns).map_or(self.config.rest_tail_s, |p| {
+                (MISSED_TURNS * p).min(self.config.rest_tail_s)
             })
         };
         for (n, &i) in samples.iter().enumerate().skip(first + 1) {
-            let copy = repeated(&samples, z_rim, n, noise, config.quantum)
-                && z_rim[i] - level <= threshold + RESOLVED_SIGMAS * noise;
-            let still = !motion(i, level, threshold)
-                || copy
-                || final_turn(&turns)
-                    .is_some_and(|p| in_held_picture(n, p, level, threshold, noise));
-            if still {
+            if self.no_rise(n, rest, &turns) {
                 low = low.min(z_rim[i]);
                 continue;
             }
@@ -314,7 +458,7 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             }
             let before = z_rim[samples[n - 1]];
             let after = samples.get(n + 1).map_or(f64::NEG_INFINITY, |&j| z_rim[j]);
-            if z_rim[i] >= before && z_rim[i] > after && z_rim[i] - low > threshold {
+            if z_rim[i] >= before && z_rim[i] > after && z_rim[i] - low > rest.threshold {
                 turns.push(t[i]);
                 low = z_rim[i];
             } else {
@@ -322,113 +466,142 @@ pub fn halt_time(t: &[f64], z_rim: &[f64], config: &SignalConfig) -> Result<Halt
             }
             (last_n, last) = (n, i);
         }
-        Some((last, span(&turns), final_turn(&turns)))
-    };
-    let max_deviation = samples
-        .iter()
-        .map(|&i| z_rim[i] - level)
-        .fold(0.0, f64::max);
-    let Some((first_guess, first_span, first_period)) = last_moving(level, noise, threshold) else {
-        return Err(SignalError::NoMotion {
-            threshold,
-            max_deviation,
-        });
-    };
-    // Re-measure over the whole rest segment after the guess, until it settles. The
-    // rim is never below its rest, so every reading below the rest level in that
-    // segment is noise: the deepest one, widened as the tail's band is, bounds the
-    // noise's own excursions (H.264 refresh frames, 4–6 σ of the copied frames, in
-    // either direction) wherever they fall in the segment, not only in the tail.
-    let (mut index, mut span, mut period) = (first_guess, first_span, first_period);
-    let (mut level, mut noise, mut threshold) = (level, noise, threshold);
-    for _ in 0..MAX_HALT_ITERATIONS {
-        // The rest segment's readings, but for still pictures held above the rest
-        // (module docs): they are the codec's, not the noise about the rest, and when
-        // they make up a third of the segment they would raise the noise and the
-        // level, then the threshold, move t_φ earlier and take the final turns into the
-        // segment in turn.
-        let rest: Vec<usize> = samples
+        Some(LastMotion {
+            index: last,
+            span: span(&turns),
+            period: final_turn(&turns),
+        })
+    }
+
+    /// Whether the reading at position `n` of `samples` is no rise for the search of
+    /// step 3: no motion, or a rise that repeats an earlier reading exactly (a
+    /// reference picture shown again, [`repeated`]) within [`RESOLVED_SIGMAS`] σ of
+    /// the threshold, or one inside a picture held level for [`HELD_TURN_FRACTION`]
+    /// of the final turn of the peaks `turns` so far ([`held`]).
+    fn no_rise(&self, n: usize, rest: Rest, turns: &[f64]) -> bool {
+        let i = self.samples[n];
+        let copy = repeated(
+            &self.samples,
+            self.z_rim,
+            n,
+            rest.noise,
+            self.config.quantum,
+        ) && self.z_rim[i] - rest.level <= rest.threshold + RESOLVED_SIGMAS * rest.noise;
+        !self.motion(i, rest)
+            || copy
+            || final_turn(turns).is_some_and(|p| self.in_held_picture(n, p, rest))
+    }
+
+    /// Step 3, the iteration: the rest re-measured over the whole rest segment after
+    /// the last frame of motion found, and that frame found again with it, until it
+    /// stays put (at most [`MAX_HALT_ITERATIONS`] times). Returns the settled last
+    /// motion and the rest of the last measurement.
+    fn settle(&self, first_guess: LastMotion, rest: Rest, band: f64) -> (LastMotion, Rest) {
+        let (mut motion, mut rest) = (first_guess, rest);
+        for _ in 0..MAX_HALT_ITERATIONS {
+            rest = self.remeasure_rest(&motion, rest, band);
+            let next = self.last_motion(rest).unwrap_or(motion);
+            if next.index == motion.index {
+                break;
+            }
+            motion = next;
+        }
+        (motion, rest)
+    }
+
+    /// The rest measured over every frame after the last motion, but for still
+    /// pictures held above the rest (module docs): they are the codec's, not the
+    /// noise about the rest, and when they make up a third of the segment they would
+    /// raise the noise and the level, then the threshold, move t_φ earlier and take
+    /// the final turns into the segment in turn.
+    ///
+    /// The rim is never below its rest, so every reading below the rest level in
+    /// that segment is noise: the deepest one, widened as the tail's `band` is,
+    /// bounds the noise's own excursions (H.264 refresh frames, 4–6 σ of the copied
+    /// frames, in either direction) wherever they fall in the segment, not only in
+    /// the tail. A frame more than the span that ends the motion after t_φ is rest by
+    /// the definition of t_φ (a disk lying flat does not rise again), so its rise, a
+    /// lone excursion above the threshold included, is noise too.
+    fn remeasure_rest(&self, motion: &LastMotion, previous: Rest, band: f64) -> Rest {
+        let (t, z_rim) = (self.t, self.z_rim);
+        let frames: Vec<usize> = self
+            .samples
             .iter()
             .copied()
-            .filter(|&i| i > index && !(risen(i, level, threshold) && still(i, threshold)))
+            .filter(|&i| {
+                i > motion.index && !(self.risen(i, previous) && self.still(i, previous.threshold))
+            })
             .collect();
-        (level, noise) = rest_statistics(z_rim, &rest, config.noise_floor);
-        let below = BAND_WIDENING * rest.iter().map(|&i| level - z_rim[i]).fold(0.0, f64::max);
-        // A frame more than the span that ends the motion after t_φ is rest by the
-        // definition of t_φ (a disk lying flat does not rise again), so its rise, a
-        // lone excursion above the threshold included, is noise too.
+        let (level, noise) = rest_statistics(z_rim, &frames, self.config.noise_floor);
+        let below = BAND_WIDENING * frames.iter().map(|&i| level - z_rim[i]).fold(0.0, f64::max);
         let lone = BAND_WIDENING
-            * rest
+            * frames
                 .iter()
-                .filter(|&&i| t[i] - t[index] >= span && !still(i, threshold))
+                .filter(|&&i| {
+                    t[i] - t[motion.index] >= motion.span && !self.still(i, previous.threshold)
+                })
                 .map(|&i| z_rim[i] - level)
                 .fold(0.0, f64::max);
-        threshold = (config.motion_sigmas * noise)
+        let threshold = (self.config.motion_sigmas * noise)
             .max(band)
             .max(below)
             .max(lone);
-        let (next, next_span, next_period) =
-            last_moving(level, noise, threshold).unwrap_or((index, span, period));
-        if next == index {
-            break;
+        Rest {
+            level,
+            noise,
+            threshold,
         }
-        (index, span, period) = (next, next_span, next_period);
     }
-    // The last rise is the last peak or a frame on its way up; the rim then comes
-    // down to the plate, and frames that continue that descent by more than the
-    // noise above the rest level are motion still, below the threshold or not (under
-    // flicker the rest noise is large: a descent of 0.33 and 0.22 px after a 1.23 px
-    // peak lies under a 5σ threshold of 0.9 px, yet is the rim coming down). They must
-    // stand as far above the picture right after them too (the median of the next
-    // [`MIN_REST_FRAMES`] readings): an encoder settles on a still disk over many
-    // frames, so its first still pictures may read the edge above the later level by
-    // more than σ (about 3 σ), and the frames after them read the same. Against that
-    // median alone, white noise would extend the descent more often (its own noise adds
-    // to the test's).
-    while let Some(n) = samples.iter().position(|&i| i > index && t[i] <= until) {
-        let next = samples[n];
-        // A rise that the search above took for a held picture is no descent either
-        // (a repeated reading may be: the decoder may show a picture again while the
-        // rim comes down, repeating a reading two frames back to 1e-8 px a frame
-        // before the halt, at the true height of the descent).
-        if moving(next, level, threshold)
-            && period.is_some_and(|p| in_held_picture(n, p, level, threshold, noise))
-        {
-            break;
-        }
-        let after: Vec<f64> = samples[n + 1..]
+
+    /// Step 4: the last frame of motion after the final descent. The last rise is the
+    /// last peak or a frame on its way up; the rim then comes down to the plate, and
+    /// frames that continue that descent by more than the noise above the rest level
+    /// are motion still, below the threshold or not (under flicker the rest noise is
+    /// large: a descent of 0.33 and 0.22 px after a 1.23 px peak lies under a 5σ
+    /// threshold of 0.9 px, yet is the rim coming down). They must stand as far above
+    /// the picture right after them too (the median of the next [`MIN_REST_FRAMES`]
+    /// readings): an encoder settles on a still disk over many frames, so its first
+    /// still pictures may read the edge above the later level by more than σ (about
+    /// 3 σ), and the frames after them read the same. Against that median alone,
+    /// white noise would extend the descent more often (its own noise adds to the
+    /// test's).
+    fn follow_descent(&self, motion: &LastMotion, rest: Rest) -> usize {
+        let (t, z_rim, samples) = (self.t, self.z_rim, &self.samples);
+        let mut index = motion.index;
+        while let Some(n) = samples
             .iter()
-            .take(MIN_REST_FRAMES)
-            .map(|&i| z_rim[i])
-            .collect();
-        let still = if after.is_empty() {
-            level
-        } else {
-            median(&after).max(level)
-        };
-        if z_rim[next] - still > noise && z_rim[next] < z_rim[index] {
-            index = next;
-        } else {
-            break;
+            .position(|&i| i > index && t[i] <= self.until)
+        {
+            let next = samples[n];
+            // A rise that the search took for a held picture is no descent either (a
+            // repeated reading may be: the decoder may show a picture again while the
+            // rim comes down, repeating a reading two frames back to 1e-8 px a frame
+            // before the halt, at the true height of the descent).
+            if self.moving(next, rest)
+                && motion
+                    .period
+                    .is_some_and(|p| self.in_held_picture(n, p, rest))
+            {
+                break;
+            }
+            let after: Vec<f64> = samples[n + 1..]
+                .iter()
+                .take(MIN_REST_FRAMES)
+                .map(|&i| z_rim[i])
+                .collect();
+            let still = if after.is_empty() {
+                rest.level
+            } else {
+                median(&after).max(rest.level)
+            };
+            if z_rim[next] - still > rest.noise && z_rim[next] < z_rim[index] {
+                index = next;
+            } else {
+                break;
+            }
         }
+        index
     }
-    let t_phi = config.halt_at.unwrap_or(t[index]);
-    let unbounded = SignalConfig {
-        motion_until: None,
-        ..config.clone()
-    };
-    let motion_cut = config.motion_until.is_some()
-        && halt_time(t, z_rim, &unbounded).is_ok_and(|free| free.index > index);
-    Ok(Halt {
-        index,
-        t_phi,
-        rest_level: level,
-        noise,
-        threshold,
-        rest_frames: samples.iter().filter(|&&i| i > index).count(),
-        shifted_t: t.iter().map(|&x| x - t_phi).collect(),
-        motion_cut,
-    })
 }
 
 /// Whether the reading at position `n` of `samples` belongs to a held picture: some

@@ -9,7 +9,7 @@
 //! cannot tell the sense of precession).
 
 use super::RimModel;
-use crate::numeric::lsq::levenberg_marquardt;
+use crate::numeric::lsq::{LsqFit, levenberg_marquardt};
 use std::f64::consts::PI;
 
 /// Starting values of a local fit.
@@ -37,6 +37,16 @@ impl Terms {
 
     fn parameters(self) -> usize {
         4 + usize::from(self.chirp)
+    }
+
+    /// (φ, χ) at scaled time `u` for the scaled parameters `p`: φ = p₀ + p₁u,
+    /// χ = p₂ + p₃u (+ p₄u² with the chirp).
+    fn state(self, p: &[f64], u: f64) -> (f64, f64) {
+        let mut chi = p[2] + p[3] * u;
+        if self.chirp {
+            chi += p[4] * u * u;
+        }
+        (p[0] + p[1] * u, chi)
     }
 }
 
@@ -72,9 +82,7 @@ pub(crate) fn fit_local(
     terms: Terms,
     shift: Option<(f64, f64)>,
 ) -> Option<LocalFit> {
-    let parameters = terms.parameters();
-    let chirp = terms.chirp;
-    if t.len() <= parameters {
+    if t.len() <= terms.parameters() {
         return None;
     }
     let half_width = t
@@ -96,78 +104,90 @@ pub(crate) fn fit_local(
         init.chi,
         init.omega * half_width,
     ];
-    if chirp {
+    if terms.chirp {
         p0.push(0.0);
     }
-    // The Jacobian by the chain rule: with φ_i = p₀ + p₁u_i and
-    // χ_i = p₂ + p₃u_i (+ p₄u_i²), ∂r_i/∂p = (∂z/∂φ [1, u_i], ∂z/∂χ [1, u_i, u_i²]),
-    // from the model's partials: two sin/cos pairs per sample instead of the ten
-    // model evaluations of central differences in all parameters.
-    let state = |p: &[f64], ui: f64| {
-        let mut chi = p[2] + p[3] * ui;
-        if chirp {
-            chi += p[4] * ui * ui;
-        }
-        (p[0] + p[1] * ui, chi)
-    };
-    let fit = levenberg_marquardt(
+    let fit = fit_scaled(model, &u, z, &p0, terms)?;
+    LocalFit::from_scaled(&fit, half_width, terms)
+}
+
+/// The least-squares fit of the model in scaled time `u` to the heights `z`, from
+/// the scaled parameters `p0` (φ₀, φ₁w, χ₀, ωw[, ½ω̇w²]). The Jacobian by the chain
+/// rule: with φ_i = p₀ + p₁u_i and χ_i = p₂ + p₃u_i (+ p₄u_i²),
+/// ∂r_i/∂p = (∂z/∂φ [1, u_i], ∂z/∂χ [1, u_i, u_i²]), from the model's partials: two
+/// sin/cos pairs per sample instead of the ten model evaluations of central
+/// differences in all parameters.
+fn fit_scaled(
+    model: &dyn RimModel,
+    u: &[f64],
+    z: &[f64],
+    p0: &[f64],
+    terms: Terms,
+) -> Option<LsqFit> {
+    levenberg_marquardt(
         |p, out| {
-            for ((o, &ui), &zi) in out.iter_mut().zip(&u).zip(z) {
-                let (phi, chi) = state(p, ui);
+            for ((o, &ui), &zi) in out.iter_mut().zip(u).zip(z) {
+                let (phi, chi) = terms.state(p, ui);
                 *o = model.z_rim(phi, chi) - zi;
             }
         },
         |p, jac| {
             for (i, &ui) in u.iter().enumerate() {
-                let (phi, chi) = state(p, ui);
+                let (phi, chi) = terms.state(p, ui);
                 let (dz_dphi, dz_dchi) = model.z_rim_partials(phi, chi);
                 jac[(i, 0)] = dz_dphi;
                 jac[(i, 1)] = dz_dphi * ui;
                 jac[(i, 2)] = dz_dchi;
                 jac[(i, 3)] = dz_dchi * ui;
-                if chirp {
+                if terms.chirp {
                     jac[(i, 4)] = dz_dchi * ui * ui;
                 }
             }
         },
-        &p0,
+        p0,
         u.len(),
-    )?;
-    let p = &fit.params;
-    let cov = fit.covariance()?;
-    let sign = if p[3] < 0.0 { -1.0 } else { 1.0 };
-    let result = LocalFit {
-        phi: p[0],
-        phi_slope: p[1] / half_width,
-        chi: sign * p[2],
-        omega: sign * p[3] / half_width,
-        omega_dot: if chirp {
-            sign * 2.0 * p[4] / (half_width * half_width)
-        } else {
-            0.0
-        },
-        sigma_phi: cov[(0, 0)].sqrt(),
-        sigma_chi: cov[(2, 2)].sqrt(),
-        sigma_omega: cov[(3, 3)].sqrt() / half_width,
-        ssr: fit.ssr,
-        dof: fit.dof,
-        points: u.len(),
-    };
-    let finite = [
-        result.phi,
-        result.phi_slope,
-        result.chi,
-        result.omega,
-        result.sigma_phi,
-        result.sigma_chi,
-        result.sigma_omega,
-    ]
-    .iter()
-    .all(|x| x.is_finite());
-    (finite && result.phi > 0.0).then_some(result)
+    )
 }
 
 impl LocalFit {
+    /// The fit in physical units from the scaled one (time in units of the window's
+    /// `half_width` \[s\]), with ω ≥ 0: the model is even in χ, so (χ₀, ω) and (−χ₀, −ω)
+    /// fit alike. `None` unless every value and σ is finite and the tilt positive.
+    fn from_scaled(fit: &LsqFit, half_width: f64, terms: Terms) -> Option<Self> {
+        let p = &fit.params;
+        let cov = fit.covariance()?;
+        let sign = if p[3] < 0.0 { -1.0 } else { 1.0 };
+        let result = LocalFit {
+            phi: p[0],
+            phi_slope: p[1] / half_width,
+            chi: sign * p[2],
+            omega: sign * p[3] / half_width,
+            omega_dot: if terms.chirp {
+                sign * 2.0 * p[4] / (half_width * half_width)
+            } else {
+                0.0
+            },
+            sigma_phi: cov[(0, 0)].sqrt(),
+            sigma_chi: cov[(2, 2)].sqrt(),
+            sigma_omega: cov[(3, 3)].sqrt() / half_width,
+            ssr: fit.ssr,
+            dof: fit.dof,
+            points: fit.residuals.len(),
+        };
+        let finite = [
+            result.phi,
+            result.phi_slope,
+            result.chi,
+            result.omega,
+            result.sigma_phi,
+            result.sigma_chi,
+            result.sigma_omega,
+        ]
+        .iter()
+        .all(|x| x.is_finite());
+        (finite && result.phi > 0.0).then_some(result)
+    }
+
     /// The time near `t_c` at which the phase is `target` mod 2π (0 for a peak, π for a
     /// trough), and the tilt φ there: χ₀ + ω τ + ½ ω̇ τ² = target, solved by Newton's
     /// method from the linear root.

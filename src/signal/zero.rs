@@ -43,7 +43,7 @@
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-use super::{RimModel, StateSeries, samples_to_the_halt};
+use super::{Peak, PrecessionSample, RimModel, StateSeries, samples_to_the_halt};
 use crate::numeric::lsq::levenberg_marquardt;
 
 /// Turns between φ's knots: φ changes by a few per cent a turn near the halt, so a
@@ -91,8 +91,33 @@ pub fn motion_zero(
         .zip(&v)
         .filter(|&(&x, _)| x >= first && x <= last)
         .unzip();
-    // φ's knots: every KNOT_TURNS turns (twice as many turning points), and the last;
-    // a last piece of less than a turn joins the one before it.
+    let knots = phi_knots(turning);
+    let parameters = knots.len() + 1;
+    if times.len() < parameters + MIN_DOF {
+        return None;
+    }
+    let profile = Profile {
+        model,
+        chi: precession_phase(turning, &times),
+        place: knot_places(&knots, &times),
+        heights: &heights,
+    };
+    let mut p0 = peaks_phi_at(&series.peaks.peaks, &knots)?;
+    p0.push(0.0);
+    let (offset, se) = profile.fit_offset(&p0)?;
+    (offset.is_finite() && se.is_finite() && se > 0.0).then_some(MotionZero {
+        offset,
+        se,
+        turning_points: turning.len(),
+        points: times.len(),
+    })
+}
+
+/// φ's knots: the time of every [`KNOT_TURNS`]th turn's turning point (twice as many
+/// turning points), and the last; a last piece of less than a turn joins the one
+/// before it, as it holds too few heights to fix its own slope.
+fn phi_knots(turning: &[PrecessionSample]) -> Vec<f64> {
+    let last = turning[turning.len() - 1].t;
     let step = 2 * KNOT_TURNS;
     let mut knots: Vec<f64> = turning.iter().step_by(step).map(|s| s.t).collect();
     match (turning.len() - 1) % step {
@@ -100,12 +125,13 @@ pub fn motion_zero(
         rest if rest < KNOT_TURNS => *knots.last_mut().expect("a knot") = last,
         _ => knots.push(last),
     }
-    let parameters = knots.len() + 1;
-    if times.len() < parameters + MIN_DOF {
-        return None;
-    }
-    // χ at each height, and its place among the knots (piece j, weight of knot j + 1).
-    let chi: Vec<f64> = times
+    knots
+}
+
+/// χ at each of the `times`: linear in t between the turning points, which fix it
+/// (module docs).
+fn precession_phase(turning: &[PrecessionSample], times: &[f64]) -> Vec<f64> {
+    times
         .iter()
         .map(|&x| {
             let k = turning
@@ -114,23 +140,29 @@ pub fn motion_zero(
             let (a, b) = (&turning[k - 1], &turning[k]);
             a.psi + (b.psi - a.psi) * (x - a.t) / (b.t - a.t)
         })
-        .collect();
-    let place: Vec<(usize, f64)> = times
+        .collect()
+}
+
+/// The place of each of the `times` among the `knots`: the piece j of φ it lies on and
+/// the weight of knot j + 1 there.
+fn knot_places(knots: &[f64], times: &[f64]) -> Vec<(usize, f64)> {
+    times
         .iter()
         .map(|&x| {
             let j = (knots.partition_point(|&k| k <= x).max(1) - 1).min(knots.len() - 2);
             (j, (x - knots[j]) / (knots[j + 1] - knots[j]))
         })
-        .collect();
-    let phi_at = |p: &[f64], (j, w): (usize, f64)| (1.0 - w) * p[j] + w * p[j + 1];
-    // Start: φ of the peaks, interpolated at the knots; c = 0.
-    let peaks: Vec<&super::Peak> = series
-        .peaks
-        .peaks
+        .collect()
+}
+
+/// The starting φ at each of the `knots`: the tilt of the `peaks` (those with a finite
+/// positive one), interpolated, or the last beyond them; `None` where there is none.
+fn peaks_phi_at(peaks: &[Peak], knots: &[f64]) -> Option<Vec<f64>> {
+    let peaks: Vec<&Peak> = peaks
         .iter()
         .filter(|pk| pk.phi.is_finite() && pk.phi > 0.0)
         .collect();
-    let mut p0: Vec<f64> = knots
+    let p0: Vec<f64> = knots
         .iter()
         .map(|&k| {
             let i = peaks
@@ -145,35 +177,50 @@ pub fn motion_zero(
             }
         })
         .collect();
-    if !p0.iter().all(|x| x.is_finite()) {
-        return None;
+    p0.iter().all(|x| x.is_finite()).then_some(p0)
+}
+
+/// The rim heights of the fit window and the profile they are fitted with: φ
+/// piecewise linear between the knots, χ from the turning points, and one offset c.
+struct Profile<'a> {
+    model: &'a dyn RimModel,
+    /// χ at each height.
+    chi: Vec<f64>,
+    /// Each height's piece of φ and the weight of its later knot ([`knot_places`]).
+    place: Vec<(usize, f64)>,
+    heights: &'a [f64],
+}
+
+impl Profile<'_> {
+    /// φ at the place `(j, w)` for the knots' values `p`.
+    fn phi_at(p: &[f64], (j, w): (usize, f64)) -> f64 {
+        (1.0 - w) * p[j] + w * p[j + 1]
     }
-    p0.push(0.0);
-    let c = parameters - 1;
-    let fit = levenberg_marquardt(
-        |p, out| {
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = model.z_rim(phi_at(p, place[i]), chi[i]) + p[c] - heights[i];
-            }
-        },
-        |p, jac: &mut DMatrix<f64>| {
-            jac.fill(0.0);
-            for (i, &(j, w)) in place.iter().enumerate() {
-                let (dz_dphi, _) = model.z_rim_partials(phi_at(p, (j, w)), chi[i]);
-                jac[(i, j)] = dz_dphi * (1.0 - w);
-                jac[(i, j + 1)] = dz_dphi * w;
-                jac[(i, c)] = 1.0;
-            }
-        },
-        &p0,
-        times.len(),
-    )?;
-    let se = fit.covariance()?[(c, c)].sqrt();
-    let offset = fit.params[c];
-    (offset.is_finite() && se.is_finite() && se > 0.0).then_some(MotionZero {
-        offset,
-        se,
-        turning_points: turning.len(),
-        points: times.len(),
-    })
+
+    /// c and its standard error from a Levenberg–Marquardt fit of φ at the knots and
+    /// c (the last parameter), started from `p0`; `None` if the fit fails.
+    fn fit_offset(&self, p0: &[f64]) -> Option<(f64, f64)> {
+        let (model, chi, place) = (self.model, &self.chi, &self.place);
+        let c = p0.len() - 1;
+        let fit = levenberg_marquardt(
+            |p, out| {
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = model.z_rim(Self::phi_at(p, place[i]), chi[i]) + p[c] - self.heights[i];
+                }
+            },
+            |p, jac: &mut DMatrix<f64>| {
+                jac.fill(0.0);
+                for (i, &(j, w)) in place.iter().enumerate() {
+                    let (dz_dphi, _) = model.z_rim_partials(Self::phi_at(p, (j, w)), chi[i]);
+                    jac[(i, j)] = dz_dphi * (1.0 - w);
+                    jac[(i, j + 1)] = dz_dphi * w;
+                    jac[(i, c)] = 1.0;
+                }
+            },
+            p0,
+            self.heights.len(),
+        )?;
+        let se = fit.covariance()?[(c, c)].sqrt();
+        Some((fit.params[c], se))
+    }
 }
