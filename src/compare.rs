@@ -164,6 +164,11 @@ pub struct CompareOptions {
     pub method: EtaMethod,
     /// Time of the initial state before the halt \[s\].
     pub lead_s: f64,
+    /// When the state `lead_s` before the halt lies before the first measured peak,
+    /// start from the earliest measured state instead, with a warning (the default
+    /// lead's behaviour: the fit window can be shorter than eq. 4.43's 0.5 s); else
+    /// such a lead is refused.
+    pub lead_falls_back: bool,
     /// Exponent p of augmented contour friction (start value of the fit).
     pub augmented_exponent: f64,
     /// μ; `None`: from the experiment's material (Table 3.1).
@@ -179,6 +184,7 @@ impl CompareOptions {
             model,
             method: EtaMethod::TunedToHalt,
             lead_s: DEFAULT_LEAD_S,
+            lead_falls_back: true,
             augmented_exponent: DEFAULT_AUGMENTED_EXPONENT,
             mu: None,
             contact_gap_m: DEFAULT_CONTACT_GAP_M,
@@ -429,6 +435,43 @@ fn local_value(points: &[(f64, f64)], t0: f64) -> Option<(f64, usize)> {
     }
 }
 
+/// `options` with a lead whose initial state the measurement reaches: the given one,
+/// or, when it lies before the first measured peak and `lead_falls_back`, the first
+/// peak's (the earliest measured state), with a warning that says so.
+fn lead_that_fits(
+    experiment: &Experiment,
+    options: &CompareOptions,
+    warnings: &mut Vec<String>,
+) -> CompareOptions {
+    let peaks = &experiment.series.peaks;
+    let Some(first) = peaks.peaks.first().map(|p| -p.t) else {
+        return *options;
+    };
+    if !options.lead_falls_back || options.lead_s <= first + half_turn_before_first(peaks) {
+        return *options;
+    }
+    warnings.push(format!(
+        "the state {} s before the halt lies before the first measured peak: the \
+         comparison starts from the earliest measured state, {first:.4} s before the halt \
+         (give --lead to choose another)",
+        options.lead_s
+    ));
+    CompareOptions {
+        lead_s: first,
+        ..*options
+    }
+}
+
+/// Half a turn at the first peak's precession rate \[s\] (0 without one): the peaks
+/// sample the turns, so a state that far before the first is still measured.
+fn half_turn_before_first(peaks: &crate::signal::PeakSeries) -> f64 {
+    peaks
+        .precession
+        .first()
+        .and_then(|p| p.psi_dot_forward)
+        .map_or(0.0, |r| std::f64::consts::PI / r.abs())
+}
+
 /// The initial state `lead_s` before the halt (module docs: conventions).
 ///
 /// φ and ψ̇ come from the per-frame states when at least three lie within the local
@@ -449,14 +492,7 @@ pub fn estimate_initial_state(
     let series = &experiment.series;
     let t0 = -lead_s;
     let first = series.peaks.peaks.first().map_or(f64::INFINITY, |p| p.t);
-    // Half a turn of slack before the first peak (the peak times sample the turns).
-    let slack = series
-        .peaks
-        .precession
-        .first()
-        .and_then(|p| p.psi_dot_forward)
-        .map_or(0.0, |r| std::f64::consts::PI / r.abs());
-    if t0 < first - slack {
+    if t0 < first - half_turn_before_first(&series.peaks) {
         return Err(data(format!(
             "the initial state {lead_s} s before the halt lies before the first measured \
              peak (t = {first:.4} s); give a shorter --lead"
@@ -994,8 +1030,9 @@ pub fn compare(
     options: &CompareOptions,
 ) -> Result<Comparison, CompareError> {
     check_options(experiment, dir, options)?;
-    let (model, lead) = (options.model, options.lead_s);
     let mut warnings = Vec::new();
+    let options = &lead_that_fits(experiment, options, &mut warnings);
+    let (model, lead) = (options.model, options.lead_s);
     let initial = estimate_initial_state(experiment, dir, lead)?;
     let measured = measured_window(experiment, dir, lead, &mut warnings)?;
     let (mu, mu_source, mu_warning) = match options.mu {

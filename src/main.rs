@@ -264,9 +264,10 @@ struct CompareArgs {
     /// best one is drawn over the footage (unless --no-overlay).
     #[arg(long)]
     all_models: bool,
-    /// Time of the initial state before the halt [s] (eq. 4.43: 0.5).
-    #[arg(long, default_value_t = eulerdisk::compare::DEFAULT_LEAD_S)]
-    lead: f64,
+    /// Time of the initial state before the halt [s] (default 0.5, eq. 4.43; when the
+    /// measurement does not reach back that far, the earliest measured state).
+    #[arg(long)]
+    lead: Option<f64>,
     /// Exponent p of augmented contour friction (start value with --fit).
     #[arg(long, default_value_t = 0.722)]
     p: f64,
@@ -1145,7 +1146,8 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         } else {
             EtaMethod::TunedToHalt
         },
-        lead_s: args.lead,
+        lead_s: args.lead.unwrap_or(eulerdisk::compare::DEFAULT_LEAD_S),
+        lead_falls_back: args.lead.is_none(),
         augmented_exponent: args.p,
         mu: args.mu,
         contact_gap_m: args.contact_gap,
