@@ -564,3 +564,33 @@ fn container_timestamp_gaps_are_flagged_and_keep_the_time() {
     assert!(!line.contains("WARNING"), "{line}");
     assert!((n(&early) - true_n).abs() < 0.02, "n = {}", n(&early));
 }
+
+/// Issue 72 §2: a calibration whose side reads far thicker, against the diameter, than
+/// the disk's dimensions allow (here the config's disk a third as thick as the one
+/// filmed, as a reflection taken for part of the disk would read) stops with an error
+/// that names the factor and what to check, instead of running on with the diameter's
+/// scale and the rim gauge on the wrong edge; and the failure page says so.
+#[test]
+fn a_side_thicker_than_the_disk_allows_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(fixture("side-dark-n050.mp4"), dir.path().join("clip.mp4")).unwrap();
+    std::fs::write(
+        dir.path().join("clip.toml"),
+        "[disk]\nhalf_thickness_m = 0.00212\n",
+    )
+    .unwrap();
+    let out = eulerdisk(dir.path(), &["analyse", "clip.mp4"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("times as thick, against its diameter")
+            && err.contains("half_thickness_m")
+            && err.contains("perspective factor"),
+        "{err}"
+    );
+    let record: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(dir.path().join("out/clip.mp4/failure.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(record["stage"], "opening and calibration");
+}

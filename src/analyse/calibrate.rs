@@ -451,13 +451,19 @@ const END_STEP_RATIO: f64 = 2.0;
 /// later one's ends are edges where its ends are not, or the plate under the disk
 /// shows a shadow ([`takes_over`]).
 ///
+/// With none plausible, the first whose side reads thinner than the range allows is
+/// taken (a top face lit like the side leaves z_t at the far rim: its scale then falls
+/// back to the diameter, with a warning). One that reads the side thicker (the
+/// reflection or shadow taken for part of the disk) puts the rim gauge on the wrong
+/// edge, and no scale mends that: with only such, the clip is refused
+/// ([`VisionError::ImpossibleScale`]).
+///
 /// A dark-plate calibration of a light plate finds a sliver of the plate, an
 /// unsteady blob, or (on a plate brighter than the disk's side) a run that stops
 /// inside the disk where its side's shading crosses γ, with a plausible camera;
 /// a light-plate calibration of a dark plate takes the reflection for part of the
-/// disk. With neither plausible, the first that calibrated at all is taken (its
-/// scale then falls back to the diameter, with a warning), else the error of
-/// [`no_plate`] is returned. The description lists what each kind showed.
+/// disk. The description lists what each kind showed; with no calibration, the
+/// error of [`no_plate`] is returned.
 fn calibrate_detecting_plate(
     rest: &RestSides,
     side_config: &SideViewConfig,
@@ -466,6 +472,7 @@ fn calibrate_detecting_plate(
     let last = rest.sides.last().ok_or(VisionError::NoFrames)?;
     let mut taken: Option<(CalibrationReport, Plate, f64)> = None;
     let mut fallback = None;
+    let mut thickest: Option<f64> = None;
     let mut tried = Vec::new();
     let mut errors = Vec::new();
     for plate in [Plate::Dark, Plate::Light] {
@@ -483,7 +490,12 @@ fn calibrate_detecting_plate(
         };
         match plausible_end_step(&report, plate, last, disk, &mut tried) {
             None => {
-                fallback.get_or_insert((report, plate));
+                let factor = perspective_factor(&report, disk);
+                if factor > PERSPECTIVE_FACTOR_RANGE.1 {
+                    thickest = Some(thickest.map_or(factor, |f| f.min(factor)));
+                } else {
+                    fallback.get_or_insert((report, plate));
+                }
             }
             Some(step) => {
                 let first = taken.as_ref().map(|(report, _, step)| (report, *step));
@@ -493,10 +505,25 @@ fn calibrate_detecting_plate(
             }
         }
     }
-    match taken.map(|(report, plate, _)| (report, plate)).or(fallback) {
-        Some((report, plate)) => Ok((report, plate, tried.join("; "))),
-        None => Err(no_plate(&errors, &tried)),
+    match (
+        taken.map(|(report, plate, _)| (report, plate)).or(fallback),
+        thickest,
+    ) {
+        (Some((report, plate)), _) => Ok((report, plate, tried.join("; "))),
+        (None, Some(factor)) => Err(VisionError::ImpossibleScale {
+            factor,
+            max: PERSPECTIVE_FACTOR_RANGE.1,
+            tried: tried.join("; "),
+        }),
+        (None, None) => Err(no_plate(&errors, &tried)),
     }
+}
+
+/// The diameter's scale over the thickness's (eq. 3.10) of a calibration: the
+/// camera's perspective factor ([`ScaleReport`]).
+fn perspective_factor(report: &CalibrationReport, disk: &DiskParams) -> f64 {
+    let cal = &report.calibration;
+    ScaleReport::new(cal, cal.z_base, disk).perspective_factor
 }
 
 /// How sharply a plate kind's calibration changes across the disk's ends on the
@@ -513,7 +540,7 @@ fn plausible_end_step(
 ) -> Option<f64> {
     let (lo, hi) = PERSPECTIVE_FACTOR_RANGE;
     let cal = &report.calibration;
-    let factor = ScaleReport::new(cal, cal.z_base, disk).perspective_factor;
+    let factor = perspective_factor(report, disk);
     if !(lo..=hi).contains(&factor) {
         tried.push(format!(
             "{}: perspective factor {factor:.3}, outside {lo}–{hi}",

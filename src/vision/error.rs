@@ -74,6 +74,22 @@ pub enum VisionError {
         tolerance_px: f64,
     },
 
+    /// Every plate kind's calibration reads the disk's side thicker, against its
+    /// diameter, than any side view shows it (issue 72 §2).
+    #[error(
+        "the calibration reads the disk's side {factor:.2} times as thick, against its \
+         diameter, as the disk's dimensions allow (at most {max} for a camera that close): \
+         the reflection or the shadow below the disk was probably taken for part of it \
+         ({tried}); check the disk's `half_thickness_m` and `radius_m` in `[disk]`, and \
+         give `plate` (\"dark\" or \"light\") or the calibration points in \
+         `[calibration]` in the config"
+    )]
+    ImpossibleScale {
+        factor: f64,
+        max: f64,
+        tried: String,
+    },
+
     /// Neither plate kind could be calibrated on the rest frames.
     #[error(
         "the plate's kind was not recognised: {tried}; if you know it, give `plate` \
