@@ -108,6 +108,10 @@ fn a_clip_stored_at_playback_rate_is_blamed_on_its_frame_rate() {
         "{record}"
     );
     assert!(!record["try_next"].as_array().unwrap().is_empty());
+    assert!(
+        record["plate"].as_str().unwrap().starts_with("dark plate"),
+        "{record}"
+    );
     let html = std::fs::read_to_string(page.join("index.html")).unwrap();
     assert!(
         html.contains("not measured") && html.contains("<svg"),

@@ -152,6 +152,9 @@ pub fn analyse_clip_keeping<K: FrameKeeping>(
 pub struct Partial {
     /// The rest frame with the calibration points (PNG), once the clip was calibrated.
     pub calibration_png: Option<Vec<u8>>,
+    /// The plate kind the calibration took, and how it was told (what each kind
+    /// showed), once calibrated.
+    pub plate: Option<String>,
     /// The rim heights as measured, once every frame was read: (capture time \[s\],
     /// z_rim \[px\], NaN where no edge was found) per frame.
     pub heights: Option<(Vec<f64>, Vec<f64>)>,
@@ -187,6 +190,7 @@ pub fn analyse_clip_explaining<K: FrameKeeping>(
     let rest = calibrate::calibrate(clip, &mut opened, config, &params)
         .map_err(|e| refused(e, Partial::default()))?;
     partial.calibration_png = Some(assemble::calibration_png(&rest));
+    partial.plate = Some(rest.plate.clone());
     let measured = span::measure_spans(
         clip,
         &mut opened,

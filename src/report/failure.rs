@@ -33,6 +33,8 @@ pub struct FailureRecord {
     pub stage: String,
     /// The refusal, as the chain gave it.
     pub reason: String,
+    /// The plate kind the calibration took and how it was told, once calibrated.
+    pub plate: Option<String>,
     /// What to try, most likely first.
     pub try_next: Vec<String>,
     /// The crate version that refused it.
@@ -51,6 +53,7 @@ impl FailureRecord {
             clip: clip.to_path_buf(),
             stage: stage.into(),
             reason: failure.error.to_string(),
+            plate: failure.partial.plate.clone(),
             try_next: try_next(&failure.error),
             crate_version: env!("CARGO_PKG_VERSION").into(),
         }
@@ -74,6 +77,9 @@ fn try_next(error: &AnalyseError) -> Vec<String> {
         AnalyseError::Signal { .. } | AnalyseError::Fit { .. } => &[
             "check the rim heights below: the rim should rise and fall once a turn and come \
              to rest before the clip ends",
+            "check the rest frame and the plate kind below: a mirror image taken for the \
+             disk, or the wrong kind of plate, puts the rim's edge elsewhere; give `plate` \
+             (\"dark\" or \"light\") or the calibration points in the config",
             "check the frame rate (`fps`): too few frames a turn hide the peaks",
             "lengthen the fit window (`fit.window_s`) when too few peaks lie in it",
         ],
@@ -113,6 +119,7 @@ pub fn write_failure(dir: &Path, clip: &Path, failure: &Failure) -> Result<(), R
         }
         @if let Some(png) = calibration {
             h2 { "The rest frame" }
+            @if let Some(plate) = &record.plate { p { "Plate: " (plate) } }
             (png_figure(png, "Rest frame: x_l, x_r (green), z_t (yellow), z_base (red), centre line (blue)."))
         }
         p.note { "eulerdisk " (record.crate_version) "; " (FAILURE_FILE) " holds this in JSON." }
