@@ -499,7 +499,7 @@ fn calibrate_detecting_plate(
             }
             Some(step) => {
                 let first = taken.as_ref().map(|(report, _, step)| (report, *step));
-                if takes_over(first, step, last, &mut tried) {
+                if takes_over(first, &report, step, last, &mut tried) {
                     taken = Some((report, plate, step));
                 }
             }
@@ -566,8 +566,14 @@ fn plausible_end_step(
 /// plate's shadow, brighter a dark plate's mirror image. (A light plate under a
 /// darker tone curve can give both kinds the same disk; read as dark, its heights
 /// come out 2.5 % low and n +0.02.)
+///
+/// Before any of that, a later calibration whose disk is the first's mirror image
+/// (its top at the first's plate line, as tall) is never taken: on a plate that
+/// mirrors the disk, a light plate's reading of the rest frame can take the image
+/// below the plate line for the disk, with ends as sharp as the disk's.
 fn takes_over(
     first: Option<(&CalibrationReport, f64)>,
+    later: &CalibrationReport,
     step: f64,
     last: &FrameView,
     tried: &mut Vec<String>,
@@ -575,6 +581,10 @@ fn takes_over(
     let Some((first, first_step)) = first else {
         return true;
     };
+    if is_mirror_image(&later.calibration, &first.calibration) {
+        tried.push("the later kind's disk is the first's mirror image".into());
+        return false;
+    }
     if step > END_STEP_RATIO * first_step {
         return true;
     }
@@ -595,6 +605,21 @@ fn takes_over(
     under.is_some_and(|light| light < 0.0)
 }
 
+/// Whether `image`'s disk is `disk`'s mirror image in the plate: its top lies at
+/// `disk`'s plate line and it is as tall, each within [`MIRROR_TOLERANCE`] of the
+/// disk's height.
+fn is_mirror_image(image: &vision::Calibration, disk: &vision::Calibration) -> bool {
+    let height = disk.disk_height_px();
+    let tolerance = MIRROR_TOLERANCE * height;
+    (image.z_t - disk.z_base).abs() <= tolerance
+        && (image.disk_height_px() - height).abs() <= 2.0 * tolerance
+}
+
+/// How close, as a fraction of the disk's height, a mirror image's top lies to the
+/// plate line (the rounded bottom rim and the blur move both edges by a few px; a
+/// light plate's disk found as a sliver or a blob inside it lies elsewhere).
+const MIRROR_TOLERANCE: f64 = 0.05;
+
 /// The error when no plate kind calibrated: for the same reason each time (a disk
 /// not yet at rest, say), that reason; for different ones, each kind's (`tried`).
 fn no_plate(errors: &[VisionError], tried: &[String]) -> VisionError {
@@ -614,4 +639,31 @@ fn no_plate(errors: &[VisionError], tried: &[String]) -> VisionError {
 
 fn layout_name(two_view: bool) -> &'static str {
     if two_view { "two-view" } else { "side view" }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cal(z_t: f64, z_base: f64) -> vision::Calibration {
+        vision::Calibration {
+            x_l: 86.0,
+            x_r: 1138.0,
+            z_t,
+            z_base,
+        }
+    }
+
+    /// The readings of footage-open-2's drifting clip at rest: the dark plate's disk
+    /// (rows 244–436) and the light plate's, which is its mirror image (437–613,
+    /// shorter by the camera's elevation); a disk's own second reading, and a sliver
+    /// inside it, are not.
+    #[test]
+    fn a_disk_below_the_plate_line_as_tall_is_the_mirror_image() {
+        let disk = cal(244.1, 436.4);
+        assert!(is_mirror_image(&cal(437.0, 613.0), &disk));
+        assert!(!is_mirror_image(&cal(247.4, 434.0), &disk));
+        assert!(!is_mirror_image(&cal(437.0, 470.0), &disk));
+        assert!(!is_mirror_image(&cal(300.0, 480.0), &disk));
+    }
 }
