@@ -916,6 +916,32 @@ struct Objective<'a> {
 }
 
 impl Objective<'_> {
+    /// The least misfit from ln η = `start` and the augmented exponent `p`, as
+    /// (ln η, p, misfit): for the augmented contour Nelder–Mead on (ln η, p) with p
+    /// kept within [−0.5, 2.5], for the other models a bracketed 1-D search on ln η
+    /// that looks downwards first (larger η end the motion before the halt).
+    fn search(&mut self, model: ModelKind, start: f64, p: f64) -> (f64, f64, f64) {
+        if model == ModelKind::AugmentedContour {
+            let (x, cost) = nelder_mead_2d(
+                |x| {
+                    if (-0.5..=2.5).contains(&x[1]) {
+                        self.cost(x[0], x[1])
+                    } else {
+                        f64::INFINITY
+                    }
+                },
+                [start, p],
+                [-0.3, 0.1],
+                [1e-3, 1e-3],
+                120,
+            );
+            (x[0], x[1], cost)
+        } else {
+            let (x, cost) = minimise_1d(|x| self.cost(x, p), start, -0.2, 1e-3);
+            (x, p, cost)
+        }
+    }
+
     fn cost(&mut self, ln_eta: f64, p: f64) -> f64 {
         let mut spec = self.base;
         spec.eta = ln_eta.exp();
@@ -1032,7 +1058,7 @@ pub fn compare(
     check_options(experiment, dir, options)?;
     let mut warnings = Vec::new();
     let options = &lead_that_fits(experiment, options, &mut warnings);
-    let (model, lead) = (options.model, options.lead_s);
+    let lead = options.lead_s;
     let initial = estimate_initial_state(experiment, dir, lead)?;
     let measured = measured_window(experiment, dir, lead, &mut warnings)?;
     let (mu, mu_source, mu_warning) = match options.mu {
@@ -1041,20 +1067,9 @@ pub fn compare(
     };
     warnings.extend(mu_warning);
     let params = experiment.plan.disk;
-    let mut dissipation = Dissipation::new(model);
-    dissipation.augmented_exponent = options.augmented_exponent;
-    let base = SimulationSpec {
-        params,
-        mu,
-        eta: eta_guess(model),
-        dissipation,
-        initial: initial.state,
-        t_end: 2.0 * lead,
-        output_interval: OUTPUT_INTERVAL_S,
-        flat_angle: FLAT_ANGLE,
-        beta0: 0.0,
-    };
+    let base = starting_spec(params, mu, initial.state, options);
     let fitted = fit_eta(base, &measured, dir, options, &mut warnings)?;
+    let mut dissipation = base.dissipation;
     dissipation.augmented_exponent = fitted.p;
     let trajectory = fitted.trajectory;
     let (cost, errors, sampled) = misfit(&measured, &trajectory, lead);
@@ -1095,6 +1110,29 @@ pub fn compare(
         sampled,
         trajectory,
     })
+}
+
+/// The simulation every run of the comparison starts from: the measured state
+/// `initial`, the model's guess of η, and `2 × lead` seconds to run.
+fn starting_spec(
+    params: DiskParams,
+    mu: f64,
+    initial: InitialState,
+    options: &CompareOptions,
+) -> SimulationSpec {
+    let mut dissipation = Dissipation::new(options.model);
+    dissipation.augmented_exponent = options.augmented_exponent;
+    SimulationSpec {
+        params,
+        mu,
+        eta: eta_guess(options.model),
+        dissipation,
+        initial,
+        t_end: 2.0 * options.lead_s,
+        output_interval: OUTPUT_INTERVAL_S,
+        flat_angle: FLAT_ANGLE,
+        beta0: 0.0,
+    }
 }
 
 /// Refuses options no comparison can run with: a lead that is no positive time, a
@@ -1239,10 +1277,9 @@ fn fit_eta(
 }
 
 /// η, and p for the augmented contour, that minimise the misfit to the measured
-/// series, from ln η = `start`: Nelder–Mead on (ln η, p) with p kept within
-/// [−0.5, 2.5], or a bracketed 1-D search on ln η that looks downwards first (larger
-/// η end the motion before the halt). The trajectory is then run on past the data
-/// (to 3 leads, at least the lead and 0.5 s) to show where the model ends.
+/// series, from ln η = `start` ([`Objective::search`]). The trajectory is then run on
+/// past the data (to 3 leads, at least the lead and 0.5 s) to show where the model
+/// ends.
 fn least_squares_eta(
     base: SimulationSpec,
     measured: &Measured,
@@ -1258,30 +1295,7 @@ fn least_squares_eta(
         lead,
         evaluations: 0,
     };
-    let (ln_eta, p, cost) = if model == ModelKind::AugmentedContour {
-        let (x, cost) = nelder_mead_2d(
-            |x| {
-                if (-0.5..=2.5).contains(&x[1]) {
-                    objective.cost(x[0], x[1])
-                } else {
-                    f64::INFINITY
-                }
-            },
-            [start, options.augmented_exponent],
-            [-0.3, 0.1],
-            [1e-3, 1e-3],
-            120,
-        );
-        (x[0], x[1], cost)
-    } else {
-        let (x, cost) = minimise_1d(
-            |x| objective.cost(x, options.augmented_exponent),
-            start,
-            -0.2,
-            1e-3,
-        );
-        (x, options.augmented_exponent, cost)
-    };
+    let (ln_eta, p, cost) = objective.search(model, start, options.augmented_exponent);
     if !cost.is_finite() {
         return Err(CompareError::Fit {
             dir: dir.to_path_buf(),

@@ -295,135 +295,27 @@ impl ExperimentConfig {
     /// Every value against its physical range; an error is (the key, the reason
     /// with the unit).
     fn validate(&self) -> Result<(), (String, String)> {
-        let fail = |key: &str, reason: String| Err((key.to_string(), reason));
-        let positive = |key: &str, value: Option<f64>, unit: &str| match value {
-            Some(v) if !(v.is_finite() && v > 0.0) => fail(
-                key,
-                format!("`{key}` = {v} must be a positive number [{unit}]"),
-            ),
-            _ => Ok(()),
-        };
-        // Above 0, at most `max`.
-        let up_to = |key: &str, value: Option<f64>, max: f64, unit: &str| match value {
-            Some(v) if !(v > 0.0 && v <= max) => fail(
-                key,
-                format!("`{key}` = {v} must lie above 0 and at most {max} [{unit}]"),
-            ),
-            _ => Ok(()),
-        };
         if let Some(fps) = self.fps
             && !(MIN_FPS..=MAX_FPS).contains(&fps)
         {
-            return fail(
-                "fps",
+            return Err((
+                "fps".to_string(),
                 format!("`fps` = {fps} frames/s must lie within {MIN_FPS}–{MAX_FPS} frames/s"),
-            );
+            ));
         }
         positive("camera_distance_m", self.camera_distance_m, "m")?;
         if let Some(disk) = &self.disk {
-            let (mass, length, inertia) = DISK_LIMITS;
-            up_to("disk.mass_kg", disk.mass_kg, mass, "kg")?;
-            up_to("disk.radius_m", disk.radius_m, length, "m")?;
-            up_to("disk.half_thickness_m", disk.half_thickness_m, length, "m")?;
-            up_to(
-                "disk.inertia_a_kg_m2",
-                disk.inertia_a_kg_m2,
-                inertia,
-                "kg m²",
-            )?;
-            up_to(
-                "disk.inertia_c_kg_m2",
-                disk.inertia_c_kg_m2,
-                inertia,
-                "kg m²",
-            )?;
+            validate_disk(disk)?;
         }
         let vision = self.vision.clone().unwrap_or_default();
-        if vision.band_half_width_px == Some(0) {
-            return fail(
-                "vision.band_half_width_px",
-                "`vision.band_half_width_px` = 0 px: the band needs at least 1 column either \
-                 side of the centre line (leave the key out for the default, 2 % of the \
-                 disk's width)"
-                    .into(),
-            );
-        }
-        if let Some(gamma) = vision.gamma
-            && !(gamma > 0.0 && gamma < 1.0)
-        {
-            return fail(
-                "vision.gamma",
-                format!(
-                    "`vision.gamma` = {gamma} must lie strictly between 0 and 1 \
-                     (a fraction of full white, as MATLAB's im2bw level)"
-                ),
-            );
-        }
-        if let Some([x, y, w, h]) = vision.roi {
-            let fits = |start: u32, len: u32| len > 0 && start.checked_add(len).is_some();
-            if !(fits(x, w) && fits(y, h)) {
-                return fail(
-                    "vision.roi",
-                    format!(
-                        "`vision.roi` = [{x}, {y}, {w}, {h}] px ([x, y, width, height]) needs a \
-                         width and height above 0 and x + width, y + height below {} px",
-                        u32::MAX
-                    ),
-                );
-            }
-            if let Some(band) = vision.band_half_width_px
-                && 2 * u64::from(band) + 1 > u64::from(w)
-            {
-                return fail(
-                    "vision.band_half_width_px",
-                    format!(
-                        "`vision.band_half_width_px` = {band} px: the band (2 × {band} + 1 \
-                         columns) is wider than the region of interest ({w} px)"
-                    ),
-                );
-            }
-        }
+        validate_vision(&vision)?;
         if let Some(c) = &self.calibration {
-            if c.x_r.partial_cmp(&c.x_l) != Some(std::cmp::Ordering::Greater) {
-                return fail(
-                    "calibration.x_r",
-                    format!(
-                        "calibration: x_r = {} px must lie right of x_l = {} px",
-                        c.x_r, c.x_l
-                    ),
-                );
-            }
-            if c.z_base.partial_cmp(&c.z_t) != Some(std::cmp::Ordering::Greater) {
-                return fail(
-                    "calibration.z_base",
-                    format!(
-                        "calibration: z_base = {} px must lie below z_t = {} px \
-                         (image rows grow downward)",
-                        c.z_base, c.z_t
-                    ),
-                );
-            }
-            // analyse checks the same against a calibration it finds.
-            if let Some(band) = vision.band_half_width_px {
-                band_fits_disk(band, c.x_r - c.x_l)
-                    .or_else(|reason| fail("vision.band_half_width_px", reason))?;
-            }
+            validate_calibration(c, &vision)?;
         }
-        up_to(
-            "fit.window_s",
-            self.fit.as_ref().and_then(|f| f.window_s),
-            MAX_WINDOW_S,
-            "s",
-        )?;
-        if let Some(u) = self.fit.as_ref().and_then(|f| f.rim_zero_uncertainty_px)
-            && !(u.is_finite() && u >= 0.0)
-        {
-            return fail(
-                "fit.rim_zero_uncertainty_px",
-                format!("`fit.rim_zero_uncertainty_px` = {u} must be a number ≥ 0 [px]"),
-            );
+        match &self.fit {
+            Some(fit) => validate_fit(fit),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// The disk parameters: the preset (Euler's disk by default) with any measured
@@ -466,6 +358,150 @@ impl ExperimentConfig {
             .and_then(|f| f.rim_zero)
             .unwrap_or_default()
     }
+}
+
+/// An error of [`ExperimentConfig::validate`]: the key and the reason with the unit.
+type Invalid = (String, String);
+
+/// `value`, if given, must be a positive number in `unit`.
+fn positive(key: &str, value: Option<f64>, unit: &str) -> Result<(), Invalid> {
+    match value {
+        Some(v) if !(v.is_finite() && v > 0.0) => Err((
+            key.to_string(),
+            format!("`{key}` = {v} must be a positive number [{unit}]"),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// `value`, if given, must lie above 0 and at most `max` in `unit`.
+fn up_to(key: &str, value: Option<f64>, max: f64, unit: &str) -> Result<(), Invalid> {
+    match value {
+        Some(v) if !(v > 0.0 && v <= max) => Err((
+            key.to_string(),
+            format!("`{key}` = {v} must lie above 0 and at most {max} [{unit}]"),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The disk's mass, size and moments of inertia within [`DISK_LIMITS`].
+fn validate_disk(disk: &DiskConfig) -> Result<(), Invalid> {
+    let (mass, length, inertia) = DISK_LIMITS;
+    up_to("disk.mass_kg", disk.mass_kg, mass, "kg")?;
+    up_to("disk.radius_m", disk.radius_m, length, "m")?;
+    up_to("disk.half_thickness_m", disk.half_thickness_m, length, "m")?;
+    up_to(
+        "disk.inertia_a_kg_m2",
+        disk.inertia_a_kg_m2,
+        inertia,
+        "kg m²",
+    )?;
+    up_to(
+        "disk.inertia_c_kg_m2",
+        disk.inertia_c_kg_m2,
+        inertia,
+        "kg m²",
+    )?;
+    Ok(())
+}
+
+/// The vision keys: a band of at least one column either side, γ within (0, 1), and
+/// a region of interest of some width and height that fits in pixel coordinates and
+/// holds the band.
+fn validate_vision(vision: &VisionConfig) -> Result<(), Invalid> {
+    let fail = |key: &str, reason: String| Err((key.to_string(), reason));
+    if vision.band_half_width_px == Some(0) {
+        return fail(
+            "vision.band_half_width_px",
+            "`vision.band_half_width_px` = 0 px: the band needs at least 1 column either \
+             side of the centre line (leave the key out for the default, 2 % of the \
+             disk's width)"
+                .into(),
+        );
+    }
+    if let Some(gamma) = vision.gamma
+        && !(gamma > 0.0 && gamma < 1.0)
+    {
+        return fail(
+            "vision.gamma",
+            format!(
+                "`vision.gamma` = {gamma} must lie strictly between 0 and 1 \
+                 (a fraction of full white, as MATLAB's im2bw level)"
+            ),
+        );
+    }
+    if let Some([x, y, w, h]) = vision.roi {
+        let fits = |start: u32, len: u32| len > 0 && start.checked_add(len).is_some();
+        if !(fits(x, w) && fits(y, h)) {
+            return fail(
+                "vision.roi",
+                format!(
+                    "`vision.roi` = [{x}, {y}, {w}, {h}] px ([x, y, width, height]) needs a \
+                     width and height above 0 and x + width, y + height below {} px",
+                    u32::MAX
+                ),
+            );
+        }
+        if let Some(band) = vision.band_half_width_px
+            && 2 * u64::from(band) + 1 > u64::from(w)
+        {
+            return fail(
+                "vision.band_half_width_px",
+                format!(
+                    "`vision.band_half_width_px` = {band} px: the band (2 × {band} + 1 \
+                     columns) is wider than the region of interest ({w} px)"
+                ),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A calibration given in the config: the right edge right of the left, the base
+/// below the top, and the band within the disk.
+fn validate_calibration(c: &CalibrationConfig, vision: &VisionConfig) -> Result<(), Invalid> {
+    let fail = |key: &str, reason: String| Err((key.to_string(), reason));
+    if c.x_r.partial_cmp(&c.x_l) != Some(std::cmp::Ordering::Greater) {
+        return fail(
+            "calibration.x_r",
+            format!(
+                "calibration: x_r = {} px must lie right of x_l = {} px",
+                c.x_r, c.x_l
+            ),
+        );
+    }
+    if c.z_base.partial_cmp(&c.z_t) != Some(std::cmp::Ordering::Greater) {
+        return fail(
+            "calibration.z_base",
+            format!(
+                "calibration: z_base = {} px must lie below z_t = {} px \
+                 (image rows grow downward)",
+                c.z_base, c.z_t
+            ),
+        );
+    }
+    // analyse checks the same against a calibration it finds.
+    if let Some(band) = vision.band_half_width_px {
+        band_fits_disk(band, c.x_r - c.x_l)
+            .or_else(|reason| fail("vision.band_half_width_px", reason))?;
+    }
+    Ok(())
+}
+
+/// The fit window within [`MAX_WINDOW_S`] and the zero's uncertainty a number ≥ 0.
+fn validate_fit(fit: &FitConfig) -> Result<(), Invalid> {
+    let fail = |key: &str, reason: String| Err((key.to_string(), reason));
+    up_to("fit.window_s", fit.window_s, MAX_WINDOW_S, "s")?;
+    if let Some(u) = fit.rim_zero_uncertainty_px
+        && !(u.is_finite() && u >= 0.0)
+    {
+        return fail(
+            "fit.rim_zero_uncertainty_px",
+            format!("`fit.rim_zero_uncertainty_px` = {u} must be a number ≥ 0 [px]"),
+        );
+    }
+    Ok(())
 }
 
 /// The band's half-width when the config names none: [`BAND_FRACTION`] of the disk's

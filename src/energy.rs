@@ -1160,112 +1160,30 @@ impl HaltSighting {
     /// would move n by −0.06.
     fn fit(&self, t: &[f64], energy: &[f64], turns: &[f64]) -> Result<PowerLawFit, FitError> {
         let free = fit_free(t, energy, turns)?;
-        let se_t0_free = free.se_t0.unwrap_or(f64::NAN);
-        let t_last = t.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let ssr = |fit: &PowerLawFit| fit.residual_rms.powi(2) * fit.points as f64;
-        let held =
-            |t0: f64| fit_with_limit(t, energy, HaltTime::Fixed(t0), MAX_ITERATIONS, turns).ok();
-        // The sighting at the free fit's law: reported when the two are not combined.
-        let (t0_seen, var, unseen_s) = self.seen_at(free.a_e, free.n);
-        let mut used = SightingUse {
-            t0_seen,
-            se_t0_seen: var.sqrt(),
-            unseen_s,
-            t0_fitted: free.t0,
-            se_t0_fitted: se_t0_free,
-            combined: false,
-            turns_end: self.turns_end,
-            disagrees_with_turns: false,
-            visible_rise_m: self.visible_rise(),
-            rest_above_zero_m: self.rest_above_zero_m,
-        };
+        let profile = HeldProfile::new(t, energy, turns, &free);
+        let used = self.use_at_free_fit(&free);
         let unchanged = |used: SightingUse| {
             Ok(PowerLawFit {
                 halt_sighting: Some(used),
                 ..free.clone()
             })
         };
-        // Two measurements more than SIGHTING_DISAGREEMENT standard deviations of their
-        // difference apart are not combined (the sighting at the free fit's law, as
-        // reported, and the free fit's σ_t0).
-        if (used.t0_seen - free.t0).abs()
-            > SIGHTING_DISAGREEMENT * se_t0_free.hypot(used.se_t0_seen)
-        {
-            return unchanged(used);
+        if let Some(refused) = self.refused(&free, used) {
+            return unchanged(refused);
         }
-        // Nor when it and the turns' end T are as far apart: the sighting rests on
-        // the last frames, which a held picture ends early, T on every turn's time.
-        if let Some(turns) = self.turns_end
-            && (used.t0_seen - turns.t_end).abs()
-                > SIGHTING_DISAGREEMENT * turns.se.hypot(used.se_t0_seen)
-        {
-            return unchanged(SightingUse {
-                disagrees_with_turns: true,
-                ..used
-            });
-        }
-        // k: the profile's mean rise one σ_t0 either side of the free t0 (the later
-        // side alone where the earlier reaches the last sample), so that the profile's
-        // curvature there gives the free fit's σ_t0.
-        let rise = |t0: f64| held(t0).map(|f| ssr(&f) - ssr(&free));
-        let k = match (
-            rise(free.t0 + se_t0_free),
-            (free.t0 - se_t0_free > t_last)
-                .then(|| rise(free.t0 - se_t0_free))
-                .flatten(),
-        ) {
-            (Some(later), Some(earlier)) => 0.5 * (later + earlier),
-            (Some(later), None) => later,
-            _ => f64::NAN,
-        };
-        if !(k.is_finite() && k > 0.0) {
-            return unchanged(used);
-        }
-        let q = |t0: f64| -> Option<(f64, PowerLawFit, (f64, f64, f64))> {
-            let fit = held(t0)?;
-            let seen = self.seen_at(fit.a_e, fit.n);
-            let value = (ssr(&fit) - ssr(&free)) / k + (t0 - seen.0).powi(2) / seen.1;
-            value.is_finite().then_some((value, fit, seen))
-        };
-        // The search spans both measurements and four standard deviations beyond.
-        let reach = 4.0 * se_t0_free.hypot(used.se_t0_seen);
-        let lowest = t_last + LEAST_UNSEEN_FRAMES * self.frame_s;
-        let low = (free.t0.min(used.t0_seen) - reach).max(lowest);
-        let high = free.t0.max(used.t0_seen) + reach;
-        let Some(t0) = minimise(|x| q(x).map_or(f64::INFINITY, |v| v.0), low, high) else {
+        let Some(k) = profile.scale() else {
             return unchanged(used);
         };
-        let Some((_, fit, (seen, var_seen, unseen_s))) = q(t0) else {
+        let Some(combined) = self.combine(&profile, k, &used) else {
             return unchanged(used);
         };
-        // The profile's curvature and the law's slope in t0 at the minimum, by central
-        // differences a tenth of the free σ_t0 (or of the room left) apart.
-        let h = (0.1 * se_t0_free).min(0.5 * (t0 - t_last));
-        let (Some(before), Some(after)) = (held(t0 - h), held(t0 + h)) else {
+        let Some((se_a_e, se_n, se_t0)) = profile.spread(&combined, k) else {
             return unchanged(used);
         };
-        let curvature = (ssr(&after) - 2.0 * ssr(&fit) + ssr(&before)) / (h * h);
-        let var_profile = if curvature > 0.0 {
-            2.0 * k / curvature
-        } else {
-            f64::INFINITY
-        };
-        let var_t0 = 1.0 / (1.0 / var_profile + 1.0 / var_seen);
-        let slope_n = (after.n - before.n) / (2.0 * h);
-        let slope_a = (after.a_e - before.a_e) / (2.0 * h);
-        let se_n = (fit.se_n.powi(2) + slope_n.powi(2) * var_t0).sqrt();
-        let se_a_e = (fit.se_a_e.powi(2) + slope_a.powi(2) * var_t0).sqrt();
-        let se_t0 = var_t0.sqrt();
         // The free fit's quantile: its degrees of freedom and bandwidth.
         let quantile = interval_quantile(free.blocks - 3, free.bandwidth, free.blocks)?;
         let ci = |value: f64, se: f64| (value - quantile * se, value + quantile * se);
-        used = SightingUse {
-            t0_seen: seen,
-            se_t0_seen: var_seen.sqrt(),
-            unseen_s,
-            combined: true,
-            ..used
-        };
+        let Combined { t0, fit, .. } = combined;
         Ok(PowerLawFit {
             a_e: fit.a_e,
             n: fit.n,
@@ -1276,10 +1194,86 @@ impl HaltSighting {
             ci95_a_e: ci(fit.a_e, se_a_e),
             ci95_n: ci(fit.n, se_n),
             ci95_t0: Some(ci(t0, se_t0)),
-            halt_sighting: Some(used),
+            halt_sighting: Some(SightingUse {
+                t0_seen: combined.seen,
+                se_t0_seen: combined.var_seen.sqrt(),
+                unseen_s: combined.unseen_s,
+                combined: true,
+                ..used
+            }),
             r_squared: fit.r_squared,
             residual_rms: fit.residual_rms,
             ..free
+        })
+    }
+
+    /// The sighting at the free fit's law, as reported when the two are not combined.
+    fn use_at_free_fit(&self, free: &PowerLawFit) -> SightingUse {
+        let (t0_seen, var, unseen_s) = self.seen_at(free.a_e, free.n);
+        SightingUse {
+            t0_seen,
+            se_t0_seen: var.sqrt(),
+            unseen_s,
+            t0_fitted: free.t0,
+            se_t0_fitted: free.se_t0.unwrap_or(f64::NAN),
+            combined: false,
+            turns_end: self.turns_end,
+            disagrees_with_turns: false,
+            visible_rise_m: self.visible_rise(),
+            rest_above_zero_m: self.rest_above_zero_m,
+        }
+    }
+
+    /// The sighting `used`, as reported, when it is not to be combined: two
+    /// measurements more than [`SIGHTING_DISAGREEMENT`] standard deviations of their
+    /// difference apart are not (the sighting at the free fit's law and the free
+    /// fit's σ_t0); nor when it and the turns' end T are as far apart, as the
+    /// sighting rests on the last frames, which a held picture ends early, T on every
+    /// turn's time. `None` when it is to be combined.
+    fn refused(&self, free: &PowerLawFit, used: SightingUse) -> Option<SightingUse> {
+        let se_t0_free = free.se_t0.unwrap_or(f64::NAN);
+        if (used.t0_seen - free.t0).abs()
+            > SIGHTING_DISAGREEMENT * se_t0_free.hypot(used.se_t0_seen)
+        {
+            return Some(used);
+        }
+        if let Some(turns) = self.turns_end
+            && (used.t0_seen - turns.t_end).abs()
+                > SIGHTING_DISAGREEMENT * turns.se.hypot(used.se_t0_seen)
+        {
+            return Some(SightingUse {
+                disagrees_with_turns: true,
+                ..used
+            });
+        }
+        None
+    }
+
+    /// The t0 that minimises Q (the profile's rise over `k` plus the sighting's
+    /// squared distance over its variance), searched over both measurements and four
+    /// standard deviations beyond, after the last sample by at least
+    /// [`LEAST_UNSEEN_FRAMES`] frames; with the held fit and the sighting there.
+    fn combine(&self, profile: &HeldProfile, k: f64, used: &SightingUse) -> Option<Combined> {
+        let free = profile.free;
+        let q = |t0: f64| -> Option<(f64, PowerLawFit, (f64, f64, f64))> {
+            let fit = profile.held(t0)?;
+            let seen = self.seen_at(fit.a_e, fit.n);
+            let value = (squared_residual(&fit) - squared_residual(free)) / k
+                + (t0 - seen.0).powi(2) / seen.1;
+            value.is_finite().then_some((value, fit, seen))
+        };
+        let reach = 4.0 * profile.se_t0_free.hypot(used.se_t0_seen);
+        let lowest = profile.t_last + LEAST_UNSEEN_FRAMES * self.frame_s;
+        let low = (free.t0.min(used.t0_seen) - reach).max(lowest);
+        let high = free.t0.max(used.t0_seen) + reach;
+        let t0 = minimise(|x| q(x).map_or(f64::INFINITY, |v| v.0), low, high)?;
+        let (_, fit, (seen, var_seen, unseen_s)) = q(t0)?;
+        Some(Combined {
+            t0,
+            fit,
+            seen,
+            var_seen,
+            unseen_s,
         })
     }
 
@@ -1299,6 +1293,110 @@ impl HaltSighting {
         } else {
             0.0
         }
+    }
+}
+
+/// The squared residual S of a fit.
+fn squared_residual(fit: &PowerLawFit) -> f64 {
+    fit.residual_rms.powi(2) * fit.points as f64
+}
+
+/// The energies' profile in t0 ([`HaltSighting::fit`]): the law fitted with t0 held,
+/// beside the free fit.
+struct HeldProfile<'a> {
+    t: &'a [f64],
+    energy: &'a [f64],
+    turns: &'a [f64],
+    /// The fit with t0 free.
+    free: &'a PowerLawFit,
+    /// Its σ_t0 (NaN if none) \[s\].
+    se_t0_free: f64,
+    /// The last sample's time \[s\].
+    t_last: f64,
+}
+
+/// The combined t0 and what holds there.
+struct Combined {
+    /// The combined t0 \[s\].
+    t0: f64,
+    /// The fit with t0 held there.
+    fit: PowerLawFit,
+    /// t0 as the sighting gives it for that fit's law, and its variance \[s, s²\].
+    seen: f64,
+    var_seen: f64,
+    /// Δ for that law \[s\].
+    unseen_s: f64,
+}
+
+impl<'a> HeldProfile<'a> {
+    fn new(t: &'a [f64], energy: &'a [f64], turns: &'a [f64], free: &'a PowerLawFit) -> Self {
+        HeldProfile {
+            t,
+            energy,
+            turns,
+            free,
+            se_t0_free: free.se_t0.unwrap_or(f64::NAN),
+            t_last: t.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        }
+    }
+
+    /// The law fitted with t0 held, if the fit succeeds.
+    fn held(&self, t0: f64) -> Option<PowerLawFit> {
+        fit_with_limit(
+            self.t,
+            self.energy,
+            HaltTime::Fixed(t0),
+            MAX_ITERATIONS,
+            self.turns,
+        )
+        .ok()
+    }
+
+    /// k: the profile's mean rise one σ_t0 either side of the free t0 (the later side
+    /// alone where the earlier reaches the last sample), so that the profile's
+    /// curvature there gives the free fit's σ_t0; `None` unless positive and finite.
+    fn scale(&self) -> Option<f64> {
+        let (free, se) = (self.free, self.se_t0_free);
+        let rise = |t0: f64| {
+            self.held(t0)
+                .map(|f| squared_residual(&f) - squared_residual(free))
+        };
+        let k = match (
+            rise(free.t0 + se),
+            (free.t0 - se > self.t_last)
+                .then(|| rise(free.t0 - se))
+                .flatten(),
+        ) {
+            (Some(later), Some(earlier)) => 0.5 * (later + earlier),
+            (Some(later), None) => later,
+            _ => f64::NAN,
+        };
+        (k.is_finite() && k > 0.0).then_some(k)
+    }
+
+    /// The standard errors of A_e, n and t0 at the combined t0: var t0 =
+    /// 1/(1/var_S + 1/σ_seen²) with var_S = 2k/S″, and A_e's and n's variances the
+    /// held fit's plus their slope in t0 squared times var t0 (the law of total
+    /// variance). S″ and the slopes by central differences a tenth of the free σ_t0
+    /// (or of the room left) apart; `None` if a held fit there fails.
+    fn spread(&self, combined: &Combined, k: f64) -> Option<(f64, f64, f64)> {
+        let Combined { t0, ref fit, .. } = *combined;
+        let h = (0.1 * self.se_t0_free).min(0.5 * (t0 - self.t_last));
+        let (before, after) = (self.held(t0 - h)?, self.held(t0 + h)?);
+        let curvature = (squared_residual(&after) - 2.0 * squared_residual(fit)
+            + squared_residual(&before))
+            / (h * h);
+        let var_profile = if curvature > 0.0 {
+            2.0 * k / curvature
+        } else {
+            f64::INFINITY
+        };
+        let var_t0 = 1.0 / (1.0 / var_profile + 1.0 / combined.var_seen);
+        let slope_n = (after.n - before.n) / (2.0 * h);
+        let slope_a = (after.a_e - before.a_e) / (2.0 * h);
+        let se_n = (fit.se_n.powi(2) + slope_n.powi(2) * var_t0).sqrt();
+        let se_a_e = (fit.se_a_e.powi(2) + slope_a.powi(2) * var_t0).sqrt();
+        Some((se_a_e, se_n, var_t0.sqrt()))
     }
 }
 

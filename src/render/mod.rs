@@ -675,58 +675,12 @@ impl Renderer {
         validate(spec, motion)?;
         let params = motion.params;
         let (r, h) = (params.radius, params.half_thickness);
-        let (w, hgt) = (spec.width, spec.height);
-        let elevation = spec.elevation_deg.to_radians();
         let split = spec
             .two_view
-            .then(|| (0.35 * f64::from(hgt)).round() as u32);
-        let side_rows = split.unwrap_or(hgt);
-        let scale = match spec.metres_per_px {
-            Some(s) => s,
-            None => {
-                let by_width = 2.0 * r / (0.9 * f64::from(w));
-                match split {
-                    Some(sp) => by_width.max(2.0 * r / (0.9 * f64::from(hgt - sp))),
-                    None => by_width,
-                }
-            }
-        };
-        let cx = f64::from(w / 2);
-        let (se, ce) = elevation.sin_cos();
-        // A pinhole looking along f = (0, cos ε, −sin ε) through the world origin
-        // (which the principal point (cx, cy) shows, as for the orthographic camera),
-        // with the near rim's mid-height (0, −R, H) at depth d and the disk's centre
-        // (0, 0, H) at depth d + R cos ε, where the scale is `scale`.
-        let pinhole = spec.camera_distance_m.map(|d| {
-            let depth_origin = d + r * ce + h * se;
-            Pinhole {
-                position: [0.0, -depth_origin * ce, depth_origin * se],
-                focal_px: (d + r * ce) / scale,
-            }
-        });
-        let side = Camera {
-            view: View::Side,
-            cx,
-            cy: 0.55 * f64::from(side_rows),
-            scale,
-            elevation,
-            row_start: 0,
-            row_end: side_rows,
-            pinhole,
-        };
-        let mut cameras = vec![side];
-        if let Some(sp) = split {
-            cameras.push(Camera {
-                view: View::Plan,
-                cx,
-                cy: f64::from(sp) + 0.5 * f64::from(hgt - sp),
-                scale,
-                elevation,
-                row_start: sp,
-                row_end: hgt,
-                pinhole: None,
-            });
-        }
+            .then(|| (0.35 * f64::from(spec.height)).round() as u32);
+        let scale = image_scale(spec, r, split);
+        let cameras = cameras(spec, &params, scale, split);
+        let side = cameras[0];
         let scene = Scene {
             disk: DiskShape {
                 radius: r,
@@ -740,35 +694,14 @@ impl Renderer {
             plate_front: 1.0,
         };
         let (calibration, camera) = match spec.camera_distance_m {
-            None => {
-                let calibration = Calibration {
-                    x_l: cx - r / scale,
-                    x_r: cx + r / scale,
-                    x_centre: cx,
-                    z_t: side.cy - (2.0 * h * elevation.cos() - r * elevation.sin()) / scale,
-                    z_base: side.cy + r * elevation.sin() / scale,
-                };
-                let camera = CameraTruth {
-                    projection: Projection::Orthographic,
-                    distance_to_near_rim_m: None,
-                    position_m: None,
-                    focal_px: None,
-                    perspective_factor: 1.0,
-                    near_rim_metres_per_px: scale / ce,
-                    centre_metres_per_px: scale,
-                    x_l_top: calibration.x_l,
-                    x_r_top: calibration.x_r,
-                    // The far top rim (0, R, 2H): v = R sin ε + 2H cos ε.
-                    z_t_far: side.cy - (r * se + 2.0 * h * ce) / scale,
-                };
-                (calibration, camera)
-            }
+            None => orthographic_calibration(&side, &params),
             Some(d) => pinhole_calibration(&scene, &side, &params, d)?,
         };
         let delta = 2.0 * h / (calibration.z_base - calibration.z_t);
         let written: Vec<usize> = (0..motion.states.len())
             .filter(|k| !spec.dropped.contains(k))
             .collect();
+        let truth = ground_truth(spec, motion, split, scale, delta, camera, calibration);
         let mut renderer = Renderer {
             spec: spec.clone(),
             motion: motion.clone(),
@@ -776,67 +709,34 @@ impl Renderer {
             cameras,
             background: Vec::new(),
             background_mirror: Vec::new(),
-            truth: GroundTruth {
-                format_version: 2,
-                source: motion.source,
-                plate: spec.plate,
-                two_view: spec.two_view,
-                split_row: split,
-                width: w,
-                height: hgt,
-                fps: motion.timing.fps,
-                captured_frames: motion.states.len(),
-                halt_time: motion.timing.halt_time,
-                t_beta: motion.t_beta(),
-                post_flat_beta_dot: motion.post_flat.beta_dot0,
-                true_n: motion.true_n,
-                a_e: motion.a_e,
-                disk: params,
-                beta0: motion.beta0,
-                elevation,
-                metres_per_px_image: scale,
-                delta,
-                camera,
-                scenery: spec.scenery,
-                nutation: motion.nutation,
-                calibration,
-                effects: spec.effects,
-                dropped: {
-                    let mut d = spec.dropped.clone();
-                    d.sort_unstable();
-                    d.dedup();
-                    d
-                },
-                display_orientation: spec.display_orientation,
-                storage: spec.storage,
-                duplicated: sorted(&spec.duplicated),
-                interpolated: sorted(&spec.interpolated),
-                vfr_jitter: motion.timing.jitter,
-                slowed_sections: spec.slowed_sections.clone(),
-                stamped: motion.timing.jitter.is_some() || !spec.slowed_sections.is_empty(),
-                frames: Vec::new(),
-            },
+            truth,
             written,
         };
         renderer.background = renderer.render_background();
         if renderer.scene.look.separate_mirror {
             renderer.background_mirror = renderer.blurred_background_mirror();
         }
-        let frames = renderer
+        renderer.add_frame_truth();
+        Ok(renderer)
+    }
+
+    /// Each written frame's ground truth, with its container time where the frames
+    /// are stamped (capture jitter or slowed sections).
+    fn add_frame_truth(&mut self) {
+        let frames = self
             .written
             .par_iter()
             .enumerate()
-            .map(|(file_index, &index)| renderer.frame_truth(file_index, index))
+            .map(|(file_index, &index)| self.frame_truth(file_index, index))
             .collect();
-        renderer.truth.frames = frames;
-        if renderer.truth.stamped {
-            let stamps = container_ticks(motion, &spec.slowed_sections);
-            let tick_s = 1.0 / (motion.timing.fps * f64::from(TICKS_PER_FRAME));
-            for frame in &mut renderer.truth.frames {
+        self.truth.frames = frames;
+        if self.truth.stamped {
+            let stamps = container_ticks(&self.motion, &self.spec.slowed_sections);
+            let tick_s = 1.0 / (self.motion.timing.fps * f64::from(TICKS_PER_FRAME));
+            for frame in &mut self.truth.frames {
                 frame.container_time_s = Some(stamps[frame.index] as f64 * tick_s);
             }
         }
-        Ok(renderer)
     }
 
     /// The ground truth of the clip.
@@ -1301,6 +1201,149 @@ impl Renderer {
                     }
                 }
             });
+    }
+}
+
+/// The image scale \[m/px\]: the spec's, or the disk's diameter over 90 % of the
+/// width, and of the side view's height in a two-view clip split at row `split`.
+fn image_scale(spec: &RenderSpec, r: f64, split: Option<u32>) -> f64 {
+    let (w, hgt) = (spec.width, spec.height);
+    match spec.metres_per_px {
+        Some(s) => s,
+        None => {
+            let by_width = 2.0 * r / (0.9 * f64::from(w));
+            match split {
+                Some(sp) => by_width.max(2.0 * r / (0.9 * f64::from(hgt - sp))),
+                None => by_width,
+            }
+        }
+    }
+}
+
+/// The side camera (first), orthographic or a pinhole, and in a two-view clip the
+/// plan camera below row `split`.
+fn cameras(spec: &RenderSpec, params: &DiskParams, scale: f64, split: Option<u32>) -> Vec<Camera> {
+    let (r, h) = (params.radius, params.half_thickness);
+    let (w, hgt) = (spec.width, spec.height);
+    let elevation = spec.elevation_deg.to_radians();
+    let side_rows = split.unwrap_or(hgt);
+    let cx = f64::from(w / 2);
+    let (se, ce) = elevation.sin_cos();
+    // A pinhole looking along f = (0, cos ε, −sin ε) through the world origin
+    // (which the principal point (cx, cy) shows, as for the orthographic camera),
+    // with the near rim's mid-height (0, −R, H) at depth d and the disk's centre
+    // (0, 0, H) at depth d + R cos ε, where the scale is `scale`.
+    let pinhole = spec.camera_distance_m.map(|d| {
+        let depth_origin = d + r * ce + h * se;
+        Pinhole {
+            position: [0.0, -depth_origin * ce, depth_origin * se],
+            focal_px: (d + r * ce) / scale,
+        }
+    });
+    let side = Camera {
+        view: View::Side,
+        cx,
+        cy: 0.55 * f64::from(side_rows),
+        scale,
+        elevation,
+        row_start: 0,
+        row_end: side_rows,
+        pinhole,
+    };
+    let mut cameras = vec![side];
+    if let Some(sp) = split {
+        cameras.push(Camera {
+            view: View::Plan,
+            cx,
+            cy: f64::from(sp) + 0.5 * f64::from(hgt - sp),
+            scale,
+            elevation,
+            row_start: sp,
+            row_end: hgt,
+            pinhole: None,
+        });
+    }
+    cameras
+}
+
+/// The calibration an orthographic `side` camera gives, and its truth: the disk's
+/// edges and rims at the image scale, the near rim's scale that scale over cos ε.
+fn orthographic_calibration(side: &Camera, params: &DiskParams) -> (Calibration, CameraTruth) {
+    let (r, h) = (params.radius, params.half_thickness);
+    let (scale, elevation, cx) = (side.scale, side.elevation, side.cx);
+    let (se, ce) = elevation.sin_cos();
+    let calibration = Calibration {
+        x_l: cx - r / scale,
+        x_r: cx + r / scale,
+        x_centre: cx,
+        z_t: side.cy - (2.0 * h * elevation.cos() - r * elevation.sin()) / scale,
+        z_base: side.cy + r * elevation.sin() / scale,
+    };
+    let camera = CameraTruth {
+        projection: Projection::Orthographic,
+        distance_to_near_rim_m: None,
+        position_m: None,
+        focal_px: None,
+        perspective_factor: 1.0,
+        near_rim_metres_per_px: scale / ce,
+        centre_metres_per_px: scale,
+        x_l_top: calibration.x_l,
+        x_r_top: calibration.x_r,
+        // The far top rim (0, R, 2H): v = R sin ε + 2H cos ε.
+        z_t_far: side.cy - (r * se + 2.0 * h * ce) / scale,
+    };
+    (calibration, camera)
+}
+
+/// The clip's ground truth but for its frames ([`Renderer::add_frame_truth`]).
+fn ground_truth(
+    spec: &RenderSpec,
+    motion: &Motion,
+    split: Option<u32>,
+    scale: f64,
+    delta: f64,
+    camera: CameraTruth,
+    calibration: Calibration,
+) -> GroundTruth {
+    GroundTruth {
+        format_version: 2,
+        source: motion.source,
+        plate: spec.plate,
+        two_view: spec.two_view,
+        split_row: split,
+        width: spec.width,
+        height: spec.height,
+        fps: motion.timing.fps,
+        captured_frames: motion.states.len(),
+        halt_time: motion.timing.halt_time,
+        t_beta: motion.t_beta(),
+        post_flat_beta_dot: motion.post_flat.beta_dot0,
+        true_n: motion.true_n,
+        a_e: motion.a_e,
+        disk: motion.params,
+        beta0: motion.beta0,
+        elevation: spec.elevation_deg.to_radians(),
+        metres_per_px_image: scale,
+        delta,
+        camera,
+        scenery: spec.scenery,
+        nutation: motion.nutation,
+        calibration,
+        effects: spec.effects,
+        dropped: {
+            let mut d = spec.dropped.clone();
+            d.sort_unstable();
+            d.dedup();
+            d
+        },
+        display_orientation: spec.display_orientation,
+        storage: spec.storage,
+        duplicated: sorted(&spec.duplicated),
+        interpolated: sorted(&spec.interpolated),
+        vfr_jitter: motion.timing.jitter,
+        slowed_sections: spec.slowed_sections.clone(),
+        stamped: motion.timing.jitter.is_some() || !spec.slowed_sections.is_empty(),
+        frames: Vec::new(),
     }
 }
 

@@ -118,16 +118,37 @@ pub fn write_experiment(
     kept: Option<&KeptFrames>,
 ) -> Result<(), ReportError> {
     let e = experiment;
+    write_csv(&dir.join("frames.csv"), &frame_rows(e))?;
+    write_csv(&dir.join("peaks.csv"), &peak_rows(e))?;
+    write_csv(&dir.join("states.csv"), &state_rows(e))?;
+    write_csv(&dir.join("flags.csv"), &flag_records(e))?;
+    write_json(&dir.join("plan.json"), &e.plan)?;
+    write_json(&dir.join("result.json"), e)?;
+    write_atomic(&dir.join("calibration.png"), &e.diagnostics.calibration_png)?;
+    write_atomic(&dir.join("threshold.png"), &e.diagnostics.threshold_png)?;
+    write_series_plot(dir, e)?;
+    write_states_plot(dir, e)?;
+    let energy_svg = energy_plot_svg(&e.peaks_fit, e.plan.window_s).map_err(plot_error)?;
+    write_atomic(&dir.join("energy.svg"), energy_svg.as_bytes())?;
+    let timing_svg = write_timing_plot(dir, e)?;
+    let overlay = overlay
+        .map(|spec| write_measurement_overlays(dir, e, spec, kept))
+        .transpose()?;
+    write_atomic(
+        &dir.join("index.html"),
+        experiment_page(e, &energy_svg, timing_svg.as_deref(), dir, overlay.as_ref())?.as_bytes(),
+    )?;
+    Ok(())
+}
+
+/// The rows of `frames.csv`: each frame's number in the clip, times, picture type,
+/// rim height and, for two-view clips, the strip angle and its rate.
+fn frame_rows(e: &Experiment) -> Vec<FrameRow> {
     let strip = e.series.strip.as_ref().map(|s| &s.series);
     let at = |v: Option<&Vec<f64>>, i: usize| {
         v.and_then(|v| v.get(i).copied()).filter(|x| x.is_finite())
     };
-    // The peaks and states count frames from the first decoded one (the flags
-    // carry clip frame numbers already); the files give each frame's number in
-    // the clip.
-    let frame_number = |position: usize| e.frames.get(position).map_or(position, |f| f.index);
-    let frame_rows: Vec<FrameRow> = e
-        .frames
+    e.frames
         .iter()
         .enumerate()
         .map(|(i, f)| FrameRow {
@@ -143,11 +164,13 @@ pub fn write_experiment(
             beta_smoothed_rad: at(strip.map(|s| &s.beta_smoothed), i),
             beta_dot_rad_s: at(strip.map(|s| &s.beta_dot), i),
         })
-        .collect();
-    write_csv(&dir.join("frames.csv"), &frame_rows)?;
+        .collect()
+}
 
-    let peak_rows: Vec<PeakRow> = e
-        .series
+/// The rows of `peaks.csv`: each peak's height, tilt and precession, and the energy
+/// eq. (3.8) fitted there.
+fn peak_rows(e: &Experiment) -> Vec<PeakRow> {
+    e.series
         .peaks
         .peaks
         .iter()
@@ -167,11 +190,16 @@ pub fn write_experiment(
                 .find(|s| s.t == p.t)
                 .map(|s| s.energy),
         })
-        .collect();
-    write_csv(&dir.join("peaks.csv"), &peak_rows)?;
+        .collect()
+}
 
-    let state_rows: Vec<StateRow> = e
-        .series
+/// The rows of `states.csv`: the per-frame states of the local fits.
+fn state_rows(e: &Experiment) -> Vec<StateRow> {
+    // The peaks and states count frames from the first decoded one (the flags
+    // carry clip frame numbers already); the files give each frame's number in
+    // the clip.
+    let frame_number = |position: usize| e.frames.get(position).map_or(position, |f| f.index);
+    e.series
         .states
         .iter()
         .map(|s| StateRow {
@@ -185,11 +213,12 @@ pub fn write_experiment(
             sigma_psi_dot_rad_s: s.sigma_psi_dot,
             residual_rms_m: s.residual_rms,
         })
-        .collect();
-    write_csv(&dir.join("states.csv"), &state_rows)?;
+        .collect()
+}
 
-    let flag_rows: Vec<FlagRow> = e
-        .series
+/// The rows of `flags.csv`: each flagged frame and why.
+fn flag_records(e: &Experiment) -> Vec<FlagRow> {
+    e.series
         .flags
         .iter()
         .map(|f| FlagRow {
@@ -198,14 +227,13 @@ pub fn write_experiment(
             kind: f.reason.kind(),
             reason: f.reason.label(),
         })
-        .collect();
-    write_csv(&dir.join("flags.csv"), &flag_rows)?;
-    write_json(&dir.join("plan.json"), &e.plan)?;
-    write_json(&dir.join("result.json"), e)?;
-    write_atomic(&dir.join("calibration.png"), &e.diagnostics.calibration_png)?;
-    write_atomic(&dir.join("threshold.png"), &e.diagnostics.threshold_png)?;
+        .collect()
+}
 
-    // Plots.
+/// `series.svg`/`.png`: the rim height per frame and, for two-view clips, the strip
+/// angle and its rate.
+fn write_series_plot(dir: &Path, e: &Experiment) -> Result<(), ReportError> {
+    let strip = e.series.strip.as_ref().map(|s| &s.series);
     let t: Vec<f64> = e.frames.iter().map(|f| f.t).collect();
     let z_mm: Vec<f64> = e
         .frames
@@ -240,24 +268,17 @@ pub fn write_experiment(
         "",
     )
     .map_err(plot_error)?;
+    Ok(())
+}
+
+/// `states.svg`/`.png`, where there are states: φ, ψ, ψ̇ and the precession check
+/// per state.
+fn write_states_plot(dir: &Path, e: &Experiment) -> Result<(), ReportError> {
     let st: Vec<f64> = e.series.states.iter().map(|s| s.t).collect();
     let phi: Vec<f64> = e.series.states.iter().map(|s| s.phi).collect();
     let psi: Vec<f64> = e.series.states.iter().map(|s| s.psi).collect();
     let psi_dot: Vec<f64> = e.series.states.iter().map(|s| s.psi_dot).collect();
-    // The precession check per state: φ from the heights over the φ that stationary
-    // rolling gives its ψ̇ (eq. 2.29), − 1; where that φ is known to better than the
-    // check's reach (2σ_ψ̇/ψ̇ below precession::AGREEMENT; the last turns' ψ̇ is not).
-    let against_precession: Vec<f64> = e
-        .series
-        .states
-        .iter()
-        .map(|s| {
-            let known = 2.0 * s.sigma_psi_dot < precession::AGREEMENT * s.psi_dot.abs();
-            precession::stationary_sin_phi(&e.plan.disk, s.psi_dot)
-                .filter(|_| known)
-                .map_or(f64::NAN, |x| 100.0 * (s.phi.sin() / x - 1.0))
-        })
-        .collect();
+    let against_precession = against_precession(e);
     let state_panels = [
         Panel {
             label: "φ [rad]",
@@ -297,25 +318,35 @@ pub fn write_experiment(
         )
         .map_err(plot_error)?;
     }
-    let energy_svg = energy_plot_svg(&e.peaks_fit, e.plan.window_s).map_err(plot_error)?;
-    write_atomic(&dir.join("energy.svg"), energy_svg.as_bytes())?;
-    let timing_svg = match &e.turn_timing {
+    Ok(())
+}
+
+/// The precession check per state: φ from the heights over the φ that stationary
+/// rolling gives its ψ̇ (eq. 2.29), − 1; where that φ is known to better than the
+/// check's reach (2σ_ψ̇/ψ̇ below precession::AGREEMENT; the last turns' ψ̇ is not).
+fn against_precession(e: &Experiment) -> Vec<f64> {
+    e.series
+        .states
+        .iter()
+        .map(|s| {
+            let known = 2.0 * s.sigma_psi_dot < precession::AGREEMENT * s.psi_dot.abs();
+            precession::stationary_sin_phi(&e.plan.disk, s.psi_dot)
+                .filter(|_| known)
+                .map_or(f64::NAN, |x| 100.0 * (s.phi.sin() / x - 1.0))
+        })
+        .collect()
+}
+
+/// `timing.svg`, where the turns' timing was fitted; the SVG for the page.
+fn write_timing_plot(dir: &Path, e: &Experiment) -> Result<Option<String>, ReportError> {
+    Ok(match &e.turn_timing {
         Some(Ok(t)) => {
             let svg = turn_timing_plot_svg(t).map_err(plot_error)?;
             write_atomic(&dir.join("timing.svg"), svg.as_bytes())?;
             Some(svg)
         }
         _ => None,
-    };
-    let overlay = overlay
-        .map(|spec| write_measurement_overlays(dir, e, spec, kept))
-        .transpose()?;
-
-    write_atomic(
-        &dir.join("index.html"),
-        experiment_page(e, &energy_svg, timing_svg.as_deref(), dir, overlay.as_ref())?.as_bytes(),
-    )?;
-    Ok(())
+    })
 }
 
 fn fit_row(f: &EnergyFit) -> Vec<String> {

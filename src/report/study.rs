@@ -192,16 +192,53 @@ pub fn write_study_report(
 ) -> Result<(), ReportError> {
     let tables = out.join("tables");
     let plots = out.join("plots");
-    let plot_error = |e: super::study_plots::StudyPlotError| ReportError::Plot(e.to_string());
-
     let materials = groups_by(results, |e| e.meta.material_or_all().to_string());
     let summaries: Vec<_> = materials
         .iter()
         .filter_map(|g| stats::summarise(g).ok())
         .collect();
+    let exponents: Vec<Vec<String>> = results.experiments.iter().map(exponent_row).collect();
+    write_csv_rows(&tables.join("exponents.csv"), &EXPONENT_COLUMNS, &exponents)?;
+    let summary_rows = summary_rows(&summaries);
+    write_atomic(
+        &tables.join("summary.md"),
+        summary_markdown(&summary_rows).as_bytes(),
+    )?;
+    let study_page = StudyPage {
+        results,
+        experiment_rows: experiment_rows(results),
+        box_svg: write_box_plot(&plots, &summaries)?,
+        summary_rows,
+        matrices: write_material_tests(&tables, &materials, options)?,
+        disk_matrices: disk_tests(results, &materials, options),
+        trend_svgs: write_trends(&plots, results)?,
+    };
+    write_atomic(
+        &out.join("index.html"),
+        page("eulerdisk study", study_page.body()).as_bytes(),
+    )?;
+    Ok(())
+}
 
-    // Experiments table.
-    let experiment_rows: Vec<Vec<String>> = results
+/// The header of the per-material summary table.
+const SUMMARY_HEADER: [&str; 7] = [
+    "material",
+    "clips",
+    "mean n",
+    "median n",
+    "sd",
+    "IQR",
+    "outliers (1.5 IQR)",
+];
+
+/// Errors of the study's plots as the report's.
+fn plot_error(e: super::study_plots::StudyPlotError) -> ReportError {
+    ReportError::Plot(e.to_string())
+}
+
+/// The exponents table of the page: each clip's n, interval, fit and checks.
+fn experiment_rows(results: &StudyResults) -> Vec<Vec<String>> {
+    results
         .experiments
         .iter()
         .map(|e| {
@@ -222,12 +259,12 @@ pub fn write_study_report(
                 e.warnings.len().to_string(),
             ]
         })
-        .collect();
-    let exponents: Vec<Vec<String>> = results.experiments.iter().map(exponent_row).collect();
-    write_csv_rows(&tables.join("exponents.csv"), &EXPONENT_COLUMNS, &exponents)?;
+        .collect()
+}
 
-    // Per-material summaries.
-    let summary_rows: Vec<Vec<String>> = summaries
+/// The per-material summary rows ([`SUMMARY_HEADER`]).
+fn summary_rows(summaries: &[stats::Summary]) -> Vec<Vec<String>> {
+    summaries
         .iter()
         .map(|s| {
             vec![
@@ -244,28 +281,29 @@ pub fn write_study_report(
                     .join(", "),
             ]
         })
-        .collect();
-    let summary_header = [
-        "material",
-        "clips",
-        "mean n",
-        "median n",
-        "sd",
-        "IQR",
-        "outliers (1.5 IQR)",
-    ];
+        .collect()
+}
+
+/// `tables/summary.md`: the summary rows as a Markdown table.
+fn summary_markdown(summary_rows: &[Vec<String>]) -> String {
     let mut md = format!(
         "| {} |\n|{}\n",
-        summary_header.join(" | "),
-        "---|".repeat(summary_header.len())
+        SUMMARY_HEADER.join(" | "),
+        "---|".repeat(SUMMARY_HEADER.len())
     );
-    for row in &summary_rows {
+    for row in summary_rows {
         md += &format!("| {} |\n", row.join(" | "));
     }
-    write_atomic(&tables.join("summary.md"), md.as_bytes())?;
+    md
+}
 
-    // Box plot.
-    let box_svg = if summaries.is_empty() {
+/// `plots/box_materials.svg`: n per material as a box plot (figs. 3.15, 3.17), or
+/// `None` without a summary; the SVG is returned for the page.
+fn write_box_plot(
+    plots: &Path,
+    summaries: &[stats::Summary],
+) -> Result<Option<String>, ReportError> {
+    Ok(if summaries.is_empty() {
         None
     } else {
         let plot = BoxPlot {
@@ -280,9 +318,17 @@ pub fn write_study_report(
         let svg = box_plot_svg(&plot).map_err(plot_error)?;
         write_atomic(&plots.join("box_materials.svg"), svg.as_bytes())?;
         Some(svg)
-    };
+    })
+}
 
-    // Pairwise tests between materials with at least two clips each.
+/// Pairwise t-tests between the materials with at least two clips each (Table 3.2),
+/// with Bonferroni's and Holm's corrections, written to `tables/p_values_*`; none
+/// with fewer than two such materials.
+fn write_material_tests(
+    tables: &Path,
+    materials: &[Group],
+    options: StudyReportOptions,
+) -> Result<Vec<PValueMatrix>, ReportError> {
     let testable: Vec<Group> = materials
         .iter()
         .filter(|g| g.values.len() >= 2)
@@ -307,10 +353,18 @@ pub fn write_study_report(
             }
         }
     }
+    Ok(matrices)
+}
 
-    // Disks compared within each material, when the study has several disks.
+/// The disks compared within each material (Table 3.3), where it has two or more
+/// disks with two clips each.
+fn disk_tests(
+    results: &StudyResults,
+    materials: &[Group],
+    options: StudyReportOptions,
+) -> Vec<(String, PValueMatrix)> {
     let mut disk_matrices = Vec::new();
-    for material in &materials {
+    for material in materials {
         let within: Vec<Group> = groups_by(results, |e| {
             if e.meta.material_or_all() == material.name {
                 e.meta.disk.clone().unwrap_or_else(|| "disk".into())
@@ -332,8 +386,13 @@ pub fn write_study_report(
             disk_matrices.push((material.name.clone(), m));
         }
     }
+    disk_matrices
+}
 
-    // Trends against Table 3.1 properties, for materials the table knows.
+/// n against each property of thesis Table 3.1 (fig. 3.16), for the materials the
+/// table knows, where two of them and three clips give a line: `plots/trend_*.svg`,
+/// the SVGs returned for the page.
+fn write_trends(plots: &Path, results: &StudyResults) -> Result<Vec<String>, ReportError> {
     let known = stats::materials().unwrap_or_default();
     let mut trend_svgs = Vec::new();
     for property in MaterialProperty::ALL {
@@ -368,78 +427,114 @@ pub fn write_study_report(
             trend_svgs.push(svg);
         }
     }
+    Ok(trend_svgs)
+}
 
-    // Each clip's page, as the study (or merge) writes it below the report.
-    let clip_pages: Vec<String> = results
-        .experiments
-        .iter()
-        .map(|e| format!("experiments/{}/index.html", url_path(&e.clip)))
-        .collect();
-    let failure_rows: Vec<Vec<String>> = results
-        .failures
-        .iter()
-        .map(|f| vec![f.clip.clone(), f.reason.clone()])
-        .collect();
-    let body = html! {
-        p class="note" {
-            (results.experiments.len()) " clips analysed, " (results.failures.len())
-            " failed · eulerdisk " (results.crate_version)
-            " · E = A_e (t0 − t)^n fitted per clip (thesis §3.2.5); tables as CSV and Markdown in "
-            code { "tables/" } ", plots as SVG in " code { "plots/" } "."
+/// What the study page shows beside the results.
+struct StudyPage<'a> {
+    results: &'a StudyResults,
+    experiment_rows: Vec<Vec<String>>,
+    summary_rows: Vec<Vec<String>>,
+    box_svg: Option<String>,
+    matrices: Vec<PValueMatrix>,
+    disk_matrices: Vec<(String, PValueMatrix)>,
+    trend_svgs: Vec<String>,
+}
+
+impl StudyPage<'_> {
+    /// The page: the exponents (each clip linked to its page), the per-material
+    /// summary and box plot, the tests, the trends and the failed clips.
+    fn body(&self) -> Markup {
+        html! {
+            (self.exponents_section())
+            (self.materials_section())
+            (self.failures_section())
         }
-        h2 { "Exponents" }
-        (linked_table(
-            &["clip", "disk", "material", "n", "95 % CI", "R²", "points", "fps (source)", "φ vs precession %", "n from the turns' timing (95 % CI)", "warnings"],
-            &experiment_rows,
-            &clip_pages,
-            |_, _| false,
-        ))
-        p class="note" {
-            "φ vs precession: φ from the rim heights over the φ that stationary rolling (eq. 2.29) \
-             gives the measured precession rate, at the fit window's mean, − 1: a check of the \
-             scale and the zero that shares neither (a warning beyond ±3 %; see each clip's page). \
-             n from the turns' timing: the exponent from the times of z_rim's peaks and troughs \
-             alone, with no height, scale or zero in it (a check of n, never combined with it; a \
-             warning where the two intervals are disjoint)."
+    }
+
+    /// What was analysed, and each clip's n with its checks, linked to its page.
+    fn exponents_section(&self) -> Markup {
+        let results = self.results;
+        let clip_pages: Vec<String> = results
+            .experiments
+            .iter()
+            .map(|e| format!("experiments/{}/index.html", url_path(&e.clip)))
+            .collect();
+        html! {
+            p class="note" {
+                (results.experiments.len()) " clips analysed, " (results.failures.len())
+                " failed · eulerdisk " (results.crate_version)
+                " · E = A_e (t0 − t)^n fitted per clip (thesis §3.2.5); tables as CSV and Markdown in "
+                code { "tables/" } ", plots as SVG in " code { "plots/" } "."
+            }
+            h2 { "Exponents" }
+            (linked_table(
+                &["clip", "disk", "material", "n", "95 % CI", "R²", "points", "fps (source)", "φ vs precession %", "n from the turns' timing (95 % CI)", "warnings"],
+                &self.experiment_rows,
+                &clip_pages,
+                |_, _| false,
+            ))
+            p class="note" {
+                "φ vs precession: φ from the rim heights over the φ that stationary rolling (eq. 2.29) \
+                 gives the measured precession rate, at the fit window's mean, − 1: a check of the \
+                 scale and the zero that shares neither (a warning beyond ±3 %; see each clip's page). \
+                 n from the turns' timing: the exponent from the times of z_rim's peaks and troughs \
+                 alone, with no height, scale or zero in it (a check of n, never combined with it; a \
+                 warning where the two intervals are disjoint)."
+            }
+            p class="note" { "Each clip's name links to its own page." }
         }
-        p class="note" { "Each clip's name links to its own page." }
-        h2 { "Per material" }
-        (table(&summary_header, &summary_rows, |_, _| false))
-        @if let Some(svg) = &box_svg {
-            (svg_figure(svg, "Box plot of n per material (figs. 3.15, 3.17): whiskers to 1.5 IQR, outliers marked."))
-        }
-        h2 { "Materials compared (Table 3.2)" }
-        @if matrices.is_empty() {
-            p { "Fewer than two materials with two or more clips each: no pairwise tests." }
-        }
-        @for m in &matrices {
-            (matrix_section(m, "Materials"))
-        }
-        @if !disk_matrices.is_empty() {
-            h2 { "Disks compared within each material (Table 3.3)" }
-            @for (material, m) in &disk_matrices {
-                h3 { (material) }
-                (matrix_section(m, "Disks"))
+    }
+
+    /// The materials: the summary and box plot, the materials and the disks compared,
+    /// and the trends against the materials' properties.
+    fn materials_section(&self) -> Markup {
+        html! {
+            h2 { "Per material" }
+            (table(&SUMMARY_HEADER, &self.summary_rows, |_, _| false))
+            @if let Some(svg) = &self.box_svg {
+                (svg_figure(svg, "Box plot of n per material (figs. 3.15, 3.17): whiskers to 1.5 IQR, outliers marked."))
+            }
+            h2 { "Materials compared (Table 3.2)" }
+            @if self.matrices.is_empty() {
+                p { "Fewer than two materials with two or more clips each: no pairwise tests." }
+            }
+            @for m in &self.matrices {
+                (matrix_section(m, "Materials"))
+            }
+            @if !self.disk_matrices.is_empty() {
+                h2 { "Disks compared within each material (Table 3.3)" }
+                @for (material, m) in &self.disk_matrices {
+                    h3 { (material) }
+                    (matrix_section(m, "Disks"))
+                }
+            }
+            @if !self.trend_svgs.is_empty() {
+                h2 { "Trends against material properties (fig. 3.16)" }
+                @for svg in &self.trend_svgs {
+                    (svg_figure(svg, "n against a property of thesis Table 3.1, OLS line with the slope's 95 % CI."))
+                }
             }
         }
-        @if !trend_svgs.is_empty() {
-            h2 { "Trends against material properties (fig. 3.16)" }
-            @for svg in &trend_svgs {
-                (svg_figure(svg, "n against a property of thesis Table 3.1, OLS line with the slope's 95 % CI."))
+    }
+
+    /// The clips that failed, and why.
+    fn failures_section(&self) -> Markup {
+        let failure_rows: Vec<Vec<String>> = self
+            .results
+            .failures
+            .iter()
+            .map(|f| vec![f.clip.clone(), f.reason.clone()])
+            .collect();
+        html! {
+            h2 { "Failed clips" }
+            @if failure_rows.is_empty() {
+                p { "None." }
+            } @else {
+                (table(&["clip", "reason"], &failure_rows, |_, _| false))
             }
         }
-        h2 { "Failed clips" }
-        @if failure_rows.is_empty() {
-            p { "None." }
-        } @else {
-            (table(&["clip", "reason"], &failure_rows, |_, _| false))
-        }
-    };
-    write_atomic(
-        &out.join("index.html"),
-        page("eulerdisk study", body).as_bytes(),
-    )?;
-    Ok(())
+    }
 }
 
 /// Tables 3.2 and 3.3 and figs. 3.15–3.17 regenerated from the thesis's published
