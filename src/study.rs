@@ -762,7 +762,7 @@ pub fn merge(shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
 /// Copies each analysed clip's folder from the shard folder that holds it into
 /// `out/experiments/`, as a single run writes it, so the merged report's links lead
 /// to the clips' pages (hard links where the file system allows: no bytes are
-/// copied).
+/// copied); and each failed clip's folder where a shard holds one.
 ///
 /// # Errors
 /// An analysed clip whose folder no shard holds (its page would be missing), or a
@@ -787,6 +787,18 @@ pub fn gather_experiments(
             })?;
         let to = out.folder().join("experiments").join(&e.clip);
         output::write_folder(&to, |staging| output::copy_tree(&from, staging))?;
+    }
+    // A failed clip's folder, where a shard wrote one (its failure page, or an
+    // earlier result it kept), so that the merged report links it as the shard's did.
+    for f in &results.failures {
+        let from = shard_dirs
+            .iter()
+            .map(|dir| dir.join("experiments").join(&f.clip))
+            .find(|dir| dir.join("index.html").is_file());
+        if let Some(from) = from {
+            let to = out.folder().join("experiments").join(&f.clip);
+            output::write_folder(&to, |staging| output::copy_tree(&from, staging))?;
+        }
     }
     Ok(())
 }

@@ -115,6 +115,10 @@ fn study_survives_bad_clips_resumes_and_merges_shards() {
     )
     .unwrap();
     assert_eq!(nodisk["stage"], "opening and calibration");
+    assert!(
+        page.contains("href=\"experiments/euler/oak/nodisk/index.html\""),
+        "the study page does not link the failed clip's page"
+    );
     // The turns' timing: its plot beside the energy's, and its n within its interval in
     // the exponents table (the last three columns: rsplitn gives the high end, the low
     // end, then n).

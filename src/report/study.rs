@@ -181,6 +181,21 @@ fn exponent_row(e: &ExperimentSummary) -> Vec<String> {
     ]
 }
 
+/// The page of each failed clip of `results` below `out`, relative to the report,
+/// where its folder has one (`None` else, as after a merge of shards).
+fn failure_pages(out: &Path, results: &StudyResults) -> Vec<Option<String>> {
+    results
+        .failures
+        .iter()
+        .map(|f| {
+            let page = format!("experiments/{}/index.html", f.clip);
+            out.join(&page)
+                .is_file()
+                .then(|| format!("experiments/{}/index.html", url_path(&f.clip)))
+        })
+        .collect()
+}
+
 /// Write `OUT/index.html`, `OUT/tables/*` and `OUT/plots/*` for a study.
 ///
 /// # Errors
@@ -212,6 +227,7 @@ pub fn write_study_report(
         matrices: write_material_tests(&tables, &materials, options)?,
         disk_matrices: disk_tests(results, &materials, options),
         trend_svgs: write_trends(&plots, results)?,
+        failure_pages: failure_pages(out, results),
     };
     write_atomic(
         &out.join("index.html"),
@@ -439,6 +455,8 @@ struct StudyPage<'a> {
     matrices: Vec<PValueMatrix>,
     disk_matrices: Vec<(String, PValueMatrix)>,
     trend_svgs: Vec<String>,
+    /// Each failed clip's page below the report, where its folder has one.
+    failure_pages: Vec<Option<String>>,
 }
 
 impl StudyPage<'_> {
@@ -518,20 +536,29 @@ impl StudyPage<'_> {
         }
     }
 
-    /// The clips that failed, and why.
+    /// The clips that failed, and why, each linked to its folder's page where there is
+    /// one (its failure page, or an earlier result kept).
     fn failures_section(&self) -> Markup {
-        let failure_rows: Vec<Vec<String>> = self
-            .results
-            .failures
-            .iter()
-            .map(|f| vec![f.clip.clone(), f.reason.clone()])
-            .collect();
+        let failures = &self.results.failures;
         html! {
             h2 { "Failed clips" }
-            @if failure_rows.is_empty() {
+            @if failures.is_empty() {
                 p { "None." }
             } @else {
-                (table(&["clip", "reason"], &failure_rows, |_, _| false))
+                table {
+                    tr { th class="text" { "clip" } th { "reason" } }
+                    @for (f, page) in failures.iter().zip(&self.failure_pages) {
+                        tr {
+                            td class="text" {
+                                @match page {
+                                    Some(href) => a href=(href) { (f.clip) },
+                                    None => (f.clip),
+                                }
+                            }
+                            td { (f.reason) }
+                        }
+                    }
+                }
             }
         }
     }
