@@ -629,6 +629,9 @@ fn run(cli: Cli) -> Result<Status> {
 /// ([`write_failure`]) unless `out` holds an earlier result, which is kept.
 fn explain_failure(clip: &Path, out: &Path, failure: &analyse::Failure) -> anyhow::Error {
     let why = &failure.error;
+    if !failure.deserves_a_page() {
+        return anyhow::anyhow!("{why}");
+    }
     if out.join("result.json").is_file() {
         return anyhow::anyhow!(
             "{why}\n{} is kept: it holds an earlier result, which a failure page does not \

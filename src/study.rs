@@ -851,7 +851,9 @@ impl ClipAnalyser for StudyAnalyser {
             Ok(analysed) => analysed,
             Err(failure) => {
                 let reason = failure.error.to_string();
-                if let Ok(mut refused) = self.refused.lock() {
+                if failure.deserves_a_page()
+                    && let Ok(mut refused) = self.refused.lock()
+                {
                     refused.insert(clip.path.clone(), failure);
                 }
                 return Err(reason);

@@ -350,9 +350,11 @@ fn fit_band_to_disk(
 ) -> Result<CalibrationReport, AnalyseError> {
     let disk_width = calibration.calibration.x_r - calibration.calibration.x_l;
     if let Some(band) = vision_config.band_half_width_px {
-        crate::config::band_fits_disk(band, disk_width).map_err(|reason| AnalyseError::Clip {
-            path: clip.to_path_buf(),
-            reason,
+        crate::config::band_fits_disk(band, disk_width).map_err(|reason| {
+            AnalyseError::Setting {
+                path: clip.to_path_buf(),
+                reason,
+            }
         })?;
         return Ok(calibration);
     }

@@ -83,6 +83,10 @@ pub enum AnalyseError {
     Fit { path: PathBuf, error: FitError },
     #[error("{}: {reason}", path.display())]
     Clip { path: PathBuf, reason: String },
+    /// A setting of the config that this clip cannot be measured with (the reason
+    /// names the key and the range the clip allows).
+    #[error("{}: {reason}", path.display())]
+    Setting { path: PathBuf, reason: String },
     /// The fit window or the rest tail crosses a change of the container's frame
     /// interval (a slowed section's start or end).
     #[error(
@@ -165,6 +169,21 @@ pub struct Partial {
 pub struct Failure {
     pub error: AnalyseError,
     pub partial: Partial,
+}
+
+impl Failure {
+    /// Whether a page would explain anything: not for a setting out of its range,
+    /// which the message names with the key and the range.
+    pub fn deserves_a_page(&self) -> bool {
+        !matches!(
+            self.error,
+            AnalyseError::Setting { .. }
+                | AnalyseError::Vision {
+                    error: VisionError::InvalidSetting { .. },
+                    ..
+                }
+        )
+    }
 }
 
 /// [`analyse_clip_keeping`], keeping on a refusal what the stages before it found.

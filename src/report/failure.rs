@@ -68,6 +68,7 @@ fn try_next(error: &AnalyseError) -> Vec<String> {
             "check that the path names a video file or a folder of frames",
         ],
         AnalyseError::Fps { .. } => &["give the camera's frame rate as `fps` in the config"],
+        AnalyseError::Setting { .. } => &["change the setting the reason names"],
         AnalyseError::Vision { .. } => &[
             "check the rest frame below: the disk must lie at rest, whole and in view, at \
              the clip's end",

@@ -462,31 +462,35 @@ pub(crate) fn rim_phase_steps(
         })
         .map(|&(k, statistic, step, _)| (k, statistic, step))
         .collect();
-    // Each step is timed on the turning points between its neighbours, so that one
-    // skip's step does not bend the law another's is measured against.
-    let at = |j: Option<usize>, beyond: f64| j.map_or(beyond, |j| st[kept[j].0]);
+    let times: Vec<f64> = kept.iter().map(|&(k, ..)| st[k]).collect();
     kept.iter()
-        .enumerate()
-        .map(|(j, &(k, statistic, step))| {
-            let between = (
-                at(j.checked_sub(1), f64::NEG_INFINITY),
-                at(Some(j + 1).filter(|&j| j < kept.len()), f64::INFINITY),
-            );
-            let knots: Vec<(f64, f64)> = track
-                .psi_knots()
+        .zip(timed_steps(track.psi_knots(), &times, frame))
+        .map(|(&(k, statistic, step), timing)| FrameFlag {
+            index: idx[k],
+            t: t[idx[k]],
+            reason: SkipReason::RimPhaseStep {
+                phase_step: step,
+                statistic,
+                timing,
+            },
+        })
+        .collect()
+}
+
+/// The timing step ([`timing_step`]) at each of the suspected skips at the sorted
+/// times `at`, each on the turning points between its neighbours, so that one skip's
+/// step does not bend the law another's is measured against.
+fn timed_steps(knots: &[(f64, f64)], at: &[f64], frame_s: f64) -> Vec<Option<TimingStep>> {
+    (0..at.len())
+        .map(|j| {
+            let after_previous = j.checked_sub(1).map_or(f64::NEG_INFINITY, |i| at[i]);
+            let before_next = at.get(j + 1).copied().unwrap_or(f64::INFINITY);
+            let between: Vec<(f64, f64)> = knots
                 .iter()
-                .filter(|knot| knot.0 >= between.0 && knot.0 < between.1)
+                .filter(|knot| knot.0 >= after_previous && knot.0 < before_next)
                 .copied()
                 .collect();
-            FrameFlag {
-                index: idx[k],
-                t: t[idx[k]],
-                reason: SkipReason::RimPhaseStep {
-                    phase_step: step,
-                    statistic,
-                    timing: timing_step(&knots, st[k], frame),
-                },
-            }
+            timing_step(&between, at[j], frame_s)
         })
         .collect()
 }
@@ -535,7 +539,6 @@ const MIN_LOG_ODDS: f64 = 4.605_170_185_988_092;
 /// the heights can take for a phase step, moves the turns' times by a wobble the
 /// smooth law leaves in its residuals, not by a frame.
 pub(crate) fn timing_step(knots: &[(f64, f64)], t_c: f64, frame_s: f64) -> Option<TimingStep> {
-    let psi_at = |t: f64| knots.iter().find(|k| k.0 >= t).map(|k| k.1);
     let split = knots.partition_point(|k| k.0 < t_c);
     let per_side = (2.0 * TIMING_TURNS) as usize;
     let (before, after) = (
@@ -545,7 +548,8 @@ pub(crate) fn timing_step(knots: &[(f64, f64)], t_c: f64, frame_s: f64) -> Optio
     if before.len() < MIN_TIMING_POINTS || after.len() < MIN_TIMING_POINTS {
         return None;
     }
-    let psi_c = psi_at(t_c)?;
+    // ψ from the first turning point after the skip: the origin of the law's cubic.
+    let psi_c = after[0].1;
     let span = before
         .iter()
         .chain(after)
