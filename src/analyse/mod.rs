@@ -204,12 +204,16 @@ pub fn analyse_clip_explaining<K: FrameKeeping>(
 ) -> Result<(Experiment, Option<K::Kept>), Box<Failure>> {
     let mut partial = Partial::default();
     let refused = |error, partial| Box::new(Failure { error, partial });
+    // The rest frame's evidence is drawn only for a refusal: a PNG costs tens of ms.
+    let after_calibration = |error, mut partial: Partial, rest: &calibrate::RestCalibration| {
+        partial.calibration_png = Some(assemble::calibration_png(rest));
+        partial.plate = Some(rest.plate.clone());
+        refused(error, partial)
+    };
     let params = config.disk_params();
     let mut opened = open::open_clip(clip, config).map_err(|e| refused(e, Partial::default()))?;
     let rest = calibrate::calibrate(clip, &mut opened, config, &params)
         .map_err(|e| refused(e, Partial::default()))?;
-    partial.calibration_png = Some(assemble::calibration_png(&rest));
-    partial.plate = Some(rest.plate.clone());
     let measured = span::measure_spans(
         clip,
         &mut opened,
@@ -223,11 +227,11 @@ pub fn analyse_clip_explaining<K: FrameKeeping>(
     );
     let (measured, decoded, kept) = match measured {
         Ok(m) => m,
-        Err(error) => return Err(refused(error, partial)),
+        Err(error) => return Err(after_calibration(error, partial, &rest)),
     };
     let settled = match halt::settle(clip, config, &params, &rest, measured) {
         Ok(s) => s,
-        Err(error) => return Err(refused(error, partial)),
+        Err(error) => return Err(after_calibration(error, partial, &rest)),
     };
     let fitted = checks::finish_fits(config, &params, settled);
     let experiment = assemble::experiment(clip, config, params, &opened, rest, decoded, fitted)

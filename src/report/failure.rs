@@ -45,9 +45,9 @@ impl FailureRecord {
     /// The record of `failure` of `clip`.
     pub fn new(clip: &Path, failure: &Failure) -> Self {
         let stage = match (&failure.partial.calibration_png, &failure.partial.heights) {
-            (None, _) => "opening and calibration",
+            (_, Some(_)) => "the signal stage and the fits",
             (Some(_), None) => "measuring the frames",
-            (Some(_), Some(_)) => "the signal stage and the fits",
+            (None, None) => "opening and calibration",
         };
         FailureRecord {
             clip: clip.to_path_buf(),
