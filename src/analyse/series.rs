@@ -477,20 +477,23 @@ pub(super) fn strip_angles(frames: &[FrameRecord], two_view: bool) -> Option<Vec
 /// The frames' capture times \[s\] and rim heights z_rim \[m\] (NaN: no edge), as the
 /// signal stage reads them.
 pub(super) fn rim_series(frames: &[FrameRecord]) -> (Vec<f64>, Vec<f64>) {
-    let t = frames.iter().map(|f| f.t_capture).collect();
-    let z = frames
-        .iter()
-        .map(|f| f.z_rim_m.unwrap_or(f64::NAN))
-        .collect();
-    (t, z)
+    series_of(frames, |f| f.z_rim_m)
 }
 
 /// Each frame's capture time \[s\] and z_rim \[px\] (NaN with no edge).
 pub(super) fn rim_series_px(frames: &[FrameRecord]) -> (Vec<f64>, Vec<f64>) {
+    series_of(frames, |f| f.z_rim_px)
+}
+
+/// The frames' capture times \[s\] and one reading of each (NaN where it is missing).
+fn series_of(
+    frames: &[FrameRecord],
+    reading: impl Fn(&FrameRecord) -> Option<f64>,
+) -> (Vec<f64>, Vec<f64>) {
     let t = frames.iter().map(|f| f.t_capture).collect();
     let z = frames
         .iter()
-        .map(|f| f.z_rim_px.unwrap_or(f64::NAN))
+        .map(|f| reading(f).unwrap_or(f64::NAN))
         .collect();
     (t, z)
 }
