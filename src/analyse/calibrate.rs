@@ -608,18 +608,23 @@ fn takes_over(
 }
 
 /// Whether `image`'s disk is `disk`'s mirror image in the plate: its top lies at
-/// `disk`'s plate line and it is as tall, each within [`MIRROR_TOLERANCE`] of the
-/// disk's height.
+/// `disk`'s plate line, its ends at the disk's, each within [`MIRROR_TOLERANCE`] of
+/// the disk's height, and it is no taller than the disk. It may be shorter: the
+/// reflection fades away from the plate line, and a threshold's run stops where it
+/// falls below.
 fn is_mirror_image(image: &vision::Calibration, disk: &vision::Calibration) -> bool {
     let height = disk.disk_height_px();
     let tolerance = MIRROR_TOLERANCE * height;
     (image.z_t - disk.z_base).abs() <= tolerance
-        && (image.disk_height_px() - height).abs() <= 2.0 * tolerance
+        && (image.x_l - disk.x_l).abs() <= tolerance
+        && (image.x_r - disk.x_r).abs() <= tolerance
+        && image.disk_height_px() <= height + tolerance
 }
 
 /// How close, as a fraction of the disk's height, a mirror image's top lies to the
-/// plate line (the rounded bottom rim and the blur move both edges by a few px; a
-/// light plate's disk found as a sliver or a blob inside it lies elsewhere).
+/// plate line and its ends to the disk's (the rounded bottom rim and the blur move
+/// the edges by a few px; a light plate's disk found as a sliver or a blob inside
+/// it lies elsewhere).
 const MIRROR_TOLERANCE: f64 = 0.05;
 
 /// The error when no plate kind calibrated: for the same reason each time (a disk
@@ -656,16 +661,23 @@ mod tests {
         }
     }
 
-    /// The readings of footage-open-2's drifting clip at rest: the dark plate's disk
-    /// (rows 244–436) and the light plate's, which is its mirror image (437–613,
-    /// shorter by the camera's elevation); a disk's own second reading, and a sliver
-    /// inside it, are not.
+    /// The readings of a drifting clip at rest: the dark plate's disk (rows
+    /// 238–436) and the light plate's, which is its mirror image (437–613, shorter:
+    /// the reflection fades); a disk's own second reading, a sliver inside it, and
+    /// anything taller or with other ends are not.
     #[test]
-    fn a_disk_below_the_plate_line_as_tall_is_the_mirror_image() {
-        let disk = cal(244.1, 436.4);
+    fn a_disk_below_the_plate_line_with_the_same_ends_is_the_mirror_image() {
+        let disk = cal(238.5, 436.4);
         assert!(is_mirror_image(&cal(437.0, 613.0), &disk));
         assert!(!is_mirror_image(&cal(247.4, 434.0), &disk));
-        assert!(!is_mirror_image(&cal(437.0, 470.0), &disk));
         assert!(!is_mirror_image(&cal(300.0, 480.0), &disk));
+        // Taller than the disk: not its image.
+        assert!(!is_mirror_image(&cal(437.0, 680.0), &disk));
+        // Other ends: another object under the plate line.
+        let narrower = vision::Calibration {
+            x_l: 300.0,
+            ..cal(437.0, 613.0)
+        };
+        assert!(!is_mirror_image(&narrower, &disk));
     }
 }

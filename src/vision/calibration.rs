@@ -41,7 +41,7 @@ use super::components::{Component, Labeller};
 use super::profile::{area_edge, check_frame, column_band_mean, row_band_mean};
 use super::rim::RimGauge;
 use super::threshold::{GammaSource, INTENSITY_SCALE, Threshold};
-use super::top_rim::{CentreBand, near_top_rim, near_top_rim_across, thin_top_face};
+use super::top_rim::{CentreBand, read_near_top_rim};
 use crate::config::Plate;
 use crate::footage::FrameView;
 
@@ -899,10 +899,7 @@ fn vertical_points(
         side_end: y0 + side_end,
         contrast,
     };
-    let z_near = near_top_rim_across(frame, &centre)
-        .or_else(|| near_top_rim(&p, top, side_end, contrast, origin))
-        .or_else(|| thin_top_face(&p, z_t - origin, side_end, contrast).map(|z| z + origin))
-        .unwrap_or(z_t);
+    let z_near = read_near_top_rim(frame, &centre, &p, true);
     Ok((z_near, z_base))
 }
 

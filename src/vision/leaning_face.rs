@@ -22,7 +22,7 @@
 //! A frame's near rim comes from the centre band's profile across the top of the
 //! disk, fitted with three levels, background B, top face T and side S, and two
 //! edges blurred alike by a Gaussian σ and sampled by area (the model of
-//! `top_rim::thin_top_face`, here fitted by Levenberg–Marquardt from a few starts):
+//! `top_rim::fit_thin_face`, here fitted by Levenberg–Marquardt from a few starts):
 //!
 //! ```text
 //! p_k = B + (T − B) c_k(far) + (S − T) c_k(near),   c_k(e) = ∫_k^{k+1} Φ((u − e)/σ) du.
@@ -64,7 +64,7 @@ pub const MIN_FRAMES: usize = 10;
 
 /// The tallest face at rest \[px\] this reading stands in for: the rest frame's own
 /// readings need plateaus REACH rows clear of both edges, and below this leave the
-/// face to `top_rim::thin_top_face` or the silhouette's top.
+/// face to `top_rim::fit_thin_face` or the silhouette's top.
 pub const THIN_AT_REST_PX: f64 = (REACH + 2) as f64;
 
 /// Where a frame's centre-band profile across the disk's top is read (side-view

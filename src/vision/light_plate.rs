@@ -29,7 +29,7 @@ use super::VisionError;
 use super::calibration::{Calibration, band};
 use super::components::Component;
 use super::profile::{area_edge, column_band_mean, row_band_mean};
-use super::top_rim::{CentreBand, near_top_rim, near_top_rim_across, thin_top_face};
+use super::top_rim::{CentreBand, NEAR_RIM_STEP_FRACTION, read_near_top_rim};
 use crate::footage::FrameView;
 use crate::numeric::{mad_sigma, median};
 
@@ -122,7 +122,9 @@ pub(super) fn calibrate(
     // darker than both the backdrop and the side makes the near rim the largest
     // step, and the blur of that edge would be read as a thin face below it (a
     // backdrop at 11, face 60, side 177: z_t 0.64 px low); such an edge is itself the
-    // near rim.
+    // near rim. A backdrop may shade over the frame (a vignette, a lamp's fall-off),
+    // so "the backdrop's level" allows as much change as a face lit like the side
+    // would show: the fraction of the disk's contrast below which a face is not seen.
     let levels = |rows: std::ops::Range<usize>| -> Vec<f64> {
         p[rows].iter().map(|&v| f64::from(v)).collect()
     };
@@ -131,15 +133,9 @@ pub(super) fn calibrate(
     let spread = mad_sigma(&backdrop_levels, backdrop).max(1.0);
     let above = j.saturating_sub(2 * REACH).max(lo - REACH);
     let top_is_backdrop = above + 1 >= j.saturating_sub(REACH)
-        || (median(&levels(above..j.saturating_sub(REACH))) - backdrop).abs() <= 3.0 * spread;
-    let z_t = near_top_rim_across(frame, &centre)
-        .or_else(|| near_top_rim(&p, j + 1, i, windowed(k), 0.0))
-        .or_else(|| {
-            top_is_backdrop
-                .then(|| thin_top_face(&p, silhouette, i, windowed(k)))
-                .flatten()
-        })
-        .unwrap_or(silhouette);
+        || (median(&levels(above..j.saturating_sub(REACH))) - backdrop).abs()
+            <= (3.0 * spread).max(f64::from(NEAR_RIM_STEP_FRACTION * windowed(k)));
+    let z_t = read_near_top_rim(frame, &centre, &p, top_is_backdrop);
     Ok(Calibration {
         x_l,
         x_r,

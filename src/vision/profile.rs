@@ -95,7 +95,7 @@ pub(super) fn steps((start, end, step): (f64, f64, f64)) -> impl Iterator<Item =
 /// The fraction of row k (covering [k, k + 1)) below a step at e blurred by a
 /// Gaussian σ, c_k(e) = ∫_k^{k+1} Φ((u − e)/σ) du = σ [I(a) − I(b)] with
 /// I(x) = x Φ(x) + φ(x), a = (k + 1 − e)/σ, b = (k − e)/σ; with its derivatives in e
-/// and in ln σ. The sampled edge of the top-face fits (`top_rim::thin_top_face`,
+/// and in ln σ. The sampled edge of the top-face fits (`top_rim::fit_thin_face`,
 /// `leaning_face`).
 pub(super) fn blurred_step_coverage(k: f64, e: f64, sigma: f64) -> (f64, f64, f64) {
     use std::f64::consts::{PI, SQRT_2};

@@ -4,7 +4,7 @@
 //! corrected), so an error of 1 px in z_t is 2–5 % in φ and E on a disk 20–50 px
 //! thick.
 //!
-//! Three readings, tried in turn:
+//! Three readings, tried in turn ([`read_near_top_rim`]):
 //!
 //! 1. [`near_top_rim_across`]: the two-plateau edge ([`near_top_rim`]) on bands of
 //!    columns across the face, carried to the centre line along the face's
@@ -15,19 +15,24 @@
 //!    only a few bands near the rim.
 //! 2. [`near_top_rim`] on the centre band alone, when too few bands see a rim (a
 //!    narrow face, a small disk).
-//! 3. [`thin_top_face`]: a face too thin for the plateaus, fitted with its blur.
+//! 3. [`fit_thin_face`]: a face up to [`REACH`] + 2 px tall, fitted with its blur
+//!    and the band of a rounded rim below it. The plateaus leave its rows out; when
+//!    they see the band and the side instead, their edge is the band's lower one,
+//!    and the fit's rim replaces it.
 //!
 //! When none sees a face the silhouette's top (the far top rim) stands for z_t.
 //! A face under [`super::leaning_face::THIN_AT_REST_PX`] is read again, in the
 //! frames in which the rolling disk leans towards the camera and shows it several
 //! pixels tall ([`super::leaning_face`]), and `analyse` takes that reading.
 
-use nalgebra::{Matrix3, Vector3};
+use std::ops::RangeInclusive;
+
+use nalgebra::{DMatrix, Matrix4, Vector4};
 
 use super::calibration::REACH;
 use super::profile::{area_edge, blurred_step_coverage, row_band_mean};
 use crate::footage::FrameView;
-use crate::numeric::median;
+use crate::numeric::{median, upper_median};
 
 /// Farthest band from the centre line, as a fraction of the disk's half-width a.
 /// There the near top rim lies b (1 − √(1 − 0.4²)) = 0.083 b above its lowest point
@@ -145,7 +150,7 @@ pub fn silhouette_top(frame: &FrameView, cal: &super::Calibration) -> Option<f64
 /// Least difference between the top face's and the side's mean levels, as a
 /// fraction of the disk's contrast with what lies below it, for the near top rim
 /// to count as seen (a sub-pixel edge between levels closer than this is noise).
-const NEAR_RIM_STEP_FRACTION: f32 = 0.15;
+pub(super) const NEAR_RIM_STEP_FRACTION: f32 = 0.15;
 
 /// The near top rim z_t (thesis fig. 3.3) on the band profile `p` of the disk's
 /// silhouette, rows `top..=side_end` (silhouette top to the last row of the
@@ -224,79 +229,398 @@ fn robust_median(mut v: Vec<f64>) -> f64 {
 }
 
 /// The near top rim on a top face too thin for [`near_top_rim`]'s plateaus (a camera
-/// looking down by 1–3° from a few decimetres shows it 1–3 px tall, within the
+/// looking down by 1–3° from a few decimetres shows it 1–5 px tall, within the
 /// [`REACH`] rows those leave out), by fitting the band profile `p` about the
-/// silhouette's top `far` (its area edge, the far top rim, in `p`'s rows) with three
-/// levels, background B, top face T and side S, and two edges blurred alike by a
-/// Gaussian σ and sampled by area:
+/// silhouette's top `far` (its area edge, the far top rim, in `p`'s rows) with the
+/// levels of the background B, the top face T, a band D and the side S, and three
+/// edges blurred alike by a Gaussian σ and sampled by area:
 ///
 /// ```text
-/// p_k = B + (T − B) c_k(far′) + (S − T) c_k(near),   c_k(e) = ∫_k^{k+1} Φ((u − e)/σ) du
+/// p_k = B + (T − B) c_k(far′) + (D − T) c_k(near) + (S − D) c_k(near + w),
+/// c_k(e) = ∫_k^{k+1} Φ((u − e)/σ) du.
 /// ```
 ///
-/// (B, T, S) by least squares for each (far′, near, σ) of a grid, the face at most
-/// [`REACH`] + 2 px tall. The answer is refused (`None`) when
-/// - the face is less than 2σ tall: two edges blurred alike are told apart only that
-///   far apart, and closer the face's level and height trade off;
-/// - a fitted level lies beyond the profile's range by more than a tenth of it (the
-///   same trade-off);
+/// The band is the rounded or chamfered edge between the face and the side (real
+/// disks' rims are rounded): it faces neither the light nor the camera as the face
+/// and side do, so it shows as a line of its own, w px tall (w = 0: a sharp edge).
+/// The near top rim, where the face's plane meets the side's, is the face's end,
+/// `near`; the band's lower edge, which a two-plateau split takes for the rim when
+/// the face is thinner than the rows it leaves out, lies w lower.
+///
+/// The levels come by least squares for each (far′, near, w, σ) of a coarse grid,
+/// then of a fine one about the best ([`FaceGrid`]); the face at most
+/// [`REACH`] + 2 px tall, the band at most [`BAND_FRACTION`] of the side.
+///
+/// A face less than 2σ tall is not resolved: two edges blurred alike are told apart
+/// only that far apart, and closer the face's level and height trade off (its
+/// level may even leave the profile's range, by more than a tenth of it). What the
+/// blurred bump fixes is its centre and its area, so the near rim, half the fitted
+/// height below the centre, is off by less than σ, where the silhouette's top is
+/// off by the whole face. Alone, such a face may be no more than the far rim's
+/// anti-aliased row; a band under it shows where it ends.
+/// The answer is refused (`None`) when
 /// - the fitted S is not the side's own level (the median of the side's rows from
 ///   `REACH` + 3 px below the silhouette's top to `side_end`, which a thin line across
 ///   the face, a strip, does not move), or T differs from it by less than
-///   [`NEAR_RIM_STEP_FRACTION`] of `contrast` (no face seen).
-pub(super) fn thin_top_face(p: &[f32], far: f64, side_end: usize, contrast: f32) -> Option<f64> {
+///   [`NEAR_RIM_STEP_FRACTION`] of `contrast` (no face seen);
+/// - the band's level D differs from T by less than that: the face goes on beyond
+///   the rows fitted, and the plateaus read it.
+fn fit_thin_face(p: &[f32], far: f64, side_end: usize, contrast: f32) -> Option<ThinFace> {
     let top = far.ceil() as usize;
     let side_rows = p.get(top + REACH + 3..side_end.checked_sub(REACH)?)?;
     if side_rows.len() < 3 {
         return None;
     }
-    let mut sorted = side_rows.to_vec();
-    sorted.sort_by(f32::total_cmp);
-    let side_level = f64::from(sorted[sorted.len() / 2]);
+    let mut side: Vec<f64> = side_rows.iter().map(|&v| f64::from(v)).collect();
+    let side_level = upper_median(&mut side);
+    let widest_band = BAND_FRACTION * (side_end as f64 - far);
     let first = (far.floor() as usize).checked_sub(REACH)?;
-    let last = side_end.min(top + REACH + 5);
+    let last = side_end.min(top + REACH + 5 + widest_band.ceil() as usize);
     let rows: Vec<(f64, f64)> = (first..last).map(|k| (k as f64, f64::from(p[k]))).collect();
-    let coverage = |k: f64, e: f64, sigma: f64| blurred_step_coverage(k, e, sigma).0;
-    let yy: f64 = rows.iter().map(|r| r.1 * r.1).sum();
-    // (SSR, face's height, σ, near, levels)
-    let mut best: Option<(f64, f64, f64, f64, Vector3<f64>)> = None;
-    for si in 0..18 {
-        let sigma = 0.3 + 0.1 * f64::from(si);
-        for fi in 0..=40 {
-            let far = far - 1.0 + 0.05 * f64::from(fi);
-            for ni in 0..=(20 * (REACH + 2) - 4) {
-                let near = far + 0.2 + 0.05 * ni as f64;
-                // Normal equations of the three levels.
-                let (mut xx, mut xy) = (Matrix3::zeros(), Vector3::zeros());
-                for &(k, v) in &rows {
-                    let (a, b) = (coverage(k, far, sigma), coverage(k, near, sigma));
-                    let x = Vector3::new(1.0 - a, a - b, b);
-                    xx += x * x.transpose();
-                    xy += x * v;
-                }
-                let Some(levels) = xx.cholesky().map(|c| c.solve(&xy)) else {
-                    continue;
-                };
-                let ssr = yy - 2.0 * levels.dot(&xy) + levels.dot(&(xx * levels));
-                if best.as_ref().is_none_or(|b| ssr < b.0) {
-                    best = Some((ssr, near - far, sigma, near, levels));
-                }
-            }
-        }
-    }
-    let (_, height, sigma, near, levels) = best?;
+    let sigmas = |first: f64, step: f64, count: usize| -> Vec<f64> {
+        (0..=count).map(|i| first + step * i as f64).collect()
+    };
+    // Coarse: edges every 0.2 px, the band in 0.4 px steps.
+    let coarse = FaceGrid {
+        origin: far - 0.6,
+        step: 0.2,
+        sigmas: sigmas(0.4, 0.2, 8),
+        far: 0..=6,
+        height: 1..=5 * (REACH + 2),
+        band: (0, 2, (widest_band / 0.4) as usize),
+    };
+    let best = coarse.best(&rows)?;
+    // Fine: every 0.05 px about the coarse best, the band in 0.1 px steps.
+    let band_from = ((best.band - 0.4) / 0.05).round().max(0.0) as usize;
+    let fine = FaceGrid {
+        origin: best.far - 0.2,
+        step: 0.05,
+        sigmas: sigmas((best.sigma - 0.2).max(0.3), 0.05, 8),
+        far: 0..=8,
+        height: (((best.near - best.far - 0.2) / 0.05).round().max(1.0) as usize)
+            ..=((best.near - best.far + 0.2) / 0.05).round() as usize,
+        band: (band_from, 2, 8),
+    };
+    let best = fine
+        .best(&rows)
+        .filter(|b| b.ssr <= best.ssr)
+        .unwrap_or(best);
     let (lo, hi) = rows
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
             (lo.min(r.1), hi.max(r.1))
         });
     let margin = 0.1 * (hi - lo);
-    let in_range = levels
+    let in_range = best
+        .levels
         .iter()
         .all(|&v| (lo - margin..=hi + margin).contains(&v));
-    let step = (levels[1] - side_level).abs();
-    let resolved = height >= 2.0 * sigma;
-    let side_agrees = (levels[2] - side_level).abs() < 0.5 * step;
-    (resolved && in_range && side_agrees && step >= f64::from(NEAR_RIM_STEP_FRACTION * contrast))
-        .then_some(near)
+    let resolved = in_range && best.near - best.far >= 2.0 * best.sigma;
+    let [_, face, band, side] = best.levels.into();
+    let least_step = f64::from(NEAR_RIM_STEP_FRACTION * contrast);
+    let step = (face - side_level).abs();
+    let side_agrees = (side - side_level).abs() < 0.5 * step;
+    // A band lit like the face is the face going on beyond the rows fitted.
+    let band_distinct = best.band == 0.0 || (band - face).abs() >= least_step;
+    // A band lit like the side is the side: the edge is sharp.
+    let band_seen = (band - side).abs() >= least_step;
+    (side_agrees && band_distinct && step >= least_step).then_some(ThinFace {
+        near: best.near,
+        band: if band_seen { best.band } else { 0.0 },
+        side: side_level,
+        least_step,
+        resolved,
+    })
+}
+
+/// A top face seen by [`fit_thin_face`]: the near top rim and the band's height
+/// below it \[px\], the side's level, the least step between levels seen, and
+/// whether the face's level and height were told apart.
+struct ThinFace {
+    near: f64,
+    band: f64,
+    side: f64,
+    least_step: f64,
+    resolved: bool,
+}
+
+impl ThinFace {
+    /// Whether `edge`, the plateaus' reading on the profile `p`, is this face's
+    /// band's lower edge, so that the plateaus were the band and the side: the
+    /// band ends at `edge` (within a pixel), and the side follows it, its level
+    /// on the band's height of rows below the edge's blur. Where the plateaus'
+    /// edge is the rim itself, a band lies under it: a face taller than the fit
+    /// reaches, which the fit can take for a sliver at the far rim above a band.
+    fn band_ends_at(&self, p: &[f32], edge: f64) -> bool {
+        let below = (edge + 2.0).ceil() as usize..(edge + 2.0 + self.band).ceil() as usize;
+        self.band >= 1.0
+            && (self.near + self.band - edge).abs() <= 1.0
+            && p.get(below).is_some_and(|rows| {
+                rows.iter()
+                    .all(|&v| (f64::from(v) - self.side).abs() < self.least_step)
+            })
+    }
+}
+
+/// The near top rim z_t on the centre band's profile `p` (rows from the frame's
+/// top) by the readers of the module docs in turn: the plateaus across the face,
+/// then on the centre band; where those see none, the thin face's fit, when the face
+/// is resolved or a band lies under it; else the far top rim `centre.far`.
+///
+/// A face thinner than the rows the plateaus leave out, above the band of a
+/// rounded rim, leaves the band and the side as the two plateaus, and their edge
+/// is the band's lower one, the band's height (a few px) below the rim. So when
+/// the thin face's fit puts its band's end at the plateaus' edge, its near rim is
+/// taken. `thin_face` false leaves the thin face out (a silhouette's top that may
+/// not be the disk's).
+pub(super) fn read_near_top_rim(
+    frame: &FrameView,
+    centre: &CentreBand,
+    p: &[f32],
+    thin_face: bool,
+) -> f64 {
+    let thin = || {
+        thin_face
+            .then(|| fit_thin_face(p, centre.far, centre.side_end, centre.contrast))
+            .flatten()
+    };
+    let plateaus = near_top_rim_across(frame, centre)
+        .or_else(|| near_top_rim(p, centre.top, centre.side_end, centre.contrast, 0.0));
+    match plateaus {
+        Some(edge) => thin()
+            .filter(|face| face.band_ends_at(p, edge))
+            .map_or(edge, |face| face.near),
+        None => thin()
+            .filter(|face| face.resolved || face.band > 0.0)
+            .map_or(centre.far, |face| face.near),
+    }
+}
+
+/// The widest band between the top face and the side that [`fit_thin_face`] fits, as
+/// a fraction of the rows from the far top rim to the side's end: a rim rounded to
+/// a tenth of the disk's thickness.
+const BAND_FRACTION: f64 = 0.1;
+
+/// One fit of [`fit_thin_face`]'s model: its edges, blur, levels (B, T, D, S) and
+/// squared error.
+struct FaceFit {
+    far: f64,
+    near: f64,
+    band: f64,
+    sigma: f64,
+    levels: Vector4<f64>,
+    ssr: f64,
+}
+
+/// A grid of [`fit_thin_face`]'s model. Every edge lies on a lattice of positions
+/// `origin + step·i`: the far rim at i ∈ `far`, the near rim j ∈ `height` steps
+/// below it, the band's end `band.0 + band.1 · m` steps below that, m = 0 ..= `band.2`.
+struct FaceGrid {
+    origin: f64,
+    step: f64,
+    sigmas: Vec<f64>,
+    far: RangeInclusive<usize>,
+    height: RangeInclusive<usize>,
+    band: (usize, usize, usize),
+}
+
+impl FaceGrid {
+    /// The grid point whose least-squares levels fit `rows` (row, level) best.
+    fn best(&self, rows: &[(f64, f64)]) -> Option<FaceFit> {
+        let (first, stride, count) = self.band;
+        let size = self.far.end() + self.height.end() + first + stride * count + 1;
+        let edges: Vec<f64> = (0..size)
+            .map(|i| self.origin + self.step * i as f64)
+            .collect();
+        let mut best: Option<FaceFit> = None;
+        for &sigma in &self.sigmas {
+            let gram = Gram::new(rows, &edges, sigma);
+            for i in self.far.clone() {
+                for j in self.height.clone() {
+                    for m in 0..=count {
+                        let end = i + j + first + stride * m;
+                        if let Some(levels) = gram.levels([i, i + j, end])
+                            && best.as_ref().is_none_or(|b| levels.1 < b.ssr)
+                        {
+                            best = Some(FaceFit {
+                                far: edges[i],
+                                near: edges[i + j],
+                                band: edges[end] - edges[i + j],
+                                sigma,
+                                levels: levels.0,
+                                ssr: levels.1,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+/// The sums of products over the fitted rows of the blurred steps c(e) at each
+/// lattice edge e, and of them with the levels, for one σ: the normal equations of
+/// any three edges' levels follow without going over the rows again.
+struct Gram {
+    /// Rows fitted, Σ v and Σ v².
+    count: f64,
+    sum: f64,
+    sum_sq: f64,
+    /// Σ c_e, Σ c_e v per edge, and Σ c_e c_f per pair.
+    cover: Vec<f64>,
+    cover_v: Vec<f64>,
+    cross: DMatrix<f64>,
+}
+
+impl Gram {
+    fn new(rows: &[(f64, f64)], edges: &[f64], sigma: f64) -> Self {
+        let columns: Vec<Vec<f64>> = edges
+            .iter()
+            .map(|&e| {
+                rows.iter()
+                    .map(|&(k, _)| blurred_step_coverage(k, e, sigma).0)
+                    .collect()
+            })
+            .collect();
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let values: Vec<f64> = rows.iter().map(|r| r.1).collect();
+        Gram {
+            count: rows.len() as f64,
+            sum: values.iter().sum(),
+            sum_sq: dot(&values, &values),
+            cover: columns.iter().map(|c| c.iter().sum()).collect(),
+            cover_v: columns.iter().map(|c| dot(c, &values)).collect(),
+            cross: DMatrix::from_fn(edges.len(), edges.len(), |e, f| {
+                dot(&columns[e], &columns[f])
+            }),
+        }
+    }
+
+    /// The levels (B, T, D, S) for the edges at lattice points `[far, near, end]`, and
+    /// their squared error: with u = (1, c_far, c_near, c_end) the model's regressors
+    /// are x = M u, x = (1 − c_far, c_far − c_near, c_near − c_end, c_end), so the
+    /// normal equations are M (Σ u uᵀ) Mᵀ L = M Σ u v. With no band (end = near), D is
+    /// T's and the model has three levels.
+    fn levels(&self, edges: [usize; 3]) -> Option<(Vector4<f64>, f64)> {
+        let u_sum = |e: Option<usize>, f: Option<usize>| match (e, f) {
+            (None, None) => self.count,
+            (Some(e), None) | (None, Some(e)) => self.cover[e],
+            (Some(e), Some(f)) => self.cross[(e, f)],
+        };
+        let index = |r: usize| (r > 0).then(|| edges[r - 1]);
+        let uu = Matrix4::from_fn(|r, c| u_sum(index(r), index(c)));
+        let uv = Vector4::from_fn(|r, _| index(r).map_or(self.sum, |e| self.cover_v[e]));
+        #[rustfmt::skip]
+        let m = Matrix4::new(
+            1.0, -1.0, 0.0, 0.0,
+            0.0, 1.0, -1.0, 0.0,
+            0.0, 0.0, 1.0, -1.0,
+            0.0, 0.0, 0.0, 1.0,
+        );
+        let mut xx = m * uu * m.transpose();
+        let mut xy = m * uv;
+        let banded = edges[2] != edges[1];
+        if !banded {
+            // D has no rows: tie it to T.
+            xx.row_mut(2).fill(0.0);
+            xx.column_mut(2).fill(0.0);
+            xx[(2, 2)] = 1.0;
+            xy[2] = 0.0;
+        }
+        let mut levels = xx.cholesky()?.solve(&xy);
+        let ssr = self.sum_sq - 2.0 * levels.dot(&xy) + levels.dot(&(xx * levels));
+        if !banded {
+            levels[2] = levels[1];
+        }
+        Some((levels, ssr))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A column's profile down the disk's top: background, a thin top face, a band
+    /// `band` px tall (the rounded rim) and the side, each edge blurred by σ and
+    /// sampled by area, as [`fit_thin_face`] models it.
+    fn profile(far: f64, near: f64, band: f64, levels: [f64; 4]) -> Vec<f32> {
+        let sigma = 0.8;
+        let [b, t, d, s] = levels;
+        (0..120)
+            .map(|k| {
+                let c = |e: f64| blurred_step_coverage(k as f64, e, sigma).0;
+                let band_edge = if band > 0.0 { c(near + band) } else { c(near) };
+                (b + (t - b) * c(far) + (d - t) * c(near) + (s - d) * band_edge) as f32
+            })
+            .collect()
+    }
+
+    /// The face's end is the rim, whether a band darker than face and side lies below
+    /// it or the edge is sharp; the band's own lower edge is not taken for it.
+    #[test]
+    fn a_thin_face_ends_at_the_rim_above_a_rounded_edge() {
+        for (near, band) in [(42.0, 5.0), (41.37, 3.5), (42.6, 0.0)] {
+            let far = 38.2;
+            let p = profile(far, near, band, [25.0, 198.0, 111.0, 160.0]);
+            let face = fit_thin_face(&p, far, 110, 140.0).expect("a face is seen");
+            assert!(
+                (face.near - near).abs() < 0.06,
+                "band {band}: rim at {near}, found {}",
+                face.near
+            );
+            assert!(
+                (face.band - band).abs() < 0.15,
+                "band {band}: {}",
+                face.band
+            );
+        }
+    }
+
+    /// A face 1 px tall above a band 5.5 px tall (a rounded rim seen from 2° above,
+    /// blurred by σ = 0.8 px): the plateaus read the band's lower edge, 5.5 px below
+    /// the rim, and the fit, which cannot tell the face's level from its height,
+    /// still ends the face within σ/2 of the rim and explains the plateaus' edge as
+    /// its band's end.
+    #[test]
+    fn the_plateaus_edge_under_a_face_thinner_than_the_blur_is_the_bands() {
+        let (far, near, band) = (40.7, 41.7, 5.5);
+        let p = profile(far, near, band, [25.0, 200.0, 116.0, 160.0]);
+        let plateaus = near_top_rim(&p, far.ceil() as usize, 110, 135.0, 0.0)
+            .expect("the band and the side are two plateaus");
+        assert!(
+            (plateaus - (near + band)).abs() < 0.3,
+            "plateaus at {plateaus}"
+        );
+        let face = fit_thin_face(&p, far, 110, 135.0).expect("a face is seen");
+        assert!(face.band_ends_at(&p, plateaus));
+        assert!(
+            (face.near - near).abs() < 0.4,
+            "rim at {near}, fit {}",
+            face.near
+        );
+    }
+
+    /// A face 11 px tall above a band: the plateaus' edge is the rim itself, with the
+    /// band under it, and the fit (which reaches 5 px faces, and may take a sliver at
+    /// the far rim for one) does not replace it.
+    #[test]
+    fn the_plateaus_edge_above_a_band_is_the_rim() {
+        let (far, near, band) = (38.2, 49.2, 4.0);
+        let p = profile(far, near, band, [23.0, 197.0, 114.0, 159.0]);
+        let plateaus = near_top_rim(&p, far.ceil() as usize, 110, 136.0, 0.0)
+            .expect("the face and the side are two plateaus");
+        assert!((plateaus - near).abs() < 0.3, "plateaus at {plateaus}");
+        if let Some(face) = fit_thin_face(&p, far, 110, 136.0) {
+            assert!(!face.band_ends_at(&p, plateaus));
+        }
+    }
+
+    /// A face that goes on past the rows fitted (a thick face) is left to the
+    /// plateaus, not cut short by a band lit like the face.
+    #[test]
+    fn a_thick_face_is_left_to_the_plateaus() {
+        let p = profile(38.2, 52.0, 0.0, [25.0, 198.0, 198.0, 120.0]);
+        assert!(fit_thin_face(&p, 38.2, 110, 140.0).is_none());
+    }
 }
