@@ -17,9 +17,8 @@ pub(super) struct RimHeights {
     /// The side view's row where z_rim = 0 \[px\]: the model's edge at rest, else
     /// z_base; moved with the zero the motion places (the signal stage).
     pub(super) zero_row_px: f64,
-    /// z_b of eq. 3.10: the plate line where the rim meets the plate at rest (its
-    /// mirror image on a dark plate, the darkest row under it on a light one;
-    /// ScaleReport), else z_base.
+    /// z_b of eq. 3.10: the plate line where the mirror-edge model finds the rim
+    /// meets its mirror image (ScaleReport), else z_base.
     pub(super) bottom_rim_row: f64,
     /// Which reading, which decides how well the zero is known when the motion does
     /// not place it.
@@ -138,18 +137,14 @@ fn mirror_edge_heights(model: &vision::MirrorEdgeModel) -> RimHeights {
     }
 }
 
-/// The heights as the shadow-edge contour reads them (light plate); z_b is where
-/// the rim meets the plate at rest, else `z_base`.
+/// The heights as the shadow-edge contour reads them (light plate); it measures no
+/// plate line, so z_b stays `z_base`.
 fn shadow_edge_heights(model: &vision::ShadowEdgeModel, z_base: f64) -> RimHeights {
-    let plate_line = match model.plate_row {
-        Some(row) => format!("plate line {row:.1} px, the darkest row under it"),
-        None => format!("no darker row under it: the plate line is z_base, {z_base:.2} px"),
-    };
     let description = format!(
         "shadow-edge contour (vision::shadow_edge): the edge where the band falls to {:.3} \
          of the disk's side, halfway to the shadow under the lifted rim ({:.3}), placed by \
          the pixel means of a step blurred by σ = {:.2} px; edge at rest {:.2} px, the zero \
-         of z_rim; {plate_line} (z_b of eq. 3.10's scale); {} frame(s) kept the first pass",
+         of z_rim; {} frame(s) kept the first pass",
         model.edge_level(),
         model.shadow_ratio,
         model.blur_px,
@@ -159,7 +154,7 @@ fn shadow_edge_heights(model: &vision::ShadowEdgeModel, z_base: f64) -> RimHeigh
     RimHeights {
         description,
         zero_row_px: model.rest_edge,
-        bottom_rim_row: model.plate_row.unwrap_or(z_base),
+        bottom_rim_row: z_base,
         reading: RimReading::ShadowEdge,
     }
 }

@@ -82,10 +82,6 @@ pub struct ShadowEdgeModel {
     /// Frames whose crossing was not found within [`SEARCH_PX`] of the first
     /// pass, which keep their first-pass height.
     pub kept_first_pass: usize,
-    /// Where the rim meets the plate at rest (the darkest row under the edge at rest,
-    /// [`contact_row`]; continuous row, px): z_b of eq. 3.10's scale. `None` when the
-    /// rest profile has no such row.
-    pub plate_row: Option<f64>,
 }
 
 impl ShadowEdgeModel {
@@ -204,31 +200,6 @@ fn shadow_ratio(window: &BandWindow, edge: f64) -> Option<f64> {
     (level > 0.0).then(|| f64::from(darkest) / level)
 }
 
-/// Rows under the edge at rest searched for the contact with the plate: a rim
-/// rounded over up to 3 px and blurred by about a pixel.
-const CONTACT_ROWS: usize = 5;
-
-/// Where the rim meets the plate in the rest frames' profile `rest`: the centre of
-/// the first row, walking down from the edge at rest `rest_edge`, darker than the
-/// row below it and no brighter than the row above.
-///
-/// Lit from above, a rim rounded into the plate turns its face down as it nears
-/// the plate, and is darkest where it touches it; below lies the lit plate, or on
-/// a dark plate the rim's mirror image, which darkens towards the same line. The
-/// contour the heights are read at, halfway down the side's fall, lies above
-/// that by the rounding and the blur (2.3–2.6 px on rims rounded over 5 px), and
-/// taken for z_b it would read the disk's thickness 1–1.5 % small and φ as much
-/// large. Read to the row (±0.5 px).
-fn contact_row(rest: &BandWindow, rest_edge: f64) -> Option<f64> {
-    let v = &rest.values;
-    let first = (rest_edge.floor() as usize)
-        .checked_sub(rest.first_row)?
-        .max(1);
-    (first..first + CONTACT_ROWS)
-        .find(|&k| k + 1 < v.len() && v[k] <= v[k - 1] && v[k] < v[k + 1])
-        .map(|k| (rest.first_row + k) as f64 + 0.5)
-}
-
 /// Re-measures a clip's rim heights on a light plate (module docs): `heights` are
 /// the first-pass z_rim per frame \[px\] (`None`: no edge, left alone), `windows`
 /// each frame's band rows about its first-pass edge z_base − z, `rest` the rest
@@ -272,14 +243,12 @@ pub fn remeasure(
         blur_px: crate::numeric::median(&blurs),
         rest_edge: f64::NAN,
         kept_first_pass: 0,
-        plate_row: None,
     };
     let rest_edge0 = rest.first_row as f64 + ROWS_ABOVE as f64;
     model.rest_edge = model
         .edge(rest)
         .filter(|e| (e - rest_edge0).abs() <= SEARCH_PX + 0.5)
         .ok_or("the rest frames' profile never falls to the edge's level")?;
-    model.plate_row = contact_row(rest, model.rest_edge);
     for (z, w) in heights.iter_mut().zip(windows) {
         if let (Some(height), Some(window)) = (z.as_mut(), w) {
             let edge0 = z_base - *height;
@@ -365,11 +334,6 @@ mod tests {
         let model = remeasure(&mut heights, &windows, plate - 0.4, &rest).expect("model");
         assert!((model.shadow_ratio - 0.58).abs() < 0.02, "{model:?}");
         assert_eq!(model.kept_first_pass, 0);
-        // The rounded rim darkest where it meets the lit plate: its row is the plate
-        // line, where the contour lies a pixel above it.
-        let plate_row = model.plate_row.expect("a darkest row at the contact");
-        assert!((plate_row - plate).abs() <= 0.5, "plate line {plate_row}");
-        assert!(model.rest_edge < plate - 0.5, "{model:?}");
         // The blur carries the lit plate under the resting rim 0.065 px into the rest
         // frames' crossing (the first pass's area edge: 0.5–0.9 px on the footage),
         // and linear interpolation of the curved edge errs by ±0.04 px with its phase.
@@ -408,8 +372,6 @@ mod tests {
         assert!((model.shadow_ratio - 1.0 / 3.0).abs() < 0.01, "{model:?}");
         assert!(model.blur_px < 0.2, "{model:?}");
         assert!((model.rest_edge - plate).abs() < 0.01, "{model:?}");
-        // No darker row under a sharp edge: the plate line is left to z_base.
-        assert_eq!(model.plate_row, None);
         for (&z, found) in lifts.iter().zip(&heights) {
             let error = found.unwrap() - z;
             assert!(error.abs() < 0.02, "lift {z}: error {error}");

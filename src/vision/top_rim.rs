@@ -32,7 +32,7 @@ use nalgebra::{DMatrix, Matrix4, Vector4};
 use super::calibration::REACH;
 use super::profile::{area_edge, blurred_step_coverage, row_band_mean};
 use crate::footage::FrameView;
-use crate::numeric::{median, upper_median};
+use crate::numeric::{mad_sigma, median, upper_median};
 
 /// Farthest band from the centre line, as a fraction of the disk's half-width a.
 /// There the near top rim lies b (1 − √(1 − 0.4²)) = 0.083 b above its lowest point
@@ -248,8 +248,10 @@ fn robust_median(mut v: Vec<f64>) -> f64 {
 /// the face is thinner than the rows it leaves out, lies w lower.
 ///
 /// The levels come by least squares for each (far′, near, w, σ) of a coarse grid,
-/// then of a fine one about the best ([`FaceGrid`]); the face at most
-/// [`REACH`] + 2 px tall, the band at most [`BAND_FRACTION`] of the side.
+/// then of a fine one about the best ([`fit_face_model`]); the face at most
+/// [`REACH`] + 2 px tall, the band at most [`BAND_FRACTION`] of the side. The model
+/// is fitted with a band and with a sharp edge (w = 0), and the band is taken when
+/// it leaves at most [`BAND_GAIN`] of the sharp edge's misfit.
 ///
 /// A face less than 2σ tall is not resolved: two edges blurred alike are told apart
 /// only that far apart, and closer the face's level and height trade off (its
@@ -271,40 +273,19 @@ fn fit_thin_face(p: &[f32], far: f64, side_end: usize, contrast: f32) -> Option<
     if side_rows.len() < 3 {
         return None;
     }
-    let mut side: Vec<f64> = side_rows.iter().map(|&v| f64::from(v)).collect();
-    let side_level = upper_median(&mut side);
+    let mut side_rows: Vec<f64> = side_rows.iter().map(|&v| f64::from(v)).collect();
+    let side_level = upper_median(&mut side_rows);
     let widest_band = BAND_FRACTION * (side_end as f64 - far);
     let first = (far.floor() as usize).checked_sub(REACH)?;
     let last = side_end.min(top + REACH + 5 + widest_band.ceil() as usize);
     let rows: Vec<(f64, f64)> = (first..last).map(|k| (k as f64, f64::from(p[k]))).collect();
-    let sigmas = |first: f64, step: f64, count: usize| -> Vec<f64> {
-        (0..=count).map(|i| first + step * i as f64).collect()
-    };
-    // Coarse: edges every 0.2 px, the band in 0.4 px steps.
-    let coarse = FaceGrid {
-        origin: far - 0.6,
-        step: 0.2,
-        sigmas: sigmas(0.4, 0.2, 8),
-        far: 0..=6,
-        height: 1..=5 * (REACH + 2),
-        band: (0, 2, (widest_band / 0.4) as usize),
-    };
-    let best = coarse.best(&rows)?;
-    // Fine: every 0.05 px about the coarse best, the band in 0.1 px steps.
-    let band_from = ((best.band - 0.4) / 0.05).round().max(0.0) as usize;
-    let fine = FaceGrid {
-        origin: best.far - 0.2,
-        step: 0.05,
-        sigmas: sigmas((best.sigma - 0.2).max(0.3), 0.05, 8),
-        far: 0..=8,
-        height: (((best.near - best.far - 0.2) / 0.05).round().max(1.0) as usize)
-            ..=((best.near - best.far + 0.2) / 0.05).round() as usize,
-        band: (band_from, 2, 8),
-    };
-    let best = fine
-        .best(&rows)
-        .filter(|b| b.ssr <= best.ssr)
-        .unwrap_or(best);
+    // A band is taken only where it explains the profile far better than a sharp
+    // edge: with a face up to 5 px tall, a sharp rim's face can also be fitted as a
+    // sliver at the far rim above a "band" that is the face itself.
+    let sharp = fit_face_model(&rows, far, 0.0)?;
+    let best = fit_face_model(&rows, far, widest_band)
+        .filter(|banded| banded.ssr < BAND_GAIN * sharp.ssr)
+        .unwrap_or(sharp);
     let (lo, hi) = rows
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
@@ -322,8 +303,19 @@ fn fit_thin_face(p: &[f32], far: f64, side_end: usize, contrast: f32) -> Option<
     let side_agrees = (side - side_level).abs() < 0.5 * step;
     // A band lit like the face is the face going on beyond the rows fitted.
     let band_distinct = best.band == 0.0 || (band - face).abs() >= least_step;
-    // A band lit like the side is the side: the edge is sharp.
-    let band_seen = (band - side).abs() >= least_step;
+    // A band is told from the face's own shading, or the side's, only when it is
+    // darker or brighter than both (a level between theirs may be a face taller
+    // than the fit reaches, shaded across). And a face above a band must show:
+    // some row of it beyond the band's level, on the face's side, by more than the
+    // noise. Else the "face" is the blur of a sharp far rim, and the "band" a face
+    // taller than the fit reaches.
+    let noise = mad_sigma(&side_rows, side_level).max(1.0);
+    let face_rows = (best.far.floor().max(0.0) as usize)..(best.near.ceil() as usize).min(p.len());
+    let face_seen = p[face_rows]
+        .iter()
+        .any(|&v| (f64::from(v) - band) * (face - band).signum() > FACE_SEEN_SIGMAS * noise);
+    let beyond_both = (band - face) * (band - side) > 0.0;
+    let band_seen = (band - side).abs() >= least_step && beyond_both && face_seen;
     (side_agrees && band_distinct && step >= least_step).then_some(ThinFace {
         near: best.near,
         band: if band_seen { best.band } else { 0.0 },
@@ -395,6 +387,49 @@ pub(super) fn read_near_top_rim(
             .map_or(centre.far, |face| face.near),
     }
 }
+
+/// The best fit of [`fit_thin_face`]'s model to `rows` (row, level) about the far rim
+/// `far`, with bands up to `widest_band` px (0: a sharp edge): on a coarse grid, then
+/// on a fine one about its best.
+fn fit_face_model(rows: &[(f64, f64)], far: f64, widest_band: f64) -> Option<FaceFit> {
+    let sigmas = |first: f64, step: f64, count: usize| -> Vec<f64> {
+        (0..=count).map(|i| first + step * i as f64).collect()
+    };
+    // Coarse: edges every 0.2 px, the band in 0.4 px steps.
+    let coarse = FaceGrid {
+        origin: far - 0.6,
+        step: 0.2,
+        sigmas: sigmas(0.4, 0.2, 8),
+        far: 0..=6,
+        height: 1..=5 * (REACH + 2),
+        band: (0, 2, (widest_band / 0.4) as usize),
+    };
+    let best = coarse.best(rows)?;
+    // Fine: every 0.05 px about the coarse best, the band in 0.1 px steps.
+    let band_from = ((best.band - 0.4) / 0.05).round().max(0.0) as usize;
+    let fine = FaceGrid {
+        origin: best.far - 0.2,
+        step: 0.05,
+        sigmas: sigmas((best.sigma - 0.2).max(0.3), 0.05, 8),
+        far: 0..=8,
+        height: (((best.near - best.far - 0.2) / 0.05).round().max(1.0) as usize)
+            ..=((best.near - best.far + 0.2) / 0.05).round() as usize,
+        band: (band_from, 2, if widest_band > 0.0 { 8 } else { 0 }),
+    };
+    Some(
+        fine.best(rows)
+            .filter(|b| b.ssr <= best.ssr)
+            .unwrap_or(best),
+    )
+}
+
+/// Noise σ (the side's rows') by which a thin face must show beyond its band.
+const FACE_SEEN_SIGMAS: f64 = 3.0;
+
+/// How much of a sharp edge's squared misfit a band must leave, at most, to be
+/// taken: a rounded rim's band, lit like neither face nor side, leaves a sharp
+/// edge's fit a dip of its own depth over several rows.
+const BAND_GAIN: f64 = 0.5;
 
 /// The widest band between the top face and the side that [`fit_thin_face`] fits, as
 /// a fraction of the rows from the far top rim to the side's end: a rim rounded to
@@ -614,6 +649,20 @@ mod tests {
         if let Some(face) = fit_thin_face(&p, far, 110, 136.0) {
             assert!(!face.band_ends_at(&p, plateaus));
         }
+    }
+
+    /// A face 9 px tall, shaded across (its lower half between its upper half's
+    /// level and the side's, as a face lit from above and behind shows): the
+    /// plateaus' edge is the rim, and no band of the fit ends there.
+    #[test]
+    fn a_shaded_face_keeps_the_plateaus_edge() {
+        let (far, split, near) = (47.3, 52.5, 56.7);
+        let p = profile(far, split, near - split, [12.0, 89.0, 100.0, 143.0]);
+        let plateaus = near_top_rim(&p, far.ceil() as usize, 110, 130.0, 0.0)
+            .expect("the face and the side are two plateaus");
+        assert!((plateaus - near).abs() < 0.3, "plateaus at {plateaus}");
+        let fit = fit_thin_face(&p, far, 110, 130.0);
+        assert!(fit.is_none_or(|face| !face.band_ends_at(&p, plateaus)));
     }
 
     /// A face that goes on past the rows fitted (a thick face) is left to the
