@@ -648,84 +648,81 @@ enum Failed {
 /// `--shard`, a missing or repeated shard, a clip a shard owns but has no result
 /// for, or a clip that two shards both analysed.
 pub fn merge(shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
-    let mut merged = StudyResults {
-        crate_version: env!("CARGO_PKG_VERSION").into(),
-        ..StudyResults::default()
-    };
-    let mut ks = BTreeSet::new();
-    let mut total = None;
-    // The footage and the clip list of the first shard, which every other must share.
-    let mut first_study: Option<(PathBuf, Vec<String>)> = None;
+    let mut shards = ShardSet::default();
     for dir in shard_dirs {
         let path = dir.join(STUDY_FILE);
         let bad = |reason: String| StudyError::Merge {
             path: path.clone(),
             reason,
         };
-        let bytes = std::fs::read(&path).map_err(|e| bad(e.to_string()))?;
-        let shard: StudyResults = serde_json::from_slice(&bytes).map_err(|e| bad(e.to_string()))?;
-        if shard.crate_version != merged.crate_version {
-            return Err(bad(format!(
-                "written by eulerdisk {}, this is {}",
-                shard.crate_version, merged.crate_version
-            )));
+        let shard = read_shard(&path, &shards.merged.crate_version).map_err(bad)?;
+        shards.add(shard).map_err(bad)?;
+    }
+    shards.complete(shard_dirs)
+}
+
+/// A shard's `study.json` at `path`, written by this `version` of eulerdisk; the
+/// reason when it cannot be read or was written by another version.
+fn read_shard(path: &Path, version: &str) -> Result<StudyResults, String> {
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    let shard: StudyResults = serde_json::from_slice(&bytes).map_err(|e| e.to_string())?;
+    if shard.crate_version != version {
+        return Err(format!(
+            "written by eulerdisk {}, this is {version}",
+            shard.crate_version
+        ));
+    }
+    Ok(shard)
+}
+
+/// The shards merged so far, and what each further shard must agree with.
+struct ShardSet {
+    merged: StudyResults,
+    /// The shards' K so far.
+    ks: BTreeSet<usize>,
+    /// The first shard's N.
+    total: Option<usize>,
+    /// The footage and the clip list of the first shard, which every other must share.
+    first_study: Option<(PathBuf, Vec<String>)>,
+}
+
+impl Default for ShardSet {
+    fn default() -> Self {
+        ShardSet {
+            merged: StudyResults {
+                crate_version: env!("CARGO_PKG_VERSION").into(),
+                ..StudyResults::default()
+            },
+            ks: BTreeSet::new(),
+            total: None,
+            first_study: None,
         }
+    }
+}
+
+impl ShardSet {
+    /// Adds a shard's experiments and failures; the reason when it is not a shard,
+    /// does not belong with the others, lacks a result for a clip it owns, or holds
+    /// a clip that an earlier shard holds.
+    fn add(&mut self, shard: StudyResults) -> Result<(), String> {
         let Some(record) = &shard.shard else {
-            return Err(bad(
-                "not a shard: written by a `study` run without --shard".into()
-            ));
+            return Err("not a shard: written by a `study` run without --shard".into());
         };
-        let study =
-            first_study.get_or_insert_with(|| (record.footage.clone(), record.study_clips.clone()));
-        if study.1 != record.study_clips {
-            return Err(bad(format!(
-                "shard {}/{} was made from a study of {} clips, the other shards from one of \
-                 {} (clips added or removed between the runs?); run every shard on the same \
-                 footage",
-                record.k,
-                record.n,
-                record.study_clips.len(),
-                study.1.len()
-            )));
-        }
-        if study.0 != record.footage {
-            return Err(bad(format!(
-                "shard {}/{} was made from the footage in {}, the other shards from {}; \
-                 give the shards of one study",
-                record.k,
-                record.n,
-                record.footage.display(),
-                study.0.display()
-            )));
-        }
-        if *total.get_or_insert(record.n) != record.n {
-            return Err(bad(format!(
-                "shard {}/{} does not belong with shards of {}",
-                record.k,
-                record.n,
-                total.unwrap_or(0)
-            )));
-        }
-        if !ks.insert(record.k) {
-            return Err(bad(format!(
-                "shard {}/{} given more than once (more than one shard folder holds it)",
-                record.k, record.n
-            )));
-        }
+        self.check_belongs(record)?;
         let has = |clip: &str| {
             shard.experiments.iter().any(|e| e.clip == clip)
                 || shard.failures.iter().any(|f| f.clip == clip)
         };
         if let Some(missing) = record.clips.iter().find(|c| !has(c)) {
-            return Err(bad(format!(
+            return Err(format!(
                 "shard {}/{} owns clip '{missing}' but has no result for it \
                  (interrupted? run the shard again with --resume)",
                 record.k, record.n
-            )));
+            ));
         }
         let seen = |clip: &str| {
-            merged.experiments.iter().any(|e| e.clip == clip)
-                || merged.failures.iter().any(|f| f.clip == clip)
+            self.merged.experiments.iter().any(|e| e.clip == clip)
+                || self.merged.failures.iter().any(|f| f.clip == clip)
         };
         for clip in shard
             .experiments
@@ -734,29 +731,80 @@ pub fn merge(shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
             .chain(shard.failures.iter().map(|f| &f.clip))
         {
             if seen(clip) {
-                return Err(bad(format!("clip '{clip}' appears in more than one shard")));
+                return Err(format!("clip '{clip}' appears in more than one shard"));
             }
         }
-        merged.experiments.extend(shard.experiments);
-        merged.failures.extend(shard.failures);
+        self.merged.experiments.extend(shard.experiments);
+        self.merged.failures.extend(shard.failures);
+        Ok(())
     }
-    let n = total.unwrap_or(0);
-    let missing: Vec<String> = (1..=n)
-        .filter(|k| !ks.contains(k))
-        .map(|k| format!("{k}/{n}"))
-        .collect();
-    if !missing.is_empty() {
-        return Err(StudyError::Merge {
-            path: shard_dirs.first().cloned().unwrap_or_default(),
-            reason: format!(
-                "incomplete: shard {} missing ({} of {n} given); give every shard's folder",
-                missing.join(", "),
-                ks.len()
-            ),
-        });
+
+    /// Whether the shard `record` belongs with those so far: the same study's clips,
+    /// the same footage, the same N, and a K not given before (which it records).
+    fn check_belongs(&mut self, record: &ShardRecord) -> Result<(), String> {
+        let study = self
+            .first_study
+            .get_or_insert_with(|| (record.footage.clone(), record.study_clips.clone()));
+        if study.1 != record.study_clips {
+            return Err(format!(
+                "shard {}/{} was made from a study of {} clips, the other shards from one of \
+                 {} (clips added or removed between the runs?); run every shard on the same \
+                 footage",
+                record.k,
+                record.n,
+                record.study_clips.len(),
+                study.1.len()
+            ));
+        }
+        if study.0 != record.footage {
+            return Err(format!(
+                "shard {}/{} was made from the footage in {}, the other shards from {}; \
+                 give the shards of one study",
+                record.k,
+                record.n,
+                record.footage.display(),
+                study.0.display()
+            ));
+        }
+        if *self.total.get_or_insert(record.n) != record.n {
+            return Err(format!(
+                "shard {}/{} does not belong with shards of {}",
+                record.k,
+                record.n,
+                self.total.unwrap_or(0)
+            ));
+        }
+        if !self.ks.insert(record.k) {
+            return Err(format!(
+                "shard {}/{} given more than once (more than one shard folder holds it)",
+                record.k, record.n
+            ));
+        }
+        Ok(())
     }
-    merged.sort();
-    Ok(merged)
+
+    /// The merged results, sorted as a single run sorts them, once every K of N is
+    /// there; the error names the missing shards against the first folder.
+    fn complete(self, shard_dirs: &[PathBuf]) -> Result<StudyResults, StudyError> {
+        let n = self.total.unwrap_or(0);
+        let missing: Vec<String> = (1..=n)
+            .filter(|k| !self.ks.contains(k))
+            .map(|k| format!("{k}/{n}"))
+            .collect();
+        if !missing.is_empty() {
+            return Err(StudyError::Merge {
+                path: shard_dirs.first().cloned().unwrap_or_default(),
+                reason: format!(
+                    "incomplete: shard {} missing ({} of {n} given); give every shard's folder",
+                    missing.join(", "),
+                    self.ks.len()
+                ),
+            });
+        }
+        let mut merged = self.merged;
+        merged.sort();
+        Ok(merged)
+    }
 }
 
 /// Copies each analysed clip's folder from the shard folder that holds it into

@@ -756,6 +756,60 @@ pub fn simulate_streaming(
     spec: &SimulationSpec,
     sink: &mut dyn FnMut(&Sample) -> Result<(), String>,
 ) -> Result<RunSummary, SimulationError> {
+    check_spec(spec)?;
+    let units = Units::of(&spec.params);
+    let mut y = units.to_scaled(&spec.initial);
+    // The discontinuity function's value at the start of the run: its zero is terminal,
+    // and the run integrates the moment's branch on this side of it.
+    let discontinuity = spec.dissipation.discontinuity(&ScaledDisk::rates(&y));
+    let disk = scaled_disk(spec, discontinuity);
+    let setup = RunSetup {
+        disk: &disk,
+        units: &units,
+        flat_angle: spec.flat_angle,
+        discontinuity_sign: discontinuity.map_or(1.0, f64::signum),
+        tau_end: spec.t_end / units.time,
+        output_step: spec.output_interval / units.time,
+        t_end: spec.t_end,
+    };
+    let mode = initial_mode(&disk, &mut y, 0.0)?;
+    let mut run = RunState::start(y, mode);
+    let mut emitter = Emitter {
+        disk: &disk,
+        units: &units,
+        beta0: spec.beta0,
+        unwrap: Unwrapper::default(),
+        sink,
+        count: 0,
+        first: None,
+        last: None,
+    };
+    let end_reason = loop {
+        let end = integrate_phase(&setup, &mut run, &mut emitter)?;
+        if end.hit.is_none() && end.handover {
+            // Same phase, other integrator.
+            (run.tau, run.y) = end.last;
+            run.stiff = !run.stiff;
+            continue;
+        }
+        let Some(hit) = end.hit else {
+            // Reached t_end.
+            run.tau = setup.tau_end;
+            run.y = end.last.1;
+            break EndReason::TimeLimit;
+        };
+        if let Some(reason) = run.take_event(hit, &disk, &units, &mut emitter)? {
+            break reason;
+        }
+    };
+    run.finish(end_reason, &units, &mut emitter)
+}
+
+/// Checks a spec before a run: valid disk parameters, μ ≥ 0 and finite η ≥ 0,
+/// positive t_end, output interval and flat angle, an initial φ between the flat
+/// angle and π/2, and finite initial rates that move the rim slower than
+/// [`MAX_RIM_SPEED_M_S`].
+fn check_spec(spec: &SimulationSpec) -> Result<(), SimulationError> {
     let p = &spec.params;
     p.validate().map_err(SimulationError::BadInput)?;
     let eta_ok = spec.eta.is_finite() && spec.eta >= 0.0;
@@ -789,13 +843,15 @@ pub fn simulate_streaming(
             MAX_RIM_SPEED_M_S / p.radius
         )));
     }
+    Ok(())
+}
 
-    let units = Units::of(p);
-    let mut y = units.to_scaled(&spec.initial);
-    // The discontinuity function's value at the start of the run: its zero is terminal,
-    // and the run integrates the moment's branch on this side of it.
-    let discontinuity = spec.dissipation.discontinuity(&ScaledDisk::rates(&y));
-    let disk = ScaledDisk {
+/// The spec's disk in the scaled units of eq. (4.21), integrating the dissipative
+/// moment's branch on the side of its discontinuity where the run starts
+/// (`discontinuity`, the discontinuity function's value there).
+fn scaled_disk(spec: &SimulationSpec, discontinuity: Option<f64>) -> ScaledDisk {
+    let p = &spec.params;
+    ScaledDisk {
         h: p.h(),
         a: p.a(),
         c: p.c(),
@@ -803,189 +859,282 @@ pub fn simulate_streaming(
         eta: spec.eta,
         dissipation: spec.dissipation,
         branch: discontinuity.filter(|d| *d != 0.0).map(f64::signum),
-    };
-    let tau_end = spec.t_end / units.time;
-    let output_step = spec.output_interval / units.time;
+    }
+}
 
-    let mut tau = 0.0;
-    let mut mode = initial_mode(&disk, &mut y, tau)?;
-    let mut phases = vec![Phase {
-        mode,
-        start: 0.0,
-        end: 0.0,
-    }];
-    let mut emitter = Emitter {
-        disk: &disk,
-        units: &units,
-        beta0: spec.beta0,
-        unwrap: Unwrapper::default(),
-        sink,
-        count: 0,
-        first: None,
-        last: None,
-    };
-    let mut next_output = 0.0;
-    let mut stats = SolverStats::default();
-    let mut switches = 0usize;
-    let discontinuity_sign = discontinuity.map_or(1.0, f64::signum);
+/// What stays fixed through a run, in scaled units: the disk, the event settings,
+/// the end time and the output step.
+struct RunSetup<'a> {
+    disk: &'a ScaledDisk,
+    units: &'a Units,
+    flat_angle: f64,
+    /// Sign of the discontinuity function at the start of the run.
+    discontinuity_sign: f64,
+    tau_end: f64,
+    output_step: f64,
+    /// t_end in SI \[s\], for [`SimulationError::NoProgress`].
+    t_end: f64,
+}
 
-    // Slipping is integrated by RODAS4 while stiff, else by DOP853 (see
-    // `integrate_slipping`); DOP853 hands back below a quarter of the slip speed at which
-    // RODAS4 handed over.
-    let mut stiff = true;
-    let mut hand_back_speed = 0.0;
-    let end_reason = loop {
-        let events = Events {
-            disk: &disk,
+/// Where a run stands between phases (scaled time and state).
+struct RunState {
+    tau: f64,
+    y: StateVector,
+    mode: Mode,
+    /// Time of the next uniform output sample.
+    next_output: f64,
+    stats: SolverStats,
+    /// Slipping is integrated by RODAS4 while stiff, else by DOP853 (see
+    /// `integrate_slipping`); DOP853 hands back below a quarter of the slip speed at
+    /// which RODAS4 handed over.
+    stiff: bool,
+    hand_back_speed: f64,
+    /// Contact phases so far, the last still open.
+    phases: Vec<Phase>,
+    /// Mode changes so far, against [`MAX_SWITCHES`].
+    switches: usize,
+}
+
+/// How one phase's integration ended: at an event (trigger, time, state), or without
+/// one at its last state, `handover` set when only the integrator changes.
+struct PhaseEnd {
+    hit: Option<(Trigger, f64, StateVector)>,
+    last: (f64, StateVector),
+    handover: bool,
+}
+
+impl RunState {
+    /// A run at τ = 0 in state `y` and `mode`, its first phase open.
+    fn start(y: StateVector, mode: Mode) -> Self {
+        RunState {
+            tau: 0.0,
+            y,
             mode,
-            flat_angle: spec.flat_angle,
-            discontinuity_sign,
-        };
-        let phase_mode = mode;
-        let mut emit = |t: f64, y: &StateVector| emitter.emit(t, y, phase_mode);
-        let mut out = PhaseOutput {
-            next_output,
-            output_step,
-            emit: &mut emit,
-            previous: Some(events.values(&y, &y)),
-            hit: None,
-            last: (tau, y),
-            handover: false,
-            error: None,
-        };
-        let slip_speed = y[X_DOT].hypot(y[Y_DOT]);
-        if mode == Mode::Slipping && stiff {
-            // Stiff slipping (small slip speed): RODAS4.
-            integrate_slipping(&events, &mut out, tau, y, tau_end, &mut stats).map_err(
-                |e| match e {
-                    SimulationError::Integration { t, reason } => SimulationError::Integration {
-                        t: t * units.time,
-                        reason,
-                    },
-                    SimulationError::NoProgress { t, .. } => SimulationError::NoProgress {
-                        t: t * units.time,
-                        t_end: spec.t_end,
-                    },
-                    other => other,
-                },
-            )?;
-            hand_back_speed = 0.25 * out.last.1[X_DOT].hypot(out.last.1[Y_DOT]);
-        } else {
-            // Rolling, and slipping once the friction mode is no longer stiff: DOP853.
-            let field = PhaseField { disk: &disk, mode };
-            let recorder = PhaseRecorder {
-                events,
-                out: &mut out,
-                hand_back_speed: hand_back_speed.min(slip_speed),
-            };
-            let solution = IVP::ode(&field, tau, tau_end, y)
-                .method(
-                    ExplicitRungeKutta::dop853()
-                        .rtol(TOLERANCE)
-                        .atol(TOLERANCE)
-                        .max_steps(
-                            MAX_STEPS
-                                .saturating_sub(stats.accepted_steps + stats.rejected_steps)
-                                .max(1),
-                        ),
-                )
-                .solout(recorder)
-                .solve()
-                .map_err(|e| match e {
-                    Error::MaxSteps { t, .. } => SimulationError::NoProgress {
-                        t: t * units.time,
-                        t_end: spec.t_end,
-                    },
-                    e => SimulationError::Integration {
-                        t: tau * units.time,
-                        reason: format!("{e:?}").chars().take(200).collect(),
-                    },
-                })?;
-            stats.rhs_evaluations += solution.evals.function;
-            stats.accepted_steps += solution.steps.accepted;
-            stats.rejected_steps += solution.steps.rejected;
+            next_output: 0.0,
+            stats: SolverStats::default(),
+            stiff: true,
+            hand_back_speed: 0.0,
+            phases: vec![Phase {
+                mode,
+                start: 0.0,
+                end: 0.0,
+            }],
+            switches: 0,
         }
-        let PhaseOutput {
-            next_output: next,
-            hit,
-            last,
-            handover,
-            error,
-            ..
-        } = out;
-        if let Some(error) = error {
-            return Err(error);
-        }
-        next_output = next;
+    }
 
-        if hit.is_none() && handover {
-            // Same phase, other integrator.
-            (tau, y) = last;
-            stiff = !stiff;
-            continue;
-        }
-        let Some((trigger, t_hit, y_hit)) = hit else {
-            // Reached t_end.
-            tau = tau_end;
-            y = last.1;
-            break EndReason::TimeLimit;
-        };
-        tau = t_hit;
-        y = y_hit;
-        if !y.iter().all(|v| v.is_finite()) {
+    /// Moves the run to the event `hit`. A terminal event ends the run (its reason
+    /// returned); a slip or stick event seeds the slip or ends it (eqs. 4.33–4.41),
+    /// records the event's state in the mode that reached it, and opens a new phase
+    /// when the mode changes.
+    fn take_event(
+        &mut self,
+        (trigger, t_hit, y_hit): (Trigger, f64, StateVector),
+        disk: &ScaledDisk,
+        units: &Units,
+        emitter: &mut Emitter,
+    ) -> Result<Option<EndReason>, SimulationError> {
+        self.tau = t_hit;
+        self.y = y_hit;
+        if !self.y.iter().all(|v| v.is_finite()) {
             return Err(SimulationError::Singular {
-                t: tau * units.time,
-                phi: y[PHI],
+                t: self.tau * units.time,
+                phi: self.y[PHI],
             });
         }
         let new_mode = match trigger {
-            Trigger::Flat => break EndReason::FallenFlat,
-            Trigger::Discontinuity => break EndReason::DiscontinuitySet,
-            Trigger::LiftOff => break EndReason::LiftOff,
+            Trigger::Flat => return Ok(Some(EndReason::FallenFlat)),
+            Trigger::Discontinuity => return Ok(Some(EndReason::DiscontinuitySet)),
+            Trigger::LiftOff => return Ok(Some(EndReason::LiftOff)),
             Trigger::Slip => {
-                seed_slip(&disk, &mut y, tau)?;
+                seed_slip(disk, &mut self.y, self.tau)?;
                 Mode::Slipping
             }
-            Trigger::Stick => stick_or_slip_on(&disk, &mut y, tau)?,
+            Trigger::Stick => stick_or_slip_on(disk, &mut self.y, self.tau)?,
         };
         // A (re)seeded slip starts at the stiff slip speed of eq. (4.41).
-        stiff = true;
-        hand_back_speed = 0.0;
-        emitter.emit(tau, &y, mode)?;
-        if new_mode != mode {
-            switches += 1;
-            if switches > MAX_SWITCHES {
-                return Err(SimulationError::Chattering {
-                    t: tau * units.time,
-                });
-            }
-            if let Some(last) = phases.last_mut() {
-                last.end = tau * units.time;
-            }
-            phases.push(Phase {
-                mode: new_mode,
-                start: tau * units.time,
-                end: tau * units.time,
-            });
-            mode = new_mode;
+        self.stiff = true;
+        self.hand_back_speed = 0.0;
+        emitter.emit(self.tau, &self.y, self.mode)?;
+        if new_mode != self.mode {
+            self.switch_to(new_mode, units)?;
         }
-    };
-    if let Some(last) = phases.last_mut() {
-        last.end = tau * units.time;
+        Ok(None)
     }
-    emitter.emit(tau, &y, mode)?;
 
-    let (Some(start), Some(end)) = (emitter.first, emitter.last) else {
-        return Err(SimulationError::BadInput("no samples".into()));
+    /// Closes the current phase at τ and opens one of `new_mode`; more than
+    /// [`MAX_SWITCHES`] changes are chattering.
+    fn switch_to(&mut self, new_mode: Mode, units: &Units) -> Result<(), SimulationError> {
+        self.switches += 1;
+        if self.switches > MAX_SWITCHES {
+            return Err(SimulationError::Chattering {
+                t: self.tau * units.time,
+            });
+        }
+        if let Some(last) = self.phases.last_mut() {
+            last.end = self.tau * units.time;
+        }
+        self.phases.push(Phase {
+            mode: new_mode,
+            start: self.tau * units.time,
+            end: self.tau * units.time,
+        });
+        self.mode = new_mode;
+        Ok(())
+    }
+
+    /// Closes the last phase, records the final state and sums the run up.
+    fn finish(
+        mut self,
+        end_reason: EndReason,
+        units: &Units,
+        emitter: &mut Emitter,
+    ) -> Result<RunSummary, SimulationError> {
+        if let Some(last) = self.phases.last_mut() {
+            last.end = self.tau * units.time;
+        }
+        emitter.emit(self.tau, &self.y, self.mode)?;
+        let (Some(start), Some(end)) = (emitter.first, emitter.last) else {
+            return Err(SimulationError::BadInput("no samples".into()));
+        };
+        Ok(RunSummary {
+            phases: self.phases,
+            end_reason,
+            start,
+            end,
+            samples: emitter.count,
+            stats: self.stats,
+        })
+    }
+}
+
+/// Integrates the run's current phase from its state until an event, t_end or a
+/// change of integrator (RODAS4 while slipping is stiff, else DOP853), handing the
+/// uniform output samples to `emitter` as they are found.
+fn integrate_phase(
+    setup: &RunSetup,
+    run: &mut RunState,
+    emitter: &mut Emitter,
+) -> Result<PhaseEnd, SimulationError> {
+    let events = Events {
+        disk: setup.disk,
+        mode: run.mode,
+        flat_angle: setup.flat_angle,
+        discontinuity_sign: setup.discontinuity_sign,
     };
-    Ok(RunSummary {
-        phases,
-        end_reason,
-        start,
-        end,
-        samples: emitter.count,
-        stats,
+    let phase_mode = run.mode;
+    let mut emit = |t: f64, y: &StateVector| emitter.emit(t, y, phase_mode);
+    let mut out = PhaseOutput {
+        next_output: run.next_output,
+        output_step: setup.output_step,
+        emit: &mut emit,
+        previous: Some(events.values(&run.y, &run.y)),
+        hit: None,
+        last: (run.tau, run.y),
+        handover: false,
+        error: None,
+    };
+    let slip_speed = run.y[X_DOT].hypot(run.y[Y_DOT]);
+    if run.mode == Mode::Slipping && run.stiff {
+        // Stiff slipping (small slip speed): RODAS4.
+        integrate_slipping(
+            &events,
+            &mut out,
+            run.tau,
+            run.y,
+            setup.tau_end,
+            &mut run.stats,
+        )
+        .map_err(|e| setup.in_si(e))?;
+        run.hand_back_speed = 0.25 * out.last.1[X_DOT].hypot(out.last.1[Y_DOT]);
+    } else {
+        // Rolling, and slipping once the friction mode is no longer stiff: DOP853.
+        let recorder = PhaseRecorder {
+            events,
+            out: &mut out,
+            hand_back_speed: run.hand_back_speed.min(slip_speed),
+        };
+        integrate_explicit(setup, recorder, run.tau, run.y, &mut run.stats)?;
+    }
+    let PhaseOutput {
+        next_output,
+        hit,
+        last,
+        handover,
+        error,
+        ..
+    } = out;
+    if let Some(error) = error {
+        return Err(error);
+    }
+    run.next_output = next_output;
+    Ok(PhaseEnd {
+        hit,
+        last,
+        handover,
     })
+}
+
+impl RunSetup<'_> {
+    /// An error of [`integrate_slipping`], which counts in scaled time, with its
+    /// times in SI.
+    fn in_si(&self, e: SimulationError) -> SimulationError {
+        match e {
+            SimulationError::Integration { t, reason } => SimulationError::Integration {
+                t: t * self.units.time,
+                reason,
+            },
+            SimulationError::NoProgress { t, .. } => SimulationError::NoProgress {
+                t: t * self.units.time,
+                t_end: self.t_end,
+            },
+            other => other,
+        }
+    }
+}
+
+/// Integrates a phase with DOP853 from (tau, y) towards t_end, feeding its accepted
+/// steps to `recorder`, within the steps of [`MAX_STEPS`] the run has left (at least
+/// one); errors in SI.
+fn integrate_explicit(
+    setup: &RunSetup,
+    recorder: PhaseRecorder,
+    tau: f64,
+    y: StateVector,
+    stats: &mut SolverStats,
+) -> Result<(), SimulationError> {
+    let field = PhaseField {
+        disk: setup.disk,
+        mode: recorder.events.mode,
+    };
+    let time = setup.units.time;
+    let solution = IVP::ode(&field, tau, setup.tau_end, y)
+        .method(
+            ExplicitRungeKutta::dop853()
+                .rtol(TOLERANCE)
+                .atol(TOLERANCE)
+                .max_steps(
+                    MAX_STEPS
+                        .saturating_sub(stats.accepted_steps + stats.rejected_steps)
+                        .max(1),
+                ),
+        )
+        .solout(recorder)
+        .solve()
+        .map_err(|e| match e {
+            Error::MaxSteps { t, .. } => SimulationError::NoProgress {
+                t: t * time,
+                t_end: setup.t_end,
+            },
+            e => SimulationError::Integration {
+                t: tau * time,
+                reason: format!("{e:?}").chars().take(200).collect(),
+            },
+        })?;
+    stats.rhs_evaluations += solution.evals.function;
+    stats.accepted_steps += solution.steps.accepted;
+    stats.rejected_steps += solution.steps.rejected;
+    Ok(())
 }
 
 /// Turns scaled states into SI samples as they are produced and hands them on,

@@ -32,12 +32,12 @@ use super::measured::{
     Layout, OVERLAY_H264, OverlaySpec, decode_positions, last_turns, peak_positions,
 };
 use super::pose::CameraPose;
-use crate::analyse::Experiment;
+use crate::analyse::{Experiment, ExperimentPlan, FrameRecord};
 use crate::compare::Comparison;
-use crate::footage::FrameSource;
+use crate::footage::{FrameSource, FrameView};
 use crate::output::{write_atomic, write_csv, write_through_temporary};
 use crate::render::H264Writer;
-use crate::render::motion::{DiskState, trajectory_motion};
+use crate::render::motion::{DiskState, Motion, trajectory_motion};
 use crate::render::rim_edge_row;
 use crate::render::scene::{Camera, DiskShape, Pose};
 
@@ -117,206 +117,29 @@ pub fn write_model_overlay(
     spec: &OverlaySpec,
 ) -> Result<ModelOverlay, OverlayError> {
     let plan = &e.plan;
-    let clip = &plan.clip;
-    let draw_err = |frame: usize| {
-        move |reason: String| OverlayError::Draw {
-            clip: clip.clone(),
-            frame,
-            reason,
-        }
-    };
-    let fps = plan.fps.fps;
-    let lead = c.options.lead_s;
-    let end = c.trajectory.end_time();
-    let after = (lead + spec.span_s.1 - end).max(0.0) + 2.0 / fps;
-    let motion = trajectory_motion(&plan.disk, &c.trajectory, 0.0, c.mu, fps, after, None)
-        .map_err(|err| draw_err(0)(err.to_string()))?;
-    // Model state at the experiment's time t (model time t + lead, a frame of
-    // the motion's grid, which starts at model time 0).
-    let state_at = |t: f64| -> Option<&DiskState> {
-        let k = ((t + lead) * fps).round();
-        (k >= 0.0).then(|| &motion.states[(k as usize).min(motion.states.len() - 1)])
-    };
-    let peaks: Vec<f64> = e
-        .series
-        .peaks
-        .peaks
-        .iter()
-        .filter(|p| p.t + lead <= end)
-        .filter_map(|p| Some(-std::f64::consts::FRAC_PI_2 - state_at(p.t)?.psi))
-        .collect();
-    let psi_offset = peaks
-        .iter()
-        .map(|d| d.sin())
-        .sum::<f64>()
-        .atan2(peaks.iter().map(|d| d.cos()).sum::<f64>());
-    let mirrored = c.measured.beta_sign < 0.0;
-
-    let in_span: Vec<usize> = (0..e.frames.len())
-        .filter(|&k| (spec.span_s.0..=spec.span_s.1).contains(&e.frames[k].t))
-        .filter(|&k| state_at(e.frames[k].t).is_some())
-        .collect();
-    let (Some(&first), Some(&last)) = (in_span.first(), in_span.last()) else {
-        return Err(OverlayError::EmptySpan {
-            clip: clip.clone(),
-            from: spec.span_s.0.max(-lead),
-            to: spec.span_s.1,
-        });
-    };
-    let z_max = in_span
-        .iter()
-        .filter_map(|&k| e.frames[k].z_rim_px)
-        .fold(0.0, f64::max);
+    let track = ModelTrack::new(e, c, spec)?;
+    let (span, z_max) = span_of(e, spec, &track)?;
     let layout = Layout::new(plan, z_max);
     let pose = CameraPose::from_calibration(plan, silhouette_top(e)?);
-    let camera = pose.camera(plan);
-    let (ox, oy) = plan.side_view_origin();
-    let (ox, oy) = (ox as f64, oy as f64);
-    let x_centre = plan.calibration.calibration.x_centre();
-    let disk = outline(plan);
-    let band = crate::vision::band(x_centre, plan.band_half_width_px, plan.side_view_width());
-    let model_image = |t: f64| -> Option<ModelImage> {
-        let s = state_at(t)?;
-        let pose = Pose::rolling(
-            &plan.disk,
-            s.psi + psi_offset,
-            s.phi,
-            s.theta,
-            s.centre[0],
-            s.centre[1],
-        );
-        let points: Vec<(f64, f64)> = (0..2 * RIM_POINTS)
-            .map(|k| {
-                let a = std::f64::consts::TAU * (k % RIM_POINTS) as f64 / RIM_POINTS as f64;
-                let z = if k < RIM_POINTS { -1.0 } else { 1.0 } * plan.disk.half_thickness;
-                let (x, row) = project(
-                    &camera,
-                    pose.world_from_body([
-                        plan.disk.radius * a.cos(),
-                        plan.disk.radius * a.sin(),
-                        z,
-                    ]),
-                );
-                let x = if mirrored { 2.0 * x_centre - x } else { x };
-                (x, row)
-            })
-            .collect();
-        let hull = convex_hull(points);
-        let edge_row = band_edge_row(&disk, &camera, &pose, band, mirrored.then_some(x_centre));
-        Some(ModelImage { hull, edge_row })
+    let (psi_offset, mirrored) = (track.psi_offset, track.mirrored);
+    let frames = ModelFrames {
+        e,
+        view: ModelView::new(plan, &pose, track),
+        layout,
+        span,
+        turns: last_turns(e, &peak_positions(e), spec.last_turns),
+        name: format!("{:?} (η = {:.3e})", c.options.model, c.eta),
     };
-
     let video = dir.join(MODEL_OVERLAY_VIDEO);
-    let encode_err = |reason: String| OverlayError::Encode {
-        path: video.clone(),
-        reason,
-    };
-    let turns = last_turns(e, &peak_positions(e), spec.last_turns);
-    let name = format!("{:?} (η = {:.3e})", c.options.model, c.eta);
-    // The video is encoded into a temporary file, renamed into place when complete.
-    let (tiles, rows) = write_through_temporary(&video, |partial| {
-        let mut writer = H264Writer::create(
-            partial,
-            layout.width,
-            layout.height,
-            spec.playback_fps,
-            OVERLAY_H264,
-        )
-        .map_err(encode_err)?;
-        let mut planes = Default::default();
-        let mut tiles = Vec::new();
-        let mut rows = Vec::new();
-        decode_positions(e, (first, last), &layout, |position, view| {
-            let record = &e.frames[position];
-            let mut image = layout.paint(view);
-            let footage_row = record.z_rim_px.map(|z| plan.rim_edge_row(z));
-            let model = model_image(record.t);
-            for (window, width) in [(&layout.side, 1.0), (&layout.band, 2.0)] {
-                if let Some(row) = footage_row {
-                    window.row_line(
-                        &mut image,
-                        row + oy,
-                        (x_centre + ox - 4.0, x_centre + ox + 4.0),
-                        width,
-                        RIM,
-                    );
-                }
-                if let Some(m) = &model {
-                    for (a, b) in m.hull.iter().zip(m.hull.iter().cycle().skip(1)) {
-                        window.segment(
-                            &mut image,
-                            (a.0 + ox, a.1 + oy),
-                            (b.0 + ox, b.1 + oy),
-                            MODEL,
-                        );
-                    }
-                    if let Some(row) = m.edge_row {
-                        window.row_line(
-                            &mut image,
-                            row + oy,
-                            (x_centre + ox - 4.0, x_centre + ox + 4.0),
-                            width,
-                            MODEL,
-                        );
-                    }
-                }
-            }
-            let error = footage_row.zip(model.as_ref().and_then(|m| m.edge_row));
-            if let Some((f, m)) = error {
-                rows.push(ErrorRow {
-                    index: record.index,
-                    t_s: record.t,
-                    footage_edge_row_px: f,
-                    model_edge_row_px: m,
-                    error_px: m - f,
-                    error_m: (m - f) * plan.metres_per_px,
-                });
-            }
-            let lines = [
-                (
-                    format!(
-                        "frame {}  t − t_φ = {:+.1} ms   model: {name}",
-                        record.index,
-                        1e3 * record.t
-                    ),
-                    TEXT,
-                ),
-                (
-                    match error {
-                        Some((f, m)) => format!(
-                            "rim edge: model − footage = {:+.2} px ({:+.3} mm)",
-                            m - f,
-                            1e3 * (m - f) * plan.metres_per_px
-                        ),
-                        None => "rim edge: not on both".into(),
-                    },
-                    TEXT,
-                ),
-                (
-                    "orange: the model's outline and rim edge · green: the footage's rim edge"
-                        .into(),
-                    Rgb([150, 150, 150]),
-                ),
-            ];
-            text_lines(&mut image, (8, 4), 14, &lines).map_err(draw_err(record.index))?;
-            if turns.contains(&position) {
-                tiles.push((image.clone(), model));
-            }
-            yuv420_of(&image, &mut planes);
-            let [y, u, v] = &planes;
-            writer.push_yuv420([y, u, v]).map_err(encode_err)?;
-            Ok(true)
-        })?;
-        writer.finish().map_err(encode_err)?;
-        Ok::<_, OverlayError>((tiles, rows))
-    })?;
+    let (tiles, rows) = frames.encode(&video, spec.playback_fps)?;
     write_csv(&dir.join(MODEL_OVERLAY_ERRORS), &rows)?;
-
     let last_turns = if tiles.is_empty() {
         None
     } else {
-        let sheet = side_by_side(&tiles, &layout, (ox, oy)).map_err(draw_err(0))?;
-        let bytes = crate::output::png_bytes(&sheet).map_err(|err| encode_err(err.to_string()))?;
+        let sheet =
+            side_by_side(&tiles, &layout, frames.view.origin).map_err(draw_error(&plan.clip, 0))?;
+        let bytes = crate::output::png_bytes(&sheet)
+            .map_err(|err| encode_error(&video)(err.to_string()))?;
         write_atomic(&dir.join(MODEL_LAST_TURNS_IMAGE), &bytes)?;
         Some(MODEL_LAST_TURNS_IMAGE.to_string())
     };
@@ -331,9 +154,338 @@ pub fn write_model_overlay(
     })
 }
 
+/// A failure to draw frame `frame` of `clip`, with its reason.
+fn draw_error(clip: &Path, frame: usize) -> impl Fn(String) -> OverlayError + '_ {
+    move |reason: String| OverlayError::Draw {
+        clip: clip.to_path_buf(),
+        frame,
+        reason,
+    }
+}
+
+/// A failure to write the video at `path`, with its reason.
+fn encode_error(path: &Path) -> impl Fn(String) -> OverlayError + '_ {
+    |reason: String| OverlayError::Encode {
+        path: path.to_path_buf(),
+        reason,
+    }
+}
+
+/// The model on the footage's clock: its trajectory sampled on the frame grid
+/// (model time t + lead at the experiment's time t), and how it is placed against
+/// the footage, which sees neither the precession's phase nor its sense.
+struct ModelTrack {
+    motion: Motion,
+    lead: f64,
+    fps: f64,
+    /// Added to the model's ψ so that its contact point is straight behind its
+    /// centre (ψ ≡ −π/2, where z_rim peaks) at the measured peaks, by their
+    /// circular mean \[rad\].
+    psi_offset: f64,
+    /// Whether the plan view showed the mirror sense (`beta_sign` = −1).
+    mirrored: bool,
+}
+
+impl ModelTrack {
+    /// The trajectory of `c` as a motion on `e`'s frame grid, reaching two frames
+    /// past the span's end or the model's, whichever is later, and its placement.
+    fn new(e: &Experiment, c: &Comparison, spec: &OverlaySpec) -> Result<Self, OverlayError> {
+        let plan = &e.plan;
+        let fps = plan.fps.fps;
+        let lead = c.options.lead_s;
+        let end = c.trajectory.end_time();
+        let after = (lead + spec.span_s.1 - end).max(0.0) + 2.0 / fps;
+        let motion = trajectory_motion(&plan.disk, &c.trajectory, 0.0, c.mu, fps, after, None)
+            .map_err(|err| draw_error(&plan.clip, 0)(err.to_string()))?;
+        let mut track = ModelTrack {
+            motion,
+            lead,
+            fps,
+            psi_offset: 0.0,
+            mirrored: c.measured.beta_sign < 0.0,
+        };
+        let peaks: Vec<f64> = e
+            .series
+            .peaks
+            .peaks
+            .iter()
+            .filter(|p| p.t + lead <= end)
+            .filter_map(|p| Some(-std::f64::consts::FRAC_PI_2 - track.state_at(p.t)?.psi))
+            .collect();
+        track.psi_offset = peaks
+            .iter()
+            .map(|d| d.sin())
+            .sum::<f64>()
+            .atan2(peaks.iter().map(|d| d.cos()).sum::<f64>());
+        Ok(track)
+    }
+
+    /// The model's state at the experiment's time t (model time t + lead, a frame
+    /// of the motion's grid, which starts at model time 0); the last state after
+    /// the motion's end, none before its start.
+    fn state_at(&self, t: f64) -> Option<&DiskState> {
+        let k = ((t + self.lead) * self.fps).round();
+        let states = &self.motion.states;
+        (k >= 0.0).then(|| &states[(k as usize).min(states.len() - 1)])
+    }
+}
+
+/// The positions in [`Experiment::frames`] of the first and last frame of the
+/// span that the model reaches, and the highest rim among the span's frames
+/// \[px\] (the band window's height).
+fn span_of(
+    e: &Experiment,
+    spec: &OverlaySpec,
+    track: &ModelTrack,
+) -> Result<((usize, usize), f64), OverlayError> {
+    let in_span: Vec<usize> = (0..e.frames.len())
+        .filter(|&k| (spec.span_s.0..=spec.span_s.1).contains(&e.frames[k].t))
+        .filter(|&k| track.state_at(e.frames[k].t).is_some())
+        .collect();
+    let (Some(&first), Some(&last)) = (in_span.first(), in_span.last()) else {
+        return Err(OverlayError::EmptySpan {
+            clip: e.plan.clip.clone(),
+            from: spec.span_s.0.max(-track.lead),
+            to: spec.span_s.1,
+        });
+    };
+    let z_max = in_span
+        .iter()
+        .filter_map(|&k| e.frames[k].z_rim_px)
+        .fold(0.0, f64::max);
+    Ok(((first, last), z_max))
+}
+
+/// The model as the side camera sees it: its track, the calibrated camera, the
+/// cylinder drawn and the centre band its rim edge is read on.
+struct ModelView<'a> {
+    plan: &'a ExperimentPlan,
+    track: ModelTrack,
+    camera: Camera,
+    disk: DiskShape,
+    /// The centre band's side-view columns.
+    band: (usize, usize),
+    /// The centre line's column, the mirror's axis \[px\].
+    x_centre: f64,
+    /// The side view's origin in the frame \[px\].
+    origin: (f64, f64),
+}
+
+impl<'a> ModelView<'a> {
+    fn new(plan: &'a ExperimentPlan, pose: &CameraPose, track: ModelTrack) -> Self {
+        let (ox, oy) = plan.side_view_origin();
+        let x_centre = plan.calibration.calibration.x_centre();
+        ModelView {
+            plan,
+            track,
+            camera: pose.camera(plan),
+            disk: outline(plan),
+            band: crate::vision::band(x_centre, plan.band_half_width_px, plan.side_view_width()),
+            x_centre,
+            origin: (ox as f64, oy as f64),
+        }
+    }
+
+    /// The model's outline and rim edge at the experiment's time t; `None` before
+    /// the model starts.
+    fn image_at(&self, t: f64) -> Option<ModelImage> {
+        let plan = self.plan;
+        let s = self.track.state_at(t)?;
+        let pose = Pose::rolling(
+            &plan.disk,
+            s.psi + self.track.psi_offset,
+            s.phi,
+            s.theta,
+            s.centre[0],
+            s.centre[1],
+        );
+        let mirrored = self.track.mirrored;
+        let points: Vec<(f64, f64)> = (0..2 * RIM_POINTS)
+            .map(|k| {
+                let a = std::f64::consts::TAU * (k % RIM_POINTS) as f64 / RIM_POINTS as f64;
+                let z = if k < RIM_POINTS { -1.0 } else { 1.0 } * plan.disk.half_thickness;
+                let (x, row) = project(
+                    &self.camera,
+                    pose.world_from_body([
+                        plan.disk.radius * a.cos(),
+                        plan.disk.radius * a.sin(),
+                        z,
+                    ]),
+                );
+                let x = if mirrored { 2.0 * self.x_centre - x } else { x };
+                (x, row)
+            })
+            .collect();
+        let hull = convex_hull(points);
+        let mirror = mirrored.then_some(self.x_centre);
+        let edge_row = band_edge_row(&self.disk, &self.camera, &pose, self.band, mirror);
+        Some(ModelImage { hull, edge_row })
+    }
+
+    /// Draws, in the side window and (twice as thick) in the band window, the
+    /// footage's rim edge (green, `footage_row`) and the model's outline and rim
+    /// edge (orange).
+    fn draw_edges(
+        &self,
+        image: &mut RgbImage,
+        layout: &Layout,
+        footage_row: Option<f64>,
+        model: Option<&ModelImage>,
+    ) {
+        let (ox, oy) = self.origin;
+        let x_centre = self.x_centre;
+        for (window, width) in [(&layout.side, 1.0), (&layout.band, 2.0)] {
+            if let Some(row) = footage_row {
+                window.row_line(
+                    image,
+                    row + oy,
+                    (x_centre + ox - 4.0, x_centre + ox + 4.0),
+                    width,
+                    RIM,
+                );
+            }
+            if let Some(m) = model {
+                for (a, b) in m.hull.iter().zip(m.hull.iter().cycle().skip(1)) {
+                    window.segment(image, (a.0 + ox, a.1 + oy), (b.0 + ox, b.1 + oy), MODEL);
+                }
+                if let Some(row) = m.edge_row {
+                    window.row_line(
+                        image,
+                        row + oy,
+                        (x_centre + ox - 4.0, x_centre + ox + 4.0),
+                        width,
+                        MODEL,
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// A frame of the last turns kept for the side-by-side sheet, with the model's
+/// image at its time.
+type Tile = (RgbImage, Option<ModelImage>);
+
+/// The model overlay's frames: what each is drawn from.
+struct ModelFrames<'a> {
+    e: &'a Experiment,
+    view: ModelView<'a>,
+    layout: Layout,
+    /// The positions in [`Experiment::frames`] of the span's first and last frame.
+    span: (usize, usize),
+    /// The positions of the last turns' frames.
+    turns: Vec<usize>,
+    /// The model and its η, for the caption.
+    name: String,
+}
+
+impl ModelFrames<'_> {
+    /// Encodes the span's frames into `video` (through a temporary file, renamed
+    /// into place when complete), keeping the last turns' tiles and each frame's
+    /// rim-edge error where both edges are found.
+    fn encode(
+        &self,
+        video: &Path,
+        playback_fps: f64,
+    ) -> Result<(Vec<Tile>, Vec<ErrorRow>), OverlayError> {
+        let (e, layout) = (self.e, &self.layout);
+        let encode_err = encode_error(video);
+        write_through_temporary(video, |partial| {
+            let mut writer = H264Writer::create(
+                partial,
+                layout.width,
+                layout.height,
+                playback_fps,
+                OVERLAY_H264,
+            )
+            .map_err(&encode_err)?;
+            let mut planes = Default::default();
+            let mut tiles = Vec::new();
+            let mut rows = Vec::new();
+            decode_positions(e, self.span, layout, |position, view| {
+                let record = &e.frames[position];
+                let (image, model, error) = self.draw(record, view)?;
+                rows.extend(error);
+                if self.turns.contains(&position) {
+                    tiles.push((image.clone(), model));
+                }
+                yuv420_of(&image, &mut planes);
+                let [y, u, v] = &planes;
+                writer.push_yuv420([y, u, v]).map_err(&encode_err)?;
+                Ok(true)
+            })?;
+            writer.finish().map_err(&encode_err)?;
+            Ok::<_, OverlayError>((tiles, rows))
+        })
+    }
+
+    /// One frame: the footage's windows with both rim edges and the model's
+    /// outline drawn, and the caption; the model's image, and the rim-edge error
+    /// when both edges are found.
+    fn draw(
+        &self,
+        record: &FrameRecord,
+        view: &FrameView,
+    ) -> Result<(RgbImage, Option<ModelImage>, Option<ErrorRow>), OverlayError> {
+        let plan = self.view.plan;
+        let mut image = self.layout.paint(view);
+        let footage_row = record.z_rim_px.map(|z| plan.rim_edge_row(z));
+        let model = self.view.image_at(record.t);
+        self.view
+            .draw_edges(&mut image, &self.layout, footage_row, model.as_ref());
+        let error = footage_row.zip(model.as_ref().and_then(|m| m.edge_row));
+        let row = error.map(|(f, m)| ErrorRow {
+            index: record.index,
+            t_s: record.t,
+            footage_edge_row_px: f,
+            model_edge_row_px: m,
+            error_px: m - f,
+            error_m: (m - f) * plan.metres_per_px,
+        });
+        let lines = caption(record, &self.name, error, plan.metres_per_px);
+        text_lines(&mut image, (8, 4), 14, &lines).map_err(draw_error(&plan.clip, record.index))?;
+        Ok((image, model, row))
+    }
+}
+
+/// A frame's caption: its number and time and the model's name, the rim-edge
+/// error `edges` (footage's row, model's row) in px and mm, and the colours' key.
+fn caption(
+    record: &FrameRecord,
+    name: &str,
+    edges: Option<(f64, f64)>,
+    metres_per_px: f64,
+) -> [(String, Rgb<u8>); 3] {
+    [
+        (
+            format!(
+                "frame {}  t − t_φ = {:+.1} ms   model: {name}",
+                record.index,
+                1e3 * record.t
+            ),
+            TEXT,
+        ),
+        (
+            match edges {
+                Some((f, m)) => format!(
+                    "rim edge: model − footage = {:+.2} px ({:+.3} mm)",
+                    m - f,
+                    1e3 * (m - f) * metres_per_px
+                ),
+                None => "rim edge: not on both".into(),
+            },
+            TEXT,
+        ),
+        (
+            "orange: the model's outline and rim edge · green: the footage's rim edge".into(),
+            Rgb([150, 150, 150]),
+        ),
+    ]
+}
+
 /// The disk the model is drawn as: the plan's cylinder (no strip; its rims
 /// sharp, as the outline and the ray cast of the rim edge read only the cylinder).
-fn outline(plan: &crate::analyse::ExperimentPlan) -> DiskShape {
+fn outline(plan: &ExperimentPlan) -> DiskShape {
     DiskShape {
         radius: plan.disk.radius,
         half_thickness: plan.disk.half_thickness,

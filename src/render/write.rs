@@ -383,12 +383,6 @@ impl H264Writer {
         ticks_per_frame: u32,
         settings: H264Settings,
     ) -> Result<Self, String> {
-        let storage = settings.storage;
-        let pixel = if storage.ten_bit {
-            Pixel::YUV420P10LE
-        } else {
-            Pixel::YUV420P
-        };
         let orientation = settings.orientation;
         let stored = orientation.stored_size((width as usize, height as usize));
         let (w, h) = (stored.0 as u32, stored.1 as u32);
@@ -408,126 +402,27 @@ impl H264Writer {
             .format()
             .flags()
             .contains(ff::format::Flags::GLOBAL_HEADER);
-        let rate = ff::Rational::from(fps);
-        let ticks = i32::try_from(ticks_per_frame)
-            .ok()
-            .and_then(|t| rate.numerator().checked_mul(t))
-            .ok_or_else(|| format!("{ticks_per_frame} ticks a frame at {fps} fps overflow"))?;
-        let time_base = ff::Rational::new(rate.denominator(), ticks);
-        let mut encoder = ff::codec::context::Context::new_with_codec(codec)
-            .encoder()
-            .video()
-            .map_err(av("encoder"))?;
-        encoder.set_width(w);
-        encoder.set_height(h);
-        encoder.set_format(pixel);
-        encoder.set_color_range(if storage.full_range {
-            ff::color::Range::JPEG
-        } else {
-            ff::color::Range::MPEG
-        });
-        if let Some(hdr) = storage.hdr {
-            encoder.set_colorspace(ff::color::Space::BT2020NCL);
-            encoder.set_color_primaries(ff::color::Primaries::BT2020);
-            encoder.set_color_transfer_characteristic(match hdr {
-                HdrTransfer::Hlg => ff::color::TransferCharacteristic::ARIB_STD_B67,
-                HdrTransfer::Pq => ff::color::TransferCharacteristic::SMPTE2084,
-            });
-        }
-        encoder.set_time_base(time_base);
-        encoder.set_frame_rate(Some(rate));
-        if global_header {
-            encoder.set_flags(ff::codec::Flags::GLOBAL_HEADER);
-        }
-        let mut options = ff::Dictionary::new();
-        options.set("preset", settings.preset);
-        match settings.rate {
-            RateControl::Crf(crf) => options.set("crf", &crf.to_string()),
-            RateControl::Qp(qp) => options.set("qp", &qp.to_string()),
-        }
-        options.set("threads", &X264_THREADS.to_string());
-        let mut params = String::from("mbtree=0");
-        if let Some(keyint) = settings.keyint {
-            params += &format!(":keyint={keyint}");
-        }
-        if let Some(bframes) = settings.bframes {
-            params += &format!(":bframes={bframes}");
-        }
-        options.set("x264-params", &params);
-        let encoder = encoder.open_with(options).map_err(av("open libx264"))?;
-        let mut stream = output
-            .add_stream(codec)
-            .map_err(av("add the video stream"))?;
-        stream.set_parameters(&encoder);
-        // The muxer keeps a multiple of the frame rate (480 fps: 1/15360 s) rather
-        // than its default 1/90000 s, so frame times are exact.
-        stream.set_time_base(time_base);
-        if !orientation.is_identity() {
-            let matrix = orientation.display_matrix(stored);
-            // SAFETY: the stream belongs to `output`, whose header is not written
-            // yet; FFmpeg allocates the 36 bytes it returns, which are filled at once.
-            unsafe {
-                let data = ffi::av_stream_new_side_data(
-                    stream.as_mut_ptr(),
-                    ffi::AVPacketSideDataType::AV_PKT_DATA_DISPLAYMATRIX,
-                    std::mem::size_of_val(&matrix),
-                );
-                if data.is_null() {
-                    return Err("FFmpeg: cannot attach the display matrix".to_owned());
-                }
-                std::ptr::copy_nonoverlapping(matrix.as_ptr().cast::<u8>(), data, 36);
-            }
-        }
-        output.write_header().map_err(av("write the MP4 header"))?;
-        let stream_time_base = output
-            .stream(0)
-            .map(|s| s.time_base())
-            .ok_or_else(|| "FFmpeg: the MP4 lost its video stream".to_owned())?;
-        let mut scaler = scaling::Context::get(
-            Pixel::RGB24,
-            w,
-            h,
-            pixel,
-            w,
-            h,
-            match settings.chroma {
-                ChromaFilter::Bicubic => scaling::Flags::BICUBIC,
-                ChromaFilter::FastBilinear => scaling::Flags::FAST_BILINEAR,
+        let format = StoredFormat {
+            width: w,
+            height: h,
+            pixel: if settings.storage.ten_bit {
+                Pixel::YUV420P10LE
+            } else {
+                Pixel::YUV420P
             },
-        )
-        .map_err(av("libswscale"))?;
-        // The matrix and range the stream declares (BT.601, libswscale's default,
-        // when nothing is declared).
-        let matrix = if storage.hdr.is_some() {
-            ffi::SWS_CS_BT2020
-        } else {
-            ffi::SWS_CS_DEFAULT
+            clock: Clock::new(fps, ticks_per_frame)?,
         };
-        // SAFETY: a live SwsContext; the coefficient table is libswscale's static one.
-        let ret = unsafe {
-            let table = ffi::sws_getCoefficients(matrix);
-            ffi::sws_setColorspaceDetails(
-                scaler.as_mut_ptr(),
-                table,
-                1,
-                table,
-                i32::from(storage.full_range),
-                0,
-                1 << 16,
-                1 << 16,
-            )
-        };
-        if ret < 0 {
-            return Err("libswscale: cannot set the matrix and range".to_owned());
-        }
+        let encoder = open_encoder(codec, &format, global_header, &settings)?;
+        let stream_time_base = start_mp4(&mut output, codec, &encoder, &format, orientation)?;
+        let scaler = yuv_scaler(&format, &settings)?;
         Ok(Self {
             output,
             encoder,
             scaler,
             rgb: ff::frame::Video::new(Pixel::RGB24, w, h),
-            yuv: ff::frame::Video::new(pixel, w, h),
+            yuv: ff::frame::Video::new(format.pixel, w, h),
             packet: ff::Packet::empty(),
-            time_base,
+            time_base: format.clock.time_base,
             stream_time_base,
             width,
             height,
@@ -662,4 +557,182 @@ impl H264Writer {
             .map_err(av("encode a frame"))?;
         self.drain()
     }
+}
+
+/// A clip's clock: its nominal frame rate, and the time base its timestamps count
+/// in, `ticks_per_frame` ticks a frame.
+#[derive(Clone, Copy)]
+struct Clock {
+    rate: ff::Rational,
+    time_base: ff::Rational,
+}
+
+impl Clock {
+    /// # Errors
+    /// `ticks_per_frame` ticks a frame at `fps` overflow FFmpeg's 32-bit rationals.
+    fn new(fps: f64, ticks_per_frame: u32) -> Result<Self, String> {
+        let rate = ff::Rational::from(fps);
+        let ticks = i32::try_from(ticks_per_frame)
+            .ok()
+            .and_then(|t| rate.numerator().checked_mul(t))
+            .ok_or_else(|| format!("{ticks_per_frame} ticks a frame at {fps} fps overflow"))?;
+        Ok(Clock {
+            rate,
+            time_base: ff::Rational::new(rate.denominator(), ticks),
+        })
+    }
+}
+
+/// How the frames are stored in the stream: their size (turned under a display
+/// orientation), 4:2:0 pixel format (8 or 10 bits) and clock.
+struct StoredFormat {
+    width: u32,
+    height: u32,
+    pixel: Pixel,
+    clock: Clock,
+}
+
+/// Opens libx264 for `format` with the settings' range, HDR tags, preset and
+/// rate control, and the options that make its bytes reproducible (see
+/// [`H264Writer`]: `mbtree=0`, [`X264_THREADS`]).
+fn open_encoder(
+    codec: ff::Codec,
+    format: &StoredFormat,
+    global_header: bool,
+    settings: &H264Settings,
+) -> Result<ff::encoder::Video, String> {
+    let storage = settings.storage;
+    let mut encoder = ff::codec::context::Context::new_with_codec(codec)
+        .encoder()
+        .video()
+        .map_err(av("encoder"))?;
+    encoder.set_width(format.width);
+    encoder.set_height(format.height);
+    encoder.set_format(format.pixel);
+    encoder.set_color_range(if storage.full_range {
+        ff::color::Range::JPEG
+    } else {
+        ff::color::Range::MPEG
+    });
+    if let Some(hdr) = storage.hdr {
+        encoder.set_colorspace(ff::color::Space::BT2020NCL);
+        encoder.set_color_primaries(ff::color::Primaries::BT2020);
+        encoder.set_color_transfer_characteristic(match hdr {
+            HdrTransfer::Hlg => ff::color::TransferCharacteristic::ARIB_STD_B67,
+            HdrTransfer::Pq => ff::color::TransferCharacteristic::SMPTE2084,
+        });
+    }
+    encoder.set_time_base(format.clock.time_base);
+    encoder.set_frame_rate(Some(format.clock.rate));
+    if global_header {
+        encoder.set_flags(ff::codec::Flags::GLOBAL_HEADER);
+    }
+    encoder
+        .open_with(x264_options(settings))
+        .map_err(av("open libx264"))
+}
+
+/// libx264's options: the preset, CRF or QP, one thread, and `x264-params` with
+/// the macroblock tree off and the settings' keyframe interval and B-frames.
+fn x264_options(settings: &H264Settings) -> ff::Dictionary<'static> {
+    let mut options = ff::Dictionary::new();
+    options.set("preset", settings.preset);
+    match settings.rate {
+        RateControl::Crf(crf) => options.set("crf", &crf.to_string()),
+        RateControl::Qp(qp) => options.set("qp", &qp.to_string()),
+    }
+    options.set("threads", &X264_THREADS.to_string());
+    let mut params = String::from("mbtree=0");
+    if let Some(keyint) = settings.keyint {
+        params += &format!(":keyint={keyint}");
+    }
+    if let Some(bframes) = settings.bframes {
+        params += &format!(":bframes={bframes}");
+    }
+    options.set("x264-params", &params);
+    options
+}
+
+/// Adds the video stream to `output` with the encoder's parameters, the clip's
+/// time base and, under a display orientation, the display matrix that turns the
+/// stored frames back; writes the header. Returns the time base the muxer kept.
+fn start_mp4(
+    output: &mut ff::format::context::Output,
+    codec: ff::Codec,
+    encoder: &ff::encoder::Video,
+    format: &StoredFormat,
+    orientation: Orientation,
+) -> Result<ff::Rational, String> {
+    let mut stream = output
+        .add_stream(codec)
+        .map_err(av("add the video stream"))?;
+    stream.set_parameters(encoder);
+    // The muxer keeps a multiple of the frame rate (480 fps: 1/15360 s) rather
+    // than its default 1/90000 s, so frame times are exact.
+    stream.set_time_base(format.clock.time_base);
+    if !orientation.is_identity() {
+        let matrix = orientation.display_matrix((format.width as usize, format.height as usize));
+        // SAFETY: the stream belongs to `output`, whose header is not written
+        // yet; FFmpeg allocates the 36 bytes it returns, which are filled at once.
+        unsafe {
+            let data = ffi::av_stream_new_side_data(
+                stream.as_mut_ptr(),
+                ffi::AVPacketSideDataType::AV_PKT_DATA_DISPLAYMATRIX,
+                std::mem::size_of_val(&matrix),
+            );
+            if data.is_null() {
+                return Err("FFmpeg: cannot attach the display matrix".to_owned());
+            }
+            std::ptr::copy_nonoverlapping(matrix.as_ptr().cast::<u8>(), data, 36);
+        }
+    }
+    output.write_header().map_err(av("write the MP4 header"))?;
+    output
+        .stream(0)
+        .map(|s| s.time_base())
+        .ok_or_else(|| "FFmpeg: the MP4 lost its video stream".to_owned())
+}
+
+/// libswscale's RGB → YUV 4:2:0 conversion into `format`, with the settings'
+/// chroma filter, and the matrix and range the stream declares (BT.601,
+/// libswscale's default, when nothing is declared; BT.2020 under HDR).
+fn yuv_scaler(format: &StoredFormat, settings: &H264Settings) -> Result<scaling::Context, String> {
+    let (w, h) = (format.width, format.height);
+    let storage = settings.storage;
+    let mut scaler = scaling::Context::get(
+        Pixel::RGB24,
+        w,
+        h,
+        format.pixel,
+        w,
+        h,
+        match settings.chroma {
+            ChromaFilter::Bicubic => scaling::Flags::BICUBIC,
+            ChromaFilter::FastBilinear => scaling::Flags::FAST_BILINEAR,
+        },
+    )
+    .map_err(av("libswscale"))?;
+    let matrix = if storage.hdr.is_some() {
+        ffi::SWS_CS_BT2020
+    } else {
+        ffi::SWS_CS_DEFAULT
+    };
+    // SAFETY: a live SwsContext; the coefficient table is libswscale's static one.
+    let ret = unsafe {
+        let table = ffi::sws_getCoefficients(matrix);
+        ffi::sws_setColorspaceDetails(
+            scaler.as_mut_ptr(),
+            table,
+            1,
+            table,
+            i32::from(storage.full_range),
+            0,
+            1 << 16,
+            1 << 16,
+        )
+    };
+    if ret < 0 {
+        return Err("libswscale: cannot set the matrix and range".to_owned());
+    }
+    Ok(scaler)
 }

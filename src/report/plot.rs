@@ -28,6 +28,7 @@ use std::sync::OnceLock;
 use image::ImageEncoder;
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -372,7 +373,6 @@ impl<'a> Figure<'a> {
         Y: AsRangedCoord<Value = f64>,
         Y::CoordDescType: ValueFormatter<f64>,
     {
-        let e2s = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
         let (x0, x1) = self.x;
         let x_span = x1 - x0;
         let x_fmt = move |v: &f64| fmt_linear_tick(*v, x_span);
@@ -384,7 +384,7 @@ impl<'a> Figure<'a> {
             .y_label_area_size(Y_LABEL_W)
             .x_label_area_size(if bottom { X_AXIS_H } else { 0 })
             .build_cartesian_2d(x0..x1, y_spec)
-            .map_err(e2s)?;
+            .map_err(drawing_error)?;
 
         {
             let mut mesh = chart.configure_mesh();
@@ -400,96 +400,154 @@ impl<'a> Figure<'a> {
             if bottom {
                 mesh.x_desc(self.time_label);
             }
-            mesh.draw().map_err(e2s)?;
+            mesh.draw().map_err(drawing_error)?;
         }
 
-        // Shade the highlight intervals.
+        self.shade_highlights(&mut chart, (ylo, yhi))?;
+        // The legend sits in the top panel, when there is something to tell apart.
+        let with_legend = top && !self.intervals.is_empty();
+        draw_base(&mut chart, panel, with_legend)?;
+        draw_highlighted(&mut chart, panel)?;
+        if panel.empty {
+            self.mark_empty(&mut chart, panel)?;
+        }
+        if with_legend {
+            self.draw_legend(&mut chart)?;
+        }
+        Ok(())
+    }
+
+    /// Shades the highlight intervals, clipped to the time axis, over the panel's
+    /// height `(ylo, yhi)`.
+    fn shade_highlights<DB: DrawingBackend, YC: Ranged<ValueType = f64>>(
+        &self,
+        chart: &mut PanelChart<'_, DB, YC>,
+        (ylo, yhi): (f64, f64),
+    ) -> Result<(), String> {
+        let (x0, x1) = self.x;
         let shade = HIGHLIGHT_COLOR.mix(0.10).filled();
         chart
             .draw_series(self.intervals.iter().filter_map(|&(a, b)| {
                 let (a, b) = (a.max(x0), b.min(x1));
                 (a <= b).then(|| Rectangle::new([(a, ylo), (b, yhi)], shade))
             }))
-            .map_err(e2s)?;
-
-        let with_legend = top && !self.intervals.is_empty();
-
-        // The full curve in blue.
-        let base_style = BASE_COLOR.stroke_width(1);
-        let anno = chart
-            .draw_series(LineSeries::new(panel.base.iter().copied(), base_style))
-            .map_err(e2s)?;
-        if with_legend {
-            anno.label(BASE_NAME).legend(|(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], BASE_COLOR.stroke_width(2))
-            });
-        }
-        if panel.base.len() == 1 {
-            chart
-                .draw_series(std::iter::once(Circle::new(
-                    panel.base[0],
-                    2,
-                    BASE_COLOR.filled(),
-                )))
-                .map_err(e2s)?;
-        }
-
-        // Samples inside highlights in red, on top.
-        let red = HIGHLIGHT_COLOR.stroke_width(2);
-        for run in &panel.highlighted {
-            if run.len() == 1 {
-                chart
-                    .draw_series(std::iter::once(Circle::new(
-                        run[0],
-                        2,
-                        HIGHLIGHT_COLOR.filled(),
-                    )))
-                    .map_err(e2s)?;
-            } else {
-                chart
-                    .draw_series(LineSeries::new(run.iter().copied(), red))
-                    .map_err(e2s)?;
-            }
-        }
-
-        if panel.empty {
-            let ymid = match panel.y {
-                YRange::Linear(lo, hi) => 0.5 * (lo + hi),
-                YRange::Log(lo, hi) => (lo * hi).sqrt(),
-            };
-            let style = TextStyle::from((FONT_FAMILY, 16).into_font())
-                .color(&RGBColor(120, 120, 120))
-                .pos(Pos::new(HPos::Center, VPos::Center));
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    "no finite data",
-                    (0.5 * (x0 + x1), ymid),
-                    style,
-                )))
-                .map_err(e2s)?;
-        }
-
-        if with_legend {
-            chart
-                .draw_series(LineSeries::new(std::iter::empty::<(f64, f64)>(), red))
-                .map_err(e2s)?
-                .label(self.highlight_name)
-                .legend(|(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], HIGHLIGHT_COLOR.stroke_width(2))
-                });
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .margin(8)
-                .legend_area_size(26)
-                .label_font((FONT_FAMILY, 14))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK.mix(0.4))
-                .draw()
-                .map_err(e2s)?;
-        }
+            .map_err(drawing_error)?;
         Ok(())
     }
+
+    /// Writes "no finite data" in the middle of a panel without a plottable sample.
+    fn mark_empty<DB: DrawingBackend, YC: Ranged<ValueType = f64>>(
+        &self,
+        chart: &mut PanelChart<'_, DB, YC>,
+        panel: &PreparedPanel,
+    ) -> Result<(), String> {
+        let (x0, x1) = self.x;
+        let ymid = match panel.y {
+            YRange::Linear(lo, hi) => 0.5 * (lo + hi),
+            YRange::Log(lo, hi) => (lo * hi).sqrt(),
+        };
+        let style = TextStyle::from((FONT_FAMILY, 16).into_font())
+            .color(&RGBColor(120, 120, 120))
+            .pos(Pos::new(HPos::Center, VPos::Center));
+        chart
+            .draw_series(std::iter::once(Text::new(
+                "no finite data",
+                (0.5 * (x0 + x1), ymid),
+                style,
+            )))
+            .map_err(drawing_error)?;
+        Ok(())
+    }
+
+    /// The legend, upper right: the full series in blue (labelled when it was
+    /// drawn), the highlights' samples in red.
+    fn draw_legend<'c, DB: DrawingBackend + 'c, YC: Ranged<ValueType = f64>>(
+        &self,
+        chart: &mut PanelChart<'c, DB, YC>,
+    ) -> Result<(), String> {
+        chart
+            .draw_series(LineSeries::new(
+                std::iter::empty::<(f64, f64)>(),
+                HIGHLIGHT_COLOR.stroke_width(2),
+            ))
+            .map_err(drawing_error)?
+            .label(self.highlight_name)
+            .legend(|(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], HIGHLIGHT_COLOR.stroke_width(2))
+            });
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .margin(8)
+            .legend_area_size(26)
+            .label_font((FONT_FAMILY, 14))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.4))
+            .draw()
+            .map_err(drawing_error)?;
+        Ok(())
+    }
+}
+
+/// A panel's chart: linear time across, `YC` (linear or logarithmic) up.
+type PanelChart<'a, DB, YC> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, YC>>;
+
+/// A drawing error as text.
+fn drawing_error<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
+    e.to_string()
+}
+
+/// The full curve in blue (a dot when it is a single sample), labelled for the
+/// legend when `with_legend`.
+fn draw_base<DB: DrawingBackend, YC: Ranged<ValueType = f64>>(
+    chart: &mut PanelChart<'_, DB, YC>,
+    panel: &PreparedPanel,
+    with_legend: bool,
+) -> Result<(), String> {
+    let base_style = BASE_COLOR.stroke_width(1);
+    let anno = chart
+        .draw_series(LineSeries::new(panel.base.iter().copied(), base_style))
+        .map_err(drawing_error)?;
+    if with_legend {
+        anno.label(BASE_NAME).legend(|(x, y)| {
+            PathElement::new(vec![(x, y), (x + 20, y)], BASE_COLOR.stroke_width(2))
+        });
+    }
+    if panel.base.len() == 1 {
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                panel.base[0],
+                2,
+                BASE_COLOR.filled(),
+            )))
+            .map_err(drawing_error)?;
+    }
+    Ok(())
+}
+
+/// The samples inside highlights in red, on top of the full curve: each run a
+/// line, or a dot when it is a single sample.
+fn draw_highlighted<DB: DrawingBackend, YC: Ranged<ValueType = f64>>(
+    chart: &mut PanelChart<'_, DB, YC>,
+    panel: &PreparedPanel,
+) -> Result<(), String> {
+    let red = HIGHLIGHT_COLOR.stroke_width(2);
+    for run in &panel.highlighted {
+        if run.len() == 1 {
+            chart
+                .draw_series(std::iter::once(Circle::new(
+                    run[0],
+                    2,
+                    HIGHLIGHT_COLOR.filled(),
+                )))
+                .map_err(drawing_error)?;
+        } else {
+            chart
+                .draw_series(LineSeries::new(run.iter().copied(), red))
+                .map_err(drawing_error)?;
+        }
+    }
+    Ok(())
 }
 
 /// Range of the finite times, padded when degenerate; `(0, 1)` when there are none.
