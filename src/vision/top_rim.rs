@@ -371,13 +371,25 @@ pub(super) fn read_near_top_rim(
     p: &[f32],
     thin_face: bool,
 ) -> f64 {
+    let across = near_top_rim_across(frame, centre);
+    near_top_rim_on_profile(p, centre, across, thin_face)
+}
+
+/// [`read_near_top_rim`] once the bands across the face have read `across`: the
+/// plateaus on the centre band `p` where they read none, then the thin face's fit.
+fn near_top_rim_on_profile(
+    p: &[f32],
+    centre: &CentreBand,
+    across: Option<f64>,
+    thin_face: bool,
+) -> f64 {
     let thin = || {
         thin_face
             .then(|| fit_thin_face(p, centre.far, centre.side_end, centre.contrast))
             .flatten()
     };
-    let plateaus = near_top_rim_across(frame, centre)
-        .or_else(|| near_top_rim(p, centre.top, centre.side_end, centre.contrast, 0.0));
+    let plateaus =
+        across.or_else(|| near_top_rim(p, centre.top, centre.side_end, centre.contrast, 0.0));
     match plateaus {
         Some(edge) => thin()
             .filter(|face| face.band_ends_at(p, edge))
@@ -612,11 +624,23 @@ mod tests {
         }
     }
 
+    /// The centre band of [`profile`]'s disk: far rim `far`, side to row 110.
+    fn centre_band(far: f64, contrast: f32) -> CentreBand {
+        CentreBand {
+            x_centre: 0.0,
+            half_span: 0.0,
+            half_width: 2,
+            top: far.ceil() as usize,
+            far,
+            side_end: 110,
+            contrast,
+        }
+    }
+
     /// A face 1 px tall above a band 5.5 px tall (a rounded rim seen from 2° above,
     /// blurred by σ = 0.8 px): the plateaus read the band's lower edge, 5.5 px below
-    /// the rim, and the fit, which cannot tell the face's level from its height,
-    /// still ends the face within σ/2 of the rim and explains the plateaus' edge as
-    /// its band's end.
+    /// the rim; the fit, which cannot tell the face's level from its height, ends
+    /// the face within σ/2 of the rim, and its rim is taken.
     #[test]
     fn the_plateaus_edge_under_a_face_thinner_than_the_blur_is_the_bands() {
         let (far, near, band) = (40.7, 41.7, 5.5);
@@ -627,42 +651,27 @@ mod tests {
             (plateaus - (near + band)).abs() < 0.3,
             "plateaus at {plateaus}"
         );
-        let face = fit_thin_face(&p, far, 110, 135.0).expect("a face is seen");
-        assert!(face.band_ends_at(&p, plateaus));
-        assert!(
-            (face.near - near).abs() < 0.4,
-            "rim at {near}, fit {}",
-            face.near
-        );
+        let z_t = near_top_rim_on_profile(&p, &centre_band(far, 135.0), None, true);
+        assert!((z_t - near).abs() < 0.4, "rim at {near}, read {z_t}");
     }
 
-    /// A face 11 px tall above a band: the plateaus' edge is the rim itself, with the
-    /// band under it, and the fit (which reaches 5 px faces, and may take a sliver at
-    /// the far rim for one) does not replace it.
+    /// The plateaus' edge is the rim itself, and no band of the fit replaces it: a
+    /// face 11 px tall above a band (the fit reaches 5 px faces, and may take a
+    /// sliver at the far rim for one), and a face 9 px tall shaded across (its
+    /// lower half between its upper half's level and the side's, as a face lit
+    /// from above and behind shows).
     #[test]
-    fn the_plateaus_edge_above_a_band_is_the_rim() {
-        let (far, near, band) = (38.2, 49.2, 4.0);
-        let p = profile(far, near, band, [23.0, 197.0, 114.0, 159.0]);
-        let plateaus = near_top_rim(&p, far.ceil() as usize, 110, 136.0, 0.0)
-            .expect("the face and the side are two plateaus");
-        assert!((plateaus - near).abs() < 0.3, "plateaus at {plateaus}");
-        if let Some(face) = fit_thin_face(&p, far, 110, 136.0) {
-            assert!(!face.band_ends_at(&p, plateaus));
+    fn a_face_taller_than_the_fit_keeps_the_plateaus_edge() {
+        // (far rim, the face's end or its shading's step, the side's start, levels
+        // B T D S, contrast, the rim)
+        for (far, split, side, levels, contrast, rim) in [
+            (38.2, 49.2, 53.2, [23.0, 197.0, 114.0, 159.0], 136.0, 49.2),
+            (47.3, 52.5, 56.7, [12.0, 89.0, 100.0, 143.0], 130.0, 56.7),
+        ] {
+            let p = profile(far, split, side - split, levels);
+            let z_t = near_top_rim_on_profile(&p, &centre_band(far, contrast), None, true);
+            assert!((z_t - rim).abs() < 0.3, "rim at {rim}, read {z_t}");
         }
-    }
-
-    /// A face 9 px tall, shaded across (its lower half between its upper half's
-    /// level and the side's, as a face lit from above and behind shows): the
-    /// plateaus' edge is the rim, and no band of the fit ends there.
-    #[test]
-    fn a_shaded_face_keeps_the_plateaus_edge() {
-        let (far, split, near) = (47.3, 52.5, 56.7);
-        let p = profile(far, split, near - split, [12.0, 89.0, 100.0, 143.0]);
-        let plateaus = near_top_rim(&p, far.ceil() as usize, 110, 130.0, 0.0)
-            .expect("the face and the side are two plateaus");
-        assert!((plateaus - near).abs() < 0.3, "plateaus at {plateaus}");
-        let fit = fit_thin_face(&p, far, 110, 130.0);
-        assert!(fit.is_none_or(|face| !face.band_ends_at(&p, plateaus)));
     }
 
     /// A face that goes on past the rows fitted (a thick face) is left to the
