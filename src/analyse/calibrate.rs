@@ -393,7 +393,13 @@ fn gauges(
         side0.width,
         side0.height,
     )?;
-    let lean = LeanGauge::new(&cal, silhouette_top, rim.band_columns(), side0.height);
+    let lean = LeanGauge::new(
+        &cal,
+        calibration.top_face,
+        silhouette_top,
+        rim.band_columns(),
+        side0.height,
+    );
     let gap = match side_config.plate {
         Plate::Dark => GapGauge::new(&cal, side_config, rest_sides)?,
         Plate::Light => None,

@@ -798,7 +798,7 @@ fn near_top_rim_text(plan: &ExperimentPlan) -> String {
             format!(
                 "{:.2} ± {:.2} px from {} frames{} in which the disk leans towards \
                  the camera (the face up to {:.1} px tall there); the rest frames, \
-                 whose face is under {:.0} px tall, read {:.2} px",
+                 which saw no face, took the far top rim, {:.2} px",
                 l.reading.z_t,
                 l.reading.se,
                 l.reading.frames,
@@ -808,7 +808,6 @@ fn near_top_rim_text(plan: &ExperimentPlan) -> String {
                     ""
                 },
                 l.reading.tallest_face_px,
-                crate::vision::THIN_AT_REST_PX,
                 l.rest_z_t
             )
         },

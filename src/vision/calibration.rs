@@ -41,7 +41,7 @@ use super::components::{Component, Labeller};
 use super::profile::{area_edge, check_frame, column_band_mean, row_band_mean};
 use super::rim::RimGauge;
 use super::threshold::{GammaSource, INTENSITY_SCALE, Threshold};
-use super::top_rim::{CentreBand, read_near_top_rim};
+use super::top_rim::{CentreBand, TopFace, read_near_top_rim};
 use crate::config::Plate;
 use crate::footage::FrameView;
 
@@ -292,6 +292,10 @@ pub struct CalibrationReport {
     pub threshold: Threshold,
     /// Sources of x_l, x_r, z_t, z_base, in that order.
     pub sources: [PointSource; 4],
+    /// Whether the reference rest frame saw the top face (or the config gave z_t),
+    /// or z_t is the far top rim standing in for the near one.
+    #[serde(default)]
+    pub top_face: TopFace,
     /// Index of the reference rest frame (the last one given); each detected
     /// point is the mean over the rest frames that agree with its median.
     pub frame: usize,
@@ -345,9 +349,14 @@ pub fn calibrate_at_rest(
     let (calibration, detected) = match given.complete() {
         Some(c) => (c, None),
         None => {
-            let d = calibrate_frame(reference, ref_index, &otsu, config)?;
-            (given.apply(d), Some(d))
+            let (d, face) = calibrate_frame(reference, ref_index, &otsu, config)?;
+            (given.apply(d), Some((d, face)))
         }
+    };
+    // A z_t the config gives is read, by the user.
+    let top_face = match detected {
+        Some((_, face)) if !given_flags[2] => face,
+        _ => TopFace::Read,
     };
     calibration.validate(reference.width, reference.height)?;
     // A light plate's rim is told from its shadow by a level of its own.
@@ -409,13 +418,13 @@ pub fn calibrate_at_rest(
             ..threshold
         });
         if detected.is_some() {
-            let here = calibrate_frame(f, index, &threshold, config)?;
+            let (here, _) = calibrate_frame(f, index, &threshold, config)?;
             points.push([here.x_l, here.x_r, here.z_t, here.z_base]);
         }
         let gauge = RimGauge::new(&calibration, &threshold, config, f.width, f.height)?;
         rims.push(gauge.measure(f, index)?);
     }
-    if let Some(d) = detected {
+    if let Some((d, _)) = detected {
         points.push([d.x_l, d.x_r, d.z_t, d.z_base]);
     }
     rims.push(ref_rim);
@@ -508,6 +517,7 @@ pub fn calibrate_at_rest(
                 PointSource::Detected
             }
         }),
+        top_face,
         frame: ref_index,
         frames_checked: frames.len(),
     })
@@ -677,13 +687,13 @@ const MAX_BRIDGED_GAP_PX: usize = 8;
 
 /// Finds x_l, x_r, z_t and z_base on one frame of the disk at rest, with the
 /// band of columns 2·half_width + 1 wide and the plate of `config` (see the
-/// module docs for the method).
+/// module docs for the method), and whether it saw the top face.
 pub fn calibrate_frame(
     frame: &FrameView,
     index: usize,
     threshold: &Threshold,
     config: &SideViewConfig,
-) -> Result<Calibration, VisionError> {
+) -> Result<(Calibration, TopFace), VisionError> {
     check_frame(frame, index)?;
     let half_width = config.half_width_px;
     let level = threshold.level();
@@ -722,7 +732,7 @@ pub fn calibrate_frame(
     // on the refined centre line settles the band.
     for _ in 0..2 {
         let (x0, x1) = band(x_centre, half_width, w);
-        let (z_t, z_base) = vertical_points(frame, index, threshold, disk, x0, x1)?;
+        let ((z_t, face), z_base) = vertical_points(frame, index, threshold, disk, x0, x1)?;
         let (x_l, x_r) = horizontal_points(frame, index, level, disk, x_centre, z_t, z_base)?;
         let cal = Calibration {
             x_l,
@@ -731,7 +741,7 @@ pub fn calibrate_frame(
             z_base,
         };
         let same_band = cal.x_centre().floor() == x_centre.floor();
-        last = Some(cal);
+        last = Some((cal, face));
         if same_band {
             break;
         }
@@ -794,7 +804,8 @@ pub(crate) fn band(x_centre: f64, half_width: usize, width: usize) -> (usize, us
     )
 }
 
-/// z_t and z_base on the band of columns `x0..x1`.
+/// z_t (and whether the top face was seen) and z_base on the band of columns
+/// `x0..x1`.
 fn vertical_points(
     frame: &FrameView,
     index: usize,
@@ -802,7 +813,7 @@ fn vertical_points(
     disk: &Component,
     x0: usize,
     x1: usize,
-) -> Result<(f64, f64), VisionError> {
+) -> Result<((f64, TopFace), f64), VisionError> {
     let level = threshold.level();
     let missing = |point| VisionError::CalibrationPointNotFound {
         frame: index,

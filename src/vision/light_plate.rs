@@ -29,7 +29,7 @@ use super::VisionError;
 use super::calibration::{Calibration, band};
 use super::components::Component;
 use super::profile::{area_edge, column_band_mean, row_band_mean};
-use super::top_rim::{CentreBand, NEAR_RIM_STEP_FRACTION, read_near_top_rim};
+use super::top_rim::{CentreBand, NEAR_RIM_STEP_FRACTION, TopFace, read_near_top_rim};
 use crate::footage::FrameView;
 use crate::numeric::{mad_sigma, median};
 
@@ -43,7 +43,7 @@ pub(super) fn calibrate(
     frame: &FrameView,
     index: usize,
     half_width: usize,
-) -> Result<Calibration, VisionError> {
+) -> Result<(Calibration, TopFace), VisionError> {
     let missing = |point| VisionError::CalibrationPointNotFound {
         frame: index,
         point,
@@ -135,13 +135,14 @@ pub(super) fn calibrate(
     let top_is_backdrop = above + 1 >= j.saturating_sub(REACH)
         || (median(&levels(above..j.saturating_sub(REACH))) - backdrop).abs()
             <= (3.0 * spread).max(f64::from(NEAR_RIM_STEP_FRACTION * windowed(k)));
-    let z_t = read_near_top_rim(frame, &centre, &p, top_is_backdrop);
-    Ok(Calibration {
+    let (z_t, face) = read_near_top_rim(frame, &centre, &p, top_is_backdrop);
+    let calibration = Calibration {
         x_l,
         x_r,
         z_t,
         z_base,
-    })
+    };
+    Ok((calibration, face))
 }
 
 /// Pixels of horizontal change summed down each column: the grey image's

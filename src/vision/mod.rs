@@ -62,7 +62,7 @@ pub use calibration::{
 };
 pub use error::VisionError;
 pub use gap::{GapGauge, GapSample};
-pub use leaning_face::{LeanGauge, LeaningTopRim, THIN_AT_REST_PX, near_top_rim_leaning};
+pub use leaning_face::{LeanGauge, LeaningTopRim, near_top_rim_leaning};
 pub use mirror_edge::{
     EdgeTemplate, MirrorEdgeModel, SHARP_RIM_PX, remeasure as remeasure_dark_rim,
 };
@@ -70,7 +70,7 @@ pub use rim::{RimGauge, RimHeight};
 pub use rim_zero::{MOTION_ZERO_PROFILE_PX, RimReading};
 pub use shadow_edge::{ShadowEdgeModel, remeasure as remeasure_light_rim};
 pub use threshold::{GammaSource, INTENSITY_SCALE, Threshold};
-pub use top_rim::silhouette_top;
+pub use top_rim::{TopFace, silhouette_top};
 pub use two_view::{
     ColourThresholds, LayoutDetection, Strip, StripFinder, ThresholdSource, auto_colour_thresholds,
     detect_two_view, find_split_row, split_views,

@@ -20,14 +20,16 @@
 //!    they see the band and the side instead, their edge is the band's lower one,
 //!    and the fit's rim replaces it.
 //!
-//! When none sees a face the silhouette's top (the far top rim) stands for z_t.
-//! A face under [`super::leaning_face::THIN_AT_REST_PX`] is read again, in the
-//! frames in which the rolling disk leans towards the camera and shows it several
-//! pixels tall ([`super::leaning_face`]), and `analyse` takes that reading.
+//! When none sees a face the silhouette's top (the far top rim) stands for z_t
+//! ([`TopFace::Unseen`]). Such a face, and a thin one above a sharp edge
+//! ([`TopFace::Thin`]), is read again, in the frames in which the rolling disk
+//! leans towards the camera and shows it several pixels tall
+//! ([`super::leaning_face`]), and `analyse` takes that reading.
 
 use std::ops::RangeInclusive;
 
 use nalgebra::{DMatrix, Matrix4, Vector4};
+use serde::{Deserialize, Serialize};
 
 use super::calibration::REACH;
 use super::profile::{area_edge, blurred_step_coverage, row_band_mean};
@@ -40,6 +42,23 @@ use crate::numeric::{mad_sigma, median, upper_median};
 /// [`REACH`] rows that [`near_top_rim`] leaves out of the face for faces up to
 /// 72 px tall.
 const ACROSS_SPAN: f64 = 0.4;
+
+/// How well a rest frame saw the top face: its near rim read, read within the
+/// blur, or not seen (the silhouette's top, the far top rim, standing in).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TopFace {
+    /// Read: between the plateaus either side of the near rim, or where the band
+    /// of a rounded rim ends the thin face's fit.
+    Read,
+    /// A face thinner than the plateaus reach above a sharp edge: the thin face's
+    /// fit ends it within about σ of the blur, and the frames in which the disk
+    /// leans towards the camera, showing it taller, read it better.
+    Thin,
+    /// Not seen: z_t is the far top rim, for the leaning frames to read again.
+    #[default]
+    Unseen,
+}
 
 /// The face's place on the centre band, as the calibration found it (frame rows
 /// and columns, px).
@@ -364,13 +383,13 @@ impl ThinFace {
 /// is the band's lower one, the band's height (a few px) below the rim. So when
 /// the thin face's fit puts its band's end at the plateaus' edge, its near rim is
 /// taken. `thin_face` false leaves the thin face out (a silhouette's top that may
-/// not be the disk's).
+/// not be the disk's). Returns z_t and whether the face was seen.
 pub(super) fn read_near_top_rim(
     frame: &FrameView,
     centre: &CentreBand,
     p: &[f32],
     thin_face: bool,
-) -> f64 {
+) -> (f64, TopFace) {
     let across = near_top_rim_across(frame, centre);
     near_top_rim_on_profile(p, centre, across, thin_face)
 }
@@ -382,7 +401,7 @@ fn near_top_rim_on_profile(
     centre: &CentreBand,
     across: Option<f64>,
     thin_face: bool,
-) -> f64 {
+) -> (f64, TopFace) {
     let thin = || {
         thin_face
             .then(|| fit_thin_face(p, centre.far, centre.side_end, centre.contrast))
@@ -393,10 +412,12 @@ fn near_top_rim_on_profile(
     match plateaus {
         Some(edge) => thin()
             .filter(|face| face.band_ends_at(p, edge))
-            .map_or(edge, |face| face.near),
-        None => thin()
-            .filter(|face| face.resolved || face.band > 0.0)
-            .map_or(centre.far, |face| face.near),
+            .map_or((edge, TopFace::Read), |face| (face.near, TopFace::Read)),
+        None => match thin() {
+            Some(face) if face.band > 0.0 => (face.near, TopFace::Read),
+            Some(face) if face.resolved => (face.near, TopFace::Thin),
+            _ => (centre.far, TopFace::Unseen),
+        },
     }
 }
 
@@ -651,8 +672,26 @@ mod tests {
             (plateaus - (near + band)).abs() < 0.3,
             "plateaus at {plateaus}"
         );
-        let z_t = near_top_rim_on_profile(&p, &centre_band(far, 135.0), None, true);
+        let (z_t, face) = near_top_rim_on_profile(&p, &centre_band(far, 135.0), None, true);
         assert!((z_t - near).abs() < 0.4, "rim at {near}, read {z_t}");
+        assert_eq!(face, TopFace::Read);
+    }
+
+    /// Above a sharp edge, blurred by σ = 0.8 px: a face 0.3 px tall shows nothing
+    /// to read, so the far rim stands in (`Unseen`); a face 2.5 px tall is fitted
+    /// and ended within σ (`Thin`). Both are left for the leaning frames to read.
+    #[test]
+    fn a_thin_face_above_a_sharp_edge_is_left_to_the_leaning_frames() {
+        let far = 40.7;
+        let p = profile(far, far + 0.3, 0.0, [25.0, 200.0, 160.0, 160.0]);
+        let (z_t, face) = near_top_rim_on_profile(&p, &centre_band(far, 135.0), None, true);
+        assert_eq!(face, TopFace::Unseen);
+        assert!((z_t - far).abs() < 1e-9, "far rim {far}, read {z_t}");
+        let near = far + 2.5;
+        let p = profile(far, near, 0.0, [25.0, 200.0, 160.0, 160.0]);
+        let (z_t, face) = near_top_rim_on_profile(&p, &centre_band(far, 135.0), None, true);
+        assert_eq!(face, TopFace::Thin);
+        assert!((z_t - near).abs() < 0.8, "rim at {near}, read {z_t}");
     }
 
     /// The plateaus' edge is the rim itself, and no band of the fit replaces it: a
@@ -669,8 +708,9 @@ mod tests {
             (47.3, 52.5, 56.7, [12.0, 89.0, 100.0, 143.0], 130.0, 56.7),
         ] {
             let p = profile(far, split, side - split, levels);
-            let z_t = near_top_rim_on_profile(&p, &centre_band(far, contrast), None, true);
+            let (z_t, face) = near_top_rim_on_profile(&p, &centre_band(far, contrast), None, true);
             assert!((z_t - rim).abs() < 0.3, "rim at {rim}, read {z_t}");
+            assert_eq!(face, TopFace::Read);
         }
     }
 
