@@ -166,6 +166,7 @@ fn experiment_plan(
         rim_zero_from_motion: zero,
         rim_zero_uncertainty_px: zero_px,
         rim_reading: Some(measured.rim.reading),
+        registration: measured.registration,
         colour_thresholds: rest.colour_thresholds,
         window_s: config.window_s(),
         halt: config.fit.as_ref().and_then(|f| f.halt).unwrap_or_default(),

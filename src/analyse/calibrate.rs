@@ -14,7 +14,7 @@ use crate::footage::FrameView;
 use crate::model::params::DiskParams;
 use crate::vision::{
     self, BandWindow, CalibrationOverride, CalibrationReport, ColourThresholds, GapGauge,
-    LeanGauge, RimGauge, RimHeight, SideViewConfig, ThresholdSource, VisionError,
+    LeanGauge, RimGauge, RimHeight, SceneStrips, SideViewConfig, ThresholdSource, VisionError,
 };
 
 /// A two-view clip's first row of the plan view \[px\], and whether the config gave it.
@@ -59,6 +59,9 @@ pub(super) struct Gauges {
     /// The rest frames' mean band window about their edge, and that edge's row: the
     /// zero of the rim's edge model (vision::mirror_edge, vision::shadow_edge).
     pub(super) rest_window: Option<(BandWindow, f64)>,
+    /// The scene beside the disk, on which each frame's camera shift is measured
+    /// (vision::registration); `None` when no strip fits beside the disk.
+    pub(super) scene: Option<SceneStrips>,
 }
 
 impl RestCalibration {
@@ -405,11 +408,13 @@ fn gauges(
         Plate::Light => None,
     };
     let rest_window = rest_window(&rim, cal.z_base, rest_sides, first_index);
+    let scene = SceneStrips::new(&cal, side0.width, side0.height);
     let gauges = Gauges {
         rim,
         lean,
         gap,
         rest_window,
+        scene,
     };
     Ok((silhouette_top, gauges))
 }

@@ -22,11 +22,17 @@ use crate::footage::{
     self, CaptureFps, FootageError, Frame, FrameSource, FrameTiming, FrameView, RepeatedFrame,
 };
 use crate::model::params::DiskParams;
-use crate::vision::{self, BandWindow, GapSample, RimHeight, Strip, StripFinder};
+use crate::vision::{
+    self, BandWindow, GapSample, Registration, RimHeight, SceneStrips, Strip, StripFinder,
+    StripProfiles,
+};
 
 /// Every second pixel of every second row is compared with the neighbouring
 /// frames' to find duplicated and interpolated frames (footage::RepeatGauge).
 const REPEAT_SAMPLE_STEP: usize = 2;
+
+/// The camera's RMS motion above which the report warns \[px\].
+const SHAKY_CAMERA_PX: f64 = 1.0;
 
 /// A frame's rim height \[px\] and its edge's row \[px\].
 type RimCrest = (f64, f64);
@@ -48,6 +54,8 @@ pub(super) struct FrameReadings {
     pub(super) profiles: Vec<Vec<f32>>,
     /// The band window about each frame's edge (the rim's edge model).
     pub(super) windows: Vec<Option<BandWindow>>,
+    /// The scene beside the disk per frame (vision::registration).
+    pub(super) scene: Vec<StripProfiles>,
     pub(super) repeats: footage::RepeatGauge,
     /// Frames in which no rim edge was found.
     pub(super) no_edge: usize,
@@ -74,6 +82,8 @@ pub(super) struct MeasuredFrames {
     pub(super) top_rim_leaning: Option<TopRimLeaning>,
     pub(super) scale: ScaleReport,
     pub(super) metres_per_px: f64,
+    /// The camera's motion against the scene, by which the heights were corrected.
+    pub(super) registration: Option<Registration>,
 }
 
 /// Measures the frames of `opened` from `first` to the end ([`read_frames`]), then
@@ -99,12 +109,16 @@ pub(super) fn measure_frames<K: FrameKeeping>(
         mut frames,
         gaps,
         profiles,
-        windows,
+        mut windows,
+        scene,
         repeats,
         no_edge,
         highest,
     } = readings;
     let mut warnings = Vec::new();
+    let registration = rim_heights::register(&mut frames, &mut windows, &scene, rest, fps.fps);
+    drop(scene);
+    warnings.extend(registration.as_ref().and_then(camera_motion_warning));
     if let Some(gauge) = &rest.gauges.gap {
         warnings.extend(rim_heights::resolve_gap(&mut frames, gauge, &gaps));
     }
@@ -129,6 +143,7 @@ pub(super) fn measure_frames<K: FrameKeeping>(
         top_rim_leaning,
         metres_per_px: scale.metres_per_px(),
         scale,
+        registration,
     };
     Ok((measured, kept))
 }
@@ -229,6 +244,9 @@ fn read_frames<K: FrameKeeping>(
         readings
             .repeats
             .push(source.brightness_samples(REPEAT_SAMPLE_STEP)?);
+        if let Some(strips) = &rest.gauges.scene {
+            readings.scene.push(read_scene(source, strips, rest.roi)?);
+        }
         if let Some(keeper) = &mut keeper {
             let position = readings.frames.len() - 1;
             let finder = strip_finder.as_mut();
@@ -240,6 +258,54 @@ fn read_frames<K: FrameKeeping>(
     }
     progress(readings.frames.len(), Some(span_frames));
     Ok((readings, keeper.and_then(KeepFrames::finish)))
+}
+
+/// One frame's scene beside the disk (vision::registration): the rows' means over
+/// the `strips` of the side view (at the `roi`'s corner in the frame), from the
+/// codec's luma plane where the decoder lends it, else from the frame converted
+/// whole (a turned video, a frame folder).
+///
+/// # Errors
+/// The frame cannot be converted whole.
+fn read_scene(
+    source: &mut FrameSource,
+    strips: &SceneStrips,
+    roi: Option<[u32; 4]>,
+) -> Result<StripProfiles, FootageError> {
+    let (x0, y0) = roi.map_or((0, 0), |r| (r[0] as usize, r[1] as usize));
+    if let Some(yuv) = source.yuv420() {
+        let (luma, stride) = yuv.planes[0];
+        return Ok(strips.read(|y, columns| {
+            let start = (y0 + y) * stride + x0;
+            let row = &luma[start + columns.start..start + columns.end];
+            row.iter().map(|&v| u32::from(v)).sum::<u32>() as f32 / row.len() as f32
+        }));
+    }
+    let whole = source.whole_frame()?;
+    Ok(strips.read(|y, columns| {
+        columns
+            .clone()
+            .map(|x| whole.intensity(x0 + x, y0 + y))
+            .sum::<f32>()
+            / columns.len() as f32
+    }))
+}
+
+/// A warning when the camera moved by more than [`SHAKY_CAMERA_PX`] RMS: the
+/// heights are corrected for the picture's vertical shift, but not for the band's
+/// columns moving along the rim.
+fn camera_motion_warning(registration: &Registration) -> Option<String> {
+    if !registration.applied {
+        return None;
+    }
+    (registration.rms_px > SHAKY_CAMERA_PX).then(|| {
+        format!(
+            "the camera moves by {:.2} px RMS ({:.1} px at most) against the scene beside \
+             the disk: the rim heights are corrected for it, but the band of columns read \
+             moves along the rim with it; a tripod would be better",
+            registration.rms_px, registration.peak_px
+        )
+    })
 }
 
 /// Offers the frame just read (at `position` in the span) to the span's `keeper`,
@@ -310,6 +376,7 @@ impl FrameReadings {
             gaps: Vec::with_capacity(room(gauges.gap.is_some())),
             profiles: Vec::with_capacity(room(gauges.lean.is_some())),
             windows: Vec::with_capacity(room(gauges.rest_window.is_some())),
+            scene: Vec::with_capacity(room(gauges.scene.is_some())),
             repeats: footage::RepeatGauge::new(),
             no_edge: 0,
             highest: None,
@@ -366,6 +433,7 @@ impl FrameReadings {
             container_time_s: frame.container_time_s,
             picture_type: frame.picture_type,
             z_rim_px,
+            camera_shift_px: None,
             z_rim_m: None,
             beta_raw: strip.map(|s| s.beta),
         });

@@ -13,7 +13,9 @@ use crate::model::params::DiskParams;
 use crate::precession::PrecessionCheck;
 use crate::signal::{self, StateSeries};
 use crate::turn_timing::TurnTimingFit;
-use crate::vision::{self, CalibrationReport, ColourThresholds, RimReading, ThresholdSource};
+use crate::vision::{
+    self, CalibrationReport, ColourThresholds, Registration, RimReading, ThresholdSource,
+};
 
 /// The zero of z_rim as the motion places it ([`signal::motion_zero`]), and how far it
 /// moved every height.
@@ -139,6 +141,11 @@ pub struct ExperimentPlan {
     /// written before it was recorded.
     #[serde(default)]
     pub rim_reading: Option<RimReading>,
+    /// The camera's motion against the scene beside the disk, by which every
+    /// rim height was corrected when `applied` (vision::registration); `None` when
+    /// no strip fits beside the disk, and in results written before it.
+    #[serde(default)]
+    pub registration: Option<Registration>,
     pub colour_thresholds: Option<(ColourThresholds, ThresholdSource)>,
     pub window_s: f64,
     pub halt: HaltChoice,
@@ -197,8 +204,13 @@ pub struct FrameRecord {
     #[serde(default)]
     pub picture_type: Option<char>,
     /// Rim height above the plate line \[px\]; 0 when the rim touches; `None`
-    /// when no edge was found.
+    /// when no edge was found. Corrected for the camera's shift.
     pub z_rim_px: Option<f64>,
+    /// The picture's vertical shift at the centre line against the rest tail
+    /// \[px\], positive down (vision::registration), by which z_rim was corrected;
+    /// `None` when not measured or not applied, and in results written before it.
+    #[serde(default)]
+    pub camera_shift_px: Option<f64>,
     /// The same in metres.
     pub z_rim_m: Option<f64>,
     /// Strip angle β from PCA, in (−π/2, π/2] (two-view clips).

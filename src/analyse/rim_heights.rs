@@ -8,7 +8,9 @@ use super::REST_FRAMES;
 use super::calibrate::RestCalibration;
 use crate::config::Plate;
 use crate::signal::SignalConfig;
-use crate::vision::{self, BandWindow, GapGauge, GapSample, RimReading};
+use crate::vision::{
+    self, BandWindow, GapGauge, GapSample, Registration, RimReading, StripProfiles,
+};
 
 /// How the span's rim heights were read.
 pub(super) struct RimHeights {
@@ -42,6 +44,39 @@ pub(super) fn resolve_gap(
         record.z_rim_px = z;
     }
     warning
+}
+
+/// The camera's shift in every frame against the rest tail (vision::registration),
+/// from the scene beside the disk `scene` (one per frame), and the first-pass
+/// heights and band `windows` moved into the rest tail's scene by it, when it is
+/// measured well enough to apply. A frame read at contact (`RimHeight::Contact`,
+/// height 0) touches the plate in its own scene: it stays at 0.
+pub(super) fn register(
+    frames: &mut [FrameRecord],
+    windows: &mut [Option<BandWindow>],
+    scene: &[StripProfiles],
+    rest: &RestCalibration,
+    fps: f64,
+) -> Option<Registration> {
+    let strips = rest.gauges.scene.as_ref()?;
+    let tail = rest_tail_frames(fps).min(scene.len());
+    let x_centre = rest.calibration.calibration.x_centre();
+    let registration = vision::register(strips, scene, scene.len() - tail..scene.len(), x_centre)?;
+    if registration.applied {
+        for (k, d) in registration.shifts.iter().enumerate() {
+            let Some(d) = *d else { continue };
+            let frame = &mut frames[k];
+            frame.camera_shift_px = Some(d);
+            // The picture moved down by d: the edge's row reads d too low.
+            if let Some(z) = frame.z_rim_px.as_mut().filter(|z| **z != 0.0) {
+                *z += d;
+            }
+            if let Some(w) = windows.get_mut(k).and_then(Option::as_mut) {
+                w.shift = d;
+            }
+        }
+    }
+    Some(registration)
 }
 
 /// Every height of `frames` re-measured with the plate's edge model, from the band

@@ -562,6 +562,7 @@ mod tests {
                 container_time_s: None,
                 picture_type: None,
                 z_rim_px: None,
+                camera_shift_px: None,
                 z_rim_m: None,
                 beta_raw: None,
             })
@@ -628,6 +629,7 @@ mod tests {
                     container_time_s: None,
                     picture_type: None,
                     z_rim_px: Some(lift),
+                    camera_shift_px: None,
                     z_rim_m: Some(lift * metres_per_px),
                     beta_raw: None,
                 }

@@ -43,6 +43,7 @@ struct FrameRow {
     beta_rad: Option<f64>,
     beta_smoothed_rad: Option<f64>,
     beta_dot_rad_s: Option<f64>,
+    camera_shift_px: Option<f64>,
 }
 
 #[derive(Serialize, Default)]
@@ -163,6 +164,7 @@ fn frame_rows(e: &Experiment) -> Vec<FrameRow> {
             beta_rad: at(strip.map(|s| &s.beta), i),
             beta_smoothed_rad: at(strip.map(|s| &s.beta_smoothed), i),
             beta_dot_rad_s: at(strip.map(|s| &s.beta_dot), i),
+            camera_shift_px: f.camera_shift_px,
         })
         .collect()
 }
@@ -714,6 +716,7 @@ fn calibration_rows(plan: &ExperimentPlan) -> Vec<Vec<String>> {
             ),
         ],
         vec!["near top rim z_t".into(), near_top_rim_text(plan)],
+        vec!["camera motion".into(), camera_motion_text(plan)],
         vec![
             "scale δ at the near rim".into(),
             format!(
@@ -785,6 +788,26 @@ fn frame_times_text(plan: &ExperimentPlan) -> String {
                 1e3 * f.min_interval_s,
                 1e3 * f.max_interval_s
             )
+        },
+    )
+}
+
+/// The camera's vertical motion against the scene beside the disk, and whether
+/// the heights were corrected for it (vision::registration).
+fn camera_motion_text(plan: &ExperimentPlan) -> String {
+    plan.registration.as_ref().map_or_else(
+        || "not measured: no strip of the scene beside the disk".into(),
+        |r| {
+            let size = format!(
+                "{:.3} px RMS, {:.2} px at most, at the centre line against the rest tail \
+                 (strips {} of the disk; σ {:.3} px a frame)",
+                r.rms_px, r.peak_px, r.strips, r.sigma_px
+            );
+            if r.applied {
+                format!("{size}; every rim height corrected for it (frames.csv camera_shift_px)")
+            } else {
+                format!("{size}: too little in the strips to register on, heights not corrected")
+            }
         },
     )
 }

@@ -24,6 +24,10 @@ pub struct BandWindow {
     pub first_row: usize,
     /// Band means, one per row from `first_row`.
     pub values: Vec<f32>,
+    /// The camera's vertical shift in this frame against the rest tail \[px\]
+    /// (vision::registration; positive: the picture moved down): row k of the
+    /// window shows the scene's rows from `first_row + k − shift`.
+    pub shift: f64,
 }
 
 impl BandWindow {
@@ -46,6 +50,7 @@ impl BandWindow {
         Some(Self {
             first_row: first,
             values,
+            shift: 0.0,
         })
     }
 
@@ -61,9 +66,11 @@ impl BandWindow {
         let values = (0..first.values.len())
             .map(|k| windows.iter().map(|w| w.values[k]).sum::<f32>() / n)
             .collect();
+        let shift = windows.iter().map(|w| w.shift).sum::<f64>() / f64::from(n);
         Some(Self {
             first_row: first.first_row,
             values,
+            shift,
         })
     }
 
@@ -101,12 +108,23 @@ impl BandWindow {
         median(&top)
     }
 
-    /// (row centre, value) pairs.
+    /// The top of the window's row `k` in the scene's rows (the rest tail's) \[px\].
+    pub(super) fn row_top(&self, k: usize) -> f64 {
+        (self.first_row + k) as f64 - self.shift
+    }
+
+    /// The index of the window's row that shows the scene's row `y`, if any.
+    pub(super) fn index_of(&self, y: f64) -> Option<usize> {
+        let k = (y + self.shift).floor() - self.first_row as f64;
+        (k >= 0.0 && (k as usize) < self.values.len()).then_some(k as usize)
+    }
+
+    /// (row centre, value) pairs, rows in the scene's rows.
     pub(super) fn samples(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
         self.values
             .iter()
             .enumerate()
-            .map(|(k, &v)| ((self.first_row + k) as f64 + 0.5, f64::from(v)))
+            .map(|(k, &v)| (self.row_top(k) + 0.5, f64::from(v)))
     }
 }
 
@@ -123,7 +141,11 @@ mod tests {
                 40.0 + 160.0 * cover
             })
             .collect();
-        BandWindow { first_row, values }
+        BandWindow {
+            first_row,
+            values,
+            shift: 0.0,
+        }
     }
 
     /// The edge of a window by the area of its step.

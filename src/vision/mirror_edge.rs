@@ -857,6 +857,7 @@ mod tests {
             values: rows
                 .map(|y| ((200.0 * gain * blurred(y as f64)).round()) as f32)
                 .collect(),
+            shift: 0.0,
         }
     }
 
@@ -1041,6 +1042,7 @@ mod tests {
         BandWindow {
             first_row: first,
             values,
+            shift: 0.0,
         }
     }
 
@@ -1086,6 +1088,7 @@ mod tests {
         let w = BandWindow {
             first_row: 0,
             values: vec![100.0; ROWS_ABOVE + ROWS_BELOW],
+            shift: 0.0,
         };
         let frames = vec![(&w, 14.0, 1.0); 100];
         assert_eq!(

@@ -44,6 +44,7 @@ mod leaning_face;
 mod light_plate;
 mod mirror_edge;
 mod profile;
+mod registration;
 mod rim;
 mod rim_zero;
 mod shadow_edge;
@@ -66,6 +67,7 @@ pub use leaning_face::{LeanGauge, LeaningTopRim, near_top_rim_leaning};
 pub use mirror_edge::{
     EdgeTemplate, MirrorEdgeModel, SHARP_RIM_PX, remeasure as remeasure_dark_rim,
 };
+pub use registration::{Registration, SceneStrips, StripProfiles, register};
 pub use rim::{RimGauge, RimHeight};
 pub use rim_zero::{MOTION_ZERO_PROFILE_PX, RimReading};
 pub use shadow_edge::{ShadowEdgeModel, remeasure as remeasure_light_rim};

@@ -130,7 +130,7 @@ impl<'a> Step<'a> {
         rows.iter()
             .filter_map(|&k| {
                 let v = f64::from(*self.window.values.get(k)?);
-                let top = (self.window.first_row + k) as f64;
+                let top = self.window.row_top(k);
                 let model = self.shadow + (self.side - self.shadow) * covered(edge - top, sigma);
                 Some((v - model).powi(2))
             })
@@ -141,7 +141,7 @@ impl<'a> Step<'a> {
     /// top of the first row below the level, on a grid of 0.05 px, then by
     /// golden-section search.
     fn fit_edge(&self, rows: &[usize], sigma: f64) -> f64 {
-        let top = (self.window.first_row + self.below) as f64;
+        let top = self.window.row_top(self.below);
         let cost = |e: f64| self.misfit(rows, e, sigma);
         let mut best = (f64::INFINITY, top);
         for e in steps((top - 1.0, top + 1.0, 0.05)) {
@@ -194,7 +194,7 @@ fn covered(depth: f64, sigma: f64) -> f64 {
 /// rows under its first-pass `edge`, over its side level.
 fn shadow_ratio(window: &BandWindow, edge: f64) -> Option<f64> {
     let level = window.level();
-    let first = (edge.floor() as usize + 1).checked_sub(window.first_row)?;
+    let first = window.index_of(edge)? + 1;
     let rows = window.values.get(first..first + SHADOW_ROWS)?;
     let darkest = rows.iter().copied().fold(f32::INFINITY, f32::min);
     (level > 0.0).then(|| f64::from(darkest) / level)
@@ -244,7 +244,7 @@ pub fn remeasure(
         rest_edge: f64::NAN,
         kept_first_pass: 0,
     };
-    let rest_edge0 = rest.first_row as f64 + ROWS_ABOVE as f64;
+    let rest_edge0 = rest.row_top(ROWS_ABOVE);
     model.rest_edge = model
         .edge(rest)
         .filter(|e| (e - rest_edge0).abs() <= SEARCH_PX + 0.5)
@@ -311,6 +311,7 @@ mod tests {
             values: (first..first + ROWS_ABOVE + ROWS_BELOW)
                 .map(|y| value(y as f64).round() as f32)
                 .collect(),
+            shift: 0.0,
         }
     }
 
