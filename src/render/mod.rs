@@ -138,6 +138,7 @@
 
 pub mod motion;
 pub mod scene;
+pub mod shake;
 pub mod write;
 
 use crate::rng::SplitMix64;
@@ -158,6 +159,8 @@ use scene::{
     Camera, Channels, DiskShape, Look, PLATE_CLASSES, Pinhole, Pose, Prepared, Sample, Scene,
     Surface, View,
 };
+use shake::Roll;
+pub use shake::{Shake, ShakeMotion, ShakeOffset};
 use std::f64::consts::PI;
 pub use write::{
     ChromaFilter, ClipEncoding, ClipFormat, DEFAULT_CRF, DEFAULT_ENCODING, H264Settings,
@@ -224,7 +227,10 @@ pub struct Effects {
     /// Lateral drift of the disk [px/s] before the halt (it arrives at rest there);
     /// px at the disk's centre.
     pub drift_px_per_s: f64,
-    /// Seed of the noise generator and of the plate's texture.
+    /// Camera shake ([`shake`]); `None`: a still camera.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shake: Option<Shake>,
+    /// Seed of the noise generator, of the plate's texture and of the shake.
     pub seed: u64,
 }
 
@@ -245,6 +251,7 @@ impl Default for Effects {
             exposure_s: 0.0,
             exposure_samples: 1,
             drift_px_per_s: 0.0,
+            shake: None,
             seed: 1,
         }
     }
@@ -456,6 +463,14 @@ pub struct FrameTruth {
     /// absent, and an MP4 stamps written frame k at k / fps.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub container_time_s: Option<f64>,
+    /// The camera's shake at the capture time (mid-exposure) when the clip is
+    /// shaken ([`Effects::shake`]): dx_px > 0 moves the picture right, dy_px > 0 down,
+    /// roll_deg > 0 turns it counter-clockwise as displayed about
+    /// [`GroundTruth::camera_shake_centre_px`] ([`shake`]). A duplicated frame's
+    /// entry is its capture's, which its picture does not show. φ, ψ, z_rim and the
+    /// rest are the still camera's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_shake: Option<ShakeOffset>,
 }
 
 fn unit_gain() -> f64 {
@@ -584,6 +599,12 @@ pub struct GroundTruth {
     /// frame (with a jitter or a slowed section; dropped frames then leave a gap).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub stamped: bool,
+    /// With camera shake: the point c its roll turns the picture about \[px\], the
+    /// side view's principal point (the image of the world origin) of the still
+    /// camera; a shaken frame shows the still picture's point p0 at
+    /// c + (dx, dy) + R(roll) (p0 − c) ([`FrameTruth::camera_shake`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_shake_centre_px: Option<[f64; 2]>,
     /// One entry per written frame, in output order.
     pub frames: Vec<FrameTruth>,
 }
@@ -650,6 +671,8 @@ pub struct Renderer {
     truth: GroundTruth,
     /// Capture index of each written frame.
     written: Vec<usize>,
+    /// The camera's shake drawn from the seed, if the spec asks for one.
+    shake: Option<ShakeMotion>,
 }
 
 /// Supersampling patterns: rank-1 lattices (i/n, g·i/n mod 1), centred, so that
@@ -701,7 +724,8 @@ impl Renderer {
         let written: Vec<usize> = (0..motion.states.len())
             .filter(|k| !spec.dropped.contains(k))
             .collect();
-        let truth = ground_truth(spec, motion, split, scale, delta, camera, calibration);
+        let mut truth = ground_truth(spec, motion, split, scale, delta, camera, calibration);
+        truth.camera_shake_centre_px = spec.effects.shake.map(|_| [side.cx, side.cy]);
         let mut renderer = Renderer {
             spec: spec.clone(),
             motion: motion.clone(),
@@ -711,8 +735,12 @@ impl Renderer {
             background_mirror: Vec::new(),
             truth,
             written,
+            shake: spec
+                .effects
+                .shake
+                .map(|s| ShakeMotion::new(&s, spec.effects.seed)),
         };
-        renderer.background = renderer.render_background();
+        renderer.background = renderer.render_background(&renderer.cameras, None);
         if renderer.scene.look.separate_mirror {
             renderer.background_mirror = renderer.blurred_background_mirror();
         }
@@ -772,15 +800,14 @@ impl Renderer {
     /// Between frames ψ and θ follow cubic Hermite polynomials with their rates, φ and
     /// the centre straight lines.
     fn exposure_poses(&self, index: usize) -> Vec<Pose> {
-        let fx = &self.spec.effects;
-        let m = fx.exposure_samples.max(1);
-        if m == 1 || fx.exposure_s <= 0.0 {
+        let offsets = self.exposure_offsets();
+        if let [_] = offsets.as_slice() {
             return vec![self.pose(index)];
         }
         let states = &self.motion.states;
-        (0..m)
-            .map(|j| {
-                let dt = fx.exposure_s * ((j as f64 + 0.5) / m as f64 - 0.5);
+        offsets
+            .into_iter()
+            .map(|dt| {
                 let s = &states[index];
                 let t = s.t + dt;
                 let pair = if dt >= 0.0 {
@@ -803,6 +830,45 @@ impl Renderer {
                 self.pose_of(psi, lerp(a.phi, b.phi).max(0.0), theta, centre, t)
             })
             .collect()
+    }
+
+    /// The times of the poses a frame's exposure averages, from the capture time
+    /// \[s\]: `exposure_samples` evenly spread over `exposure_s` (one, 0, without
+    /// smear).
+    fn exposure_offsets(&self) -> Vec<f64> {
+        let fx = &self.spec.effects;
+        let m = fx.exposure_samples.max(1);
+        if m == 1 || fx.exposure_s <= 0.0 {
+            return vec![0.0];
+        }
+        (0..m)
+            .map(|j| fx.exposure_s * ((j as f64 + 0.5) / m as f64 - 0.5))
+            .collect()
+    }
+
+    /// The shake, if it moves the picture.
+    fn moving_shake(&self) -> Option<&ShakeMotion> {
+        self.shake
+            .as_ref()
+            .filter(|_| self.spec.effects.shake.is_some_and(|s| !s.is_still()))
+    }
+
+    /// The cameras shaken by `offset`: each view's principal point shifted by
+    /// (dx, dy), and the roll that turns the rays' image coordinates about the side
+    /// view's shifted principal point ([`shake`]).
+    fn shaken_cameras(&self, offset: &ShakeOffset) -> (Vec<Camera>, Option<Roll>) {
+        let cameras = self
+            .cameras
+            .iter()
+            .map(|c| Camera {
+                cx: c.cx + offset.dx_px,
+                cy: c.cy + offset.dy_px,
+                ..*c
+            })
+            .collect();
+        let side = &self.cameras[0];
+        let centre = (side.cx + offset.dx_px, side.cy + offset.dy_px);
+        (cameras, Roll::new(centre, offset.roll_deg))
     }
 
     fn drift_px(&self, t: f64) -> f64 {
@@ -835,6 +901,10 @@ impl Renderer {
                 .effects
                 .light_gain(index as f64 / self.motion.timing.fps),
             container_time_s: None,
+            camera_shake: self
+                .shake
+                .as_ref()
+                .map(|m| m.at(s.t + self.motion.timing.halt_time)),
         }
     }
 
@@ -849,30 +919,32 @@ impl Renderer {
         )
     }
 
-    fn render_background(&self) -> Vec<Channels> {
+    /// The frame without the disk through `cameras` (rolled by `roll`).
+    fn render_background(&self, cameras: &[Camera], roll: Option<&Roll>) -> Vec<Channels> {
         let (w, h) = (self.spec.width as usize, self.spec.height as usize);
         let mut buf = vec![[0.0f32; 7]; w * h];
-        for cam in &self.cameras {
+        for cam in cameras {
             let rect = Rect {
                 x0: 0,
                 x1: w,
                 y0: cam.row_start as usize,
                 y1: cam.row_end as usize,
             };
-            self.render_rect(&mut buf, cam, None, rect);
+            self.render_rect(&mut buf, cam, None, rect, roll);
         }
         buf
     }
 
     /// The background's mirror image and plate coverage, blurred view by view.
     fn blurred_background_mirror(&self) -> Vec<[f32; 4]> {
+        self.blurred_mirror_channels(&self.background)
+    }
+
+    /// A frame's mirror image and plate coverage, blurred view by view.
+    fn blurred_mirror_channels(&self, buf: &[Channels]) -> Vec<[f32; 4]> {
         let w = self.spec.width as usize;
         let sigma = self.spec.scenery.reflection_blur_px;
-        let mut mirror: Vec<[f32; 4]> = self
-            .background
-            .iter()
-            .map(|p| [p[3], p[4], p[5], p[6]])
-            .collect();
+        let mut mirror: Vec<[f32; 4]> = buf.iter().map(|p| [p[3], p[4], p[5], p[6]]).collect();
         for cam in &self.cameras {
             let (y0, y1) = (cam.row_start as usize, cam.row_end as usize);
             gaussian_blur(&mut mirror[y0 * w..y1 * w], w, y1 - y0, sigma);
@@ -911,28 +983,44 @@ impl Renderer {
     fn render_capture(&self, file_index: usize) -> RgbImage {
         let index = self.written[file_index];
         let poses = self.exposure_poses(index);
+        // With shake, each pose's cameras, shaken at its time.
+        let shaken: Option<Vec<(Vec<Camera>, Option<Roll>)>> = self.moving_shake().map(|m| {
+            let t = self.motion.states[index].t + self.motion.timing.halt_time;
+            self.exposure_offsets()
+                .iter()
+                .map(|dt| self.shaken_cameras(&m.at(t + dt)))
+                .collect()
+        });
         let (w, h) = (self.spec.width as usize, self.spec.height as usize);
         // The pixels each view's disk, mirror image and shadow may touch.
         let mut touched: Vec<Option<Rect>> = vec![None; self.cameras.len()];
-        let mut render_poses = |buf: &mut Vec<Channels>, pose: &Pose| {
-            for (c, cam) in self.cameras.iter().enumerate() {
-                if let Some(rect) = self.disk_rect(cam, pose) {
-                    self.render_rect(buf, cam, Some(pose), rect);
+        // Pose j on its background: the still one, or the shaken cameras' own.
+        let mut render_pose = |j: usize| -> Vec<Channels> {
+            let pose = &poses[j];
+            let (cameras, roll, mut buf) = match &shaken {
+                None => (self.cameras.as_slice(), None, self.background.clone()),
+                Some(views) => {
+                    let (cameras, roll) = &views[j];
+                    let buf = self.render_background(cameras, roll.as_ref());
+                    (cameras.as_slice(), roll.as_ref(), buf)
+                }
+            };
+            for (c, cam) in cameras.iter().enumerate() {
+                if let Some(rect) = self.disk_rect(cam, pose, roll) {
+                    self.render_rect(&mut buf, cam, Some(pose), rect, roll);
                     touched[c] = Some(touched[c].map_or(rect, |t| t.union(&rect)));
                 }
             }
-        };
-        let buf = if let [pose] = poses.as_slice() {
-            let mut buf = self.background.clone();
-            render_poses(&mut buf, pose);
             buf
+        };
+        let buf = if poses.len() == 1 {
+            render_pose(0)
         } else {
             // Motion smear: the mean of the exposure's poses.
             let k = 1.0 / poses.len() as f32;
             let mut sum = vec![[0.0f32; 7]; w * h];
-            for pose in &poses {
-                let mut one = self.background.clone();
-                render_poses(&mut one, pose);
+            for j in 0..poses.len() {
+                let one = render_pose(j);
                 sum.par_iter_mut().zip(&one).for_each(|(s, o)| {
                     for (a, b) in s.iter_mut().zip(o) {
                         *a += k * b;
@@ -942,7 +1030,12 @@ impl Renderer {
             sum
         };
         let mut rgb: Vec<[f32; 3]> = if self.scene.look.separate_mirror {
-            let mirror = self.blurred_mirror(&buf, &touched);
+            let mirror = if shaken.is_some() {
+                // The background moved too: the whole mirror image is blurred.
+                seen_mirror(&buf, &self.blurred_mirror_channels(&buf))
+            } else {
+                self.blurred_mirror(&buf, &touched)
+            };
             buf.iter()
                 .zip(&mirror)
                 .map(|(p, m)| [p[0] + m[0], p[1] + m[1], p[2] + m[2]])
@@ -1027,17 +1120,7 @@ impl Renderer {
                 }
             }
         }
-        buf.par_iter()
-            .zip(&blurred)
-            .map(|(p, b)| {
-                if p[6] > 0.0 && b[3] > 1e-6 {
-                    let k = p[6] / b[3];
-                    [k * b[0], k * b[1], k * b[2]]
-                } else {
-                    [0.0; 3]
-                }
-            })
-            .collect()
+        seen_mirror(buf, &blurred)
     }
 
     /// Pixel rectangle of a view that the disk, its mirror image and its shadow can
@@ -1046,7 +1129,7 @@ impl Renderer {
     /// disk's bounding box, of its mirror image and of its shadow, which enclose
     /// them). With a textured plate it starts on the background's 2 × 2 block grid,
     /// so the plate's texture is interpolated alike inside and outside it.
-    fn disk_rect(&self, cam: &Camera, pose: &Pose) -> Option<Rect> {
+    fn disk_rect(&self, cam: &Camera, pose: &Pose, roll: Option<&Roll>) -> Option<Rect> {
         let disk = &self.scene.disk;
         let key = self.scene.look.key_light;
         let reflects = self.scene.look.reflectivity > 0.0 && cam.view == View::Side;
@@ -1095,6 +1178,22 @@ impl Renderer {
                 cam.cy - u0 / s,
             )
         };
+        // A rolled picture: the box around the turned box.
+        let (xa, xb, ua, ub) = match roll {
+            None => (xa, xb, ua, ub),
+            Some(roll) => [(xa, ua), (xb, ua), (xa, ub), (xb, ub)]
+                .map(|(x, row)| roll.apply(x, row))
+                .iter()
+                .fold(
+                    (
+                        f64::INFINITY,
+                        f64::NEG_INFINITY,
+                        f64::INFINITY,
+                        f64::NEG_INFINITY,
+                    ),
+                    |(xa, xb, ua, ub), &(x, row)| (xa.min(x), xb.max(x), ua.min(row), ub.max(row)),
+                ),
+        };
         let w = f64::from(self.spec.width);
         let (r0, r1) = (f64::from(cam.row_start), f64::from(cam.row_end));
         let mut rect = Rect {
@@ -1114,10 +1213,18 @@ impl Renderer {
     /// pixel blocks; a block whose four corner rays see the same class is filled by
     /// bilinear interpolation, otherwise its pixel corners are cast, and a pixel whose
     /// corners disagree gets 16 rays.
-    fn render_rect(&self, buf: &mut [Channels], cam: &Camera, pose: Option<&Pose>, rect: Rect) {
+    fn render_rect(
+        &self,
+        buf: &mut [Channels],
+        cam: &Camera,
+        pose: Option<&Pose>,
+        rect: Rect,
+        roll: Option<&Roll>,
+    ) {
         let w = self.spec.width as usize;
         let prepared = Prepared::new(&self.scene, pose, cam);
         let trace = |x: f64, y: f64| -> Sample {
+            let (x, y) = roll.map_or((x, y), |r| r.undo(x, y));
             let (o, d) = cam.ray(x, y);
             self.scene.trace(&prepared, cam, o, d)
         };
@@ -1343,6 +1450,7 @@ fn ground_truth(
         vfr_jitter: motion.timing.jitter,
         slowed_sections: spec.slowed_sections.clone(),
         stamped: motion.timing.jitter.is_some() || !spec.slowed_sections.is_empty(),
+        camera_shake_centre_px: None,
         frames: Vec::new(),
     }
 }
@@ -1520,6 +1628,22 @@ impl Rect {
             y1: self.y1.max(other.y1),
         }
     }
+}
+
+/// The mirror image seen where the plate is, from the frame `buf` and its blurred
+/// mirror image and plate coverage: coverage × blur(mirror)/blur(coverage).
+fn seen_mirror(buf: &[Channels], blurred: &[[f32; 4]]) -> Vec<[f32; 3]> {
+    buf.par_iter()
+        .zip(blurred)
+        .map(|(p, b)| {
+            if p[6] > 0.0 && b[3] > 1e-6 {
+                let k = p[6] / b[3];
+                [k * b[0], k * b[1], k * b[2]]
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect()
 }
 
 fn average<const N: usize>(colours: impl Iterator<Item = [f32; N]>, n: usize) -> [f32; N] {
@@ -1703,6 +1827,47 @@ fn validate_effects(fx: &Effects, fps: f64) -> Result<(), RenderError> {
     if !fx.drift_px_per_s.is_finite() {
         return fail("the drift [px/s] must be finite".into());
     }
+    match &fx.shake {
+        Some(shake) => validate_shake(shake),
+        None => Ok(()),
+    }
+}
+
+/// The camera shake: amplitudes within [0, [`MAX_SHAKE_PX`]] px and a roll within
+/// [0, [`MAX_SHAKE_ROLL_DEG`]]°, a band of positive frequencies low to high and a
+/// positive sway frequency.
+fn validate_shake(shake: &Shake) -> Result<(), RenderError> {
+    let fail = |m: String| Err(RenderError::Invalid(m));
+    for (name, v, max) in [
+        (
+            "the shake's vibration RMS [px]",
+            shake.vibration_rms_px,
+            MAX_SHAKE_PX,
+        ),
+        (
+            "the shake's sway amplitude [px]",
+            shake.sway_px,
+            MAX_SHAKE_PX,
+        ),
+        ("the shake's roll [deg]", shake.roll_deg, MAX_SHAKE_ROLL_DEG),
+    ] {
+        if !(v.is_finite() && (0.0..=max).contains(&v)) {
+            return fail(format!("{name} must lie in [0, {max}], got {v}"));
+        }
+    }
+    let [lo, hi] = shake.vibration_band_hz;
+    if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi) {
+        return fail(format!(
+            "the shake's vibration band must be LOW:HIGH with 0 < LOW ≤ HIGH [Hz], got \
+             {lo}:{hi}"
+        ));
+    }
+    if !(shake.sway_hz.is_finite() && shake.sway_hz > 0.0) {
+        return fail(format!(
+            "the shake's sway frequency must be positive [Hz], got {}",
+            shake.sway_hz
+        ));
+    }
     Ok(())
 }
 
@@ -1817,6 +1982,12 @@ pub const MAX_SLOWING: f64 = 960.0;
 
 /// Most poses one frame's exposure averages.
 pub const MAX_EXPOSURE_SAMPLES: usize = 16;
+
+/// The largest vibration RMS and sway amplitude of a camera shake \[px\].
+pub const MAX_SHAKE_PX: f64 = 50.0;
+
+/// The largest roll of a camera shake \[deg\].
+pub const MAX_SHAKE_ROLL_DEG: f64 = 10.0;
 
 /// Separable Gaussian blur with clamped borders.
 fn gaussian_blur<const N: usize>(buf: &mut [[f32; N]], w: usize, h: usize, sigma: f64) {
