@@ -2822,6 +2822,45 @@ mod tests {
         check(&|s| s.effects.exposure_s = 0.01, " s");
         check(&|s| s.effects.flicker_50hz_amplitude = 1.2, "50 Hz");
         check(&|s| s.effects.shot_noise = f64::NAN, "grey levels");
+        for (shake, unit) in [
+            (
+                Shake {
+                    vibration_rms_px: -1.0,
+                    ..Shake::default()
+                },
+                "vibration RMS [px]",
+            ),
+            (
+                Shake {
+                    sway_px: 80.0,
+                    ..Shake::default()
+                },
+                "sway amplitude [px]",
+            ),
+            (
+                Shake {
+                    roll_deg: 20.0,
+                    ..Shake::default()
+                },
+                "roll [deg]",
+            ),
+            (
+                Shake {
+                    vibration_band_hz: [80.0, 20.0],
+                    ..Shake::default()
+                },
+                "Hz",
+            ),
+            (
+                Shake {
+                    sway_hz: 0.0,
+                    ..Shake::default()
+                },
+                "sway frequency",
+            ),
+        ] {
+            check(&|s| s.effects.shake = Some(shake), unit);
+        }
     }
 
     /// A slowed section stretches the container's clock over the frame intervals
@@ -2873,6 +2912,431 @@ mod tests {
                 .collect();
             let err = Renderer::new(&spec, &m).err().expect("refused").to_string();
             assert!(err.contains(why), "{err}");
+        }
+    }
+
+    /// The shift of the picture along a line of pixels, from the still frame's
+    /// profile `f0` to the shaken frame's `fs`, given its whole part `n` (the truth's,
+    /// rounded): n plus the area between fs(j + n) and f0(j) over [a, b] over the step
+    /// between f0's levels at the window's ends. A box-filtered picture moved by r
+    /// changes that area by exactly r × the step when the picture is flat at the
+    /// window's ends; `None` where it is not (a slope of more than 4 grey levels a
+    /// pixel there). The supersampling's 16 coverage levels leave ±1/32 px in each
+    /// profile.
+    fn measured_shift(
+        f0: &dyn Fn(i64) -> f64,
+        fs: &dyn Fn(i64) -> f64,
+        a: i64,
+        b: i64,
+        n: i64,
+    ) -> Option<f64> {
+        let flat = |k: i64| (f0(k - 1) - f0(k)).abs() <= 4.0 && (f0(k + 1) - f0(k)).abs() <= 4.0;
+        let step = f0(a) - f0(b);
+        if !(flat(a) && flat(b) && step.abs() > 50.0) {
+            return None;
+        }
+        let area: f64 = (a..=b).map(|j| fs(j + n) - f0(j)).sum();
+        Some(n as f64 + area / step)
+    }
+
+    /// A shake of every kind but roll, up to about 5 px.
+    fn test_shake() -> Shake {
+        Shake {
+            vibration_rms_px: 1.0,
+            sway_px: 3.0,
+            ..Shake::default()
+        }
+    }
+
+    /// The still camera's image of the plate's far edge (the horizon) \[row\].
+    fn horizon_row(r: &Renderer) -> f64 {
+        r.cameras[0].project([0.0, r.scene.plate_back, 0.0]).1
+    }
+
+    /// Camera shake moves the picture by the truth's (dx, dy). On rest frames
+    /// rendered with and without shake, the shift is measured across edges that are
+    /// straight where they are crossed, with nothing else near (the strip is not): the
+    /// horizon on columns beside the disk (light plate), the disk's bottom rim on the
+    /// centre column and its ends on a row through its side (dark plate), and in a
+    /// two-view frame the plan view's disk at the top, bottom, left and right of its
+    /// circle (those the strip does not reach).
+    /// The supersampling's 16 coverage levels leave up to 1/16 px in each measured
+    /// shift (1/32 in each profile): each is within 0.07 px of the truth's, the
+    /// mean of a frame's shifts along each axis within 0.05 px. The rest of the
+    /// truth is the still camera's.
+    #[test]
+    fn shake_moves_the_picture_by_the_truth() {
+        let m = test_motion(480.0, 0.02, 0.1);
+        for (plate, two_view) in [
+            (Plate::Light, false),
+            (Plate::Dark, false),
+            (Plate::Dark, true),
+        ] {
+            let mut spec = small_spec(plate, two_view);
+            let still = Renderer::new(&spec, &m).expect("still");
+            spec.effects.shake = Some(test_shake());
+            let shaken = Renderer::new(&spec, &m).expect("shaken");
+            let truth = shaken.truth();
+            let unshaken: Vec<FrameTruth> = truth
+                .frames
+                .iter()
+                .map(|f| FrameTruth {
+                    camera_shake: None,
+                    ..*f
+                })
+                .collect();
+            assert_eq!(unshaken, still.truth().frames, "{plate:?}");
+            assert_eq!(truth.calibration, still.truth().calibration);
+            let side = still.cameras[0];
+            assert_eq!(truth.camera_shake_centre_px, Some([side.cx, side.cy]));
+            let cal = truth.calibration;
+            let r_px = m.params.radius / truth.metres_per_px_image;
+            // (what, along a column?, the line's fixed coordinate, the edge's position
+            // on it in the still frame).
+            let mut lines: Vec<(&str, bool, i64, f64)> = Vec::new();
+            if plate == Plate::Light {
+                // The horizon; the disk's edges here are shaded too steeply for this
+                // measure (its shading is sampled, not averaged, over a pixel).
+                let h = horizon_row(&still);
+                lines.push(("horizon, left", true, 8, h));
+                lines.push(("horizon, right", true, i64::from(spec.width) - 9, h));
+            } else {
+                let (x, y) = (
+                    cal.x_centre.round() as i64,
+                    (0.5 * (cal.z_base + cal.z_t)).round() as i64,
+                );
+                lines.push(("bottom rim", true, x, cal.z_base));
+                lines.push(("left end", false, y, cal.x_l));
+                lines.push(("right end", false, y, cal.x_r));
+            }
+            if two_view {
+                let plan = still.cameras[1];
+                let (x, y) = (plan.cx.round() as i64, plan.cy.round() as i64);
+                lines.push(("plan top", true, x, plan.cy - r_px));
+                lines.push(("plan bottom", true, x, plan.cy + r_px));
+                lines.push(("plan left", false, y, plan.cx - r_px));
+                lines.push(("plan right", false, y, plan.cx + r_px));
+            }
+            let n = shaken.frame_count();
+            let mut largest = (0.0f64, 0.0f64);
+            let mut seen: Vec<&str> = Vec::new();
+            for k in n - 8..n {
+                let (img0, img) = (still.render_frame(k), shaken.render_frame(k));
+                let d = truth.frames[k].camera_shake.expect("shaken frame");
+                assert_eq!(d.roll_deg, 0.0);
+                largest = (largest.0.max(d.dx_px.abs()), largest.1.max(d.dy_px.abs()));
+                // Each axis's errors, measured less true shift.
+                let mut errors = (Vec::new(), Vec::new());
+                for &(what, along_column, at, edge) in &lines {
+                    let (shift, other) = if along_column {
+                        (d.dy_px, d.dx_px)
+                    } else {
+                        (d.dx_px, d.dy_px)
+                    };
+                    // The shaken line: the still one moved by the other shift, rounded
+                    // (the edges are straight across it).
+                    let at_s = at + other.round() as i64;
+                    let level = |img: &RgbImage, along: i64, across: i64| {
+                        if along_column {
+                            intensity(img, across as u32, along as u32)
+                        } else {
+                            intensity(img, along as u32, across as u32)
+                        }
+                    };
+                    let f0 = |j: i64| level(&img0, j, at);
+                    let fs = |j: i64| level(&img, j, at_s);
+                    let c = edge.round() as i64;
+                    let Some(got) = measured_shift(&f0, &fs, c - 10, c + 10, shift.round() as i64)
+                    else {
+                        continue;
+                    };
+                    assert!(
+                        (got - shift).abs() < 0.07,
+                        "{plate:?} two-view {two_view}, frame {k}, {what}: moved by {got:.4} \
+                         px, the truth says {shift:.4}"
+                    );
+                    if !seen.contains(&what) {
+                        seen.push(what);
+                    }
+                    if along_column {
+                        errors.1.push(got - shift);
+                    } else {
+                        errors.0.push(got - shift);
+                    }
+                }
+                // The light plate's frames are measured along y only.
+                let axes = if plate == Plate::Light {
+                    vec![("dy", &errors.1)]
+                } else {
+                    vec![("dx", &errors.0), ("dy", &errors.1)]
+                };
+                for (axis, e) in axes {
+                    assert!(!e.is_empty(), "{plate:?}, frame {k}: no {axis} measured");
+                    let mean = e.iter().sum::<f64>() / e.len() as f64;
+                    assert!(
+                        mean.abs() < 0.05,
+                        "{plate:?} two-view {two_view}, frame {k}: {axis} off by {mean:+.4} \
+                         px on average ({e:?})"
+                    );
+                }
+            }
+            // The frames were moved by whole and fractional pixels, both ways, and
+            // the edges that must be flat at their windows' ends were.
+            assert!(largest.0 > 1.5 && largest.1 > 1.5, "{largest:?}");
+            let must: &[&str] = match plate {
+                Plate::Light => &["horizon, left", "horizon, right"],
+                Plate::Dark => &["bottom rim", "left end", "right end"],
+            };
+            for what in must {
+                assert!(seen.contains(what), "{plate:?}: {what} never measured");
+            }
+            if two_view {
+                assert!(
+                    seen.iter().filter(|w| w.starts_with("plan")).count() >= 2,
+                    "{seen:?}"
+                );
+            }
+        }
+    }
+
+    /// A rolled picture turns about the truth's centre: the horizon (light plate)
+    /// crosses the frame's outer columns where c + R(ρ)(p0 − c) puts it, within
+    /// 0.05 px (ρ > 0 raises the right side).
+    #[test]
+    fn shake_roll_turns_the_picture_about_its_centre() {
+        let m = test_motion(480.0, 0.02, 0.05);
+        let mut spec = small_spec(Plate::Light, false);
+        let still = Renderer::new(&spec, &m).expect("still");
+        spec.effects.shake = Some(Shake {
+            roll_deg: 1.0,
+            ..Shake::default()
+        });
+        let rolled = Renderer::new(&spec, &m).expect("rolled");
+        let truth = rolled.truth();
+        let [cx, cy] = truth.camera_shake_centre_px.expect("centre");
+        let h = horizon_row(&still);
+        let n = rolled.frame_count();
+        let w = i64::from(spec.width);
+        for k in [n - 1, n - 9] {
+            let (img0, img) = (still.render_frame(k), rolled.render_frame(k));
+            let d = truth.frames[k].camera_shake.expect("shake");
+            assert!(d.roll_deg.abs() > 0.5 && d.dx_px == 0.0 && d.dy_px == 0.0);
+            let rho = d.roll_deg.to_radians();
+            for x in [8, w - 9] {
+                // The turned horizon: row(x) = cy + (h − cy)/cos ρ − (x − cx) tan ρ.
+                let want = cy + (h - cy) / rho.cos() - (x as f64 - cx) * rho.tan() - h;
+                let f0 = |j: i64| intensity(&img0, x as u32, j as u32);
+                let fs = |j: i64| intensity(&img, x as u32, j as u32);
+                let c = h.round() as i64;
+                let got =
+                    measured_shift(&f0, &fs, c - 10, c + 10, want.round() as i64).expect("flat");
+                assert!(
+                    (got - want).abs() < 0.05,
+                    "frame {k}, column {x}: {got:.4} px vs {want:.4} (roll {:.3}°)",
+                    d.roll_deg
+                );
+            }
+        }
+    }
+
+    /// With an exposure, each of its poses is seen through the camera shaken at its
+    /// own time: a rest frame's horizon moves by the mean of the exposure's shifts
+    /// (a 120 Hz vibration over a quarter of its period), not the mid-exposure shift
+    /// the truth records.
+    #[test]
+    fn shake_is_sampled_over_the_exposure() {
+        let m = test_motion(480.0, 0.02, 0.05);
+        let mut spec = small_spec(Plate::Light, false);
+        let still = Renderer::new(&spec, &m).expect("still");
+        spec.effects.exposure_s = 1.0 / 480.0;
+        spec.effects.exposure_samples = 4;
+        spec.effects.shake = Some(Shake {
+            vibration_rms_px: 2.0,
+            vibration_band_hz: [120.0, 120.0],
+            ..Shake::default()
+        });
+        let smeared = Renderer::new(&spec, &m).expect("smeared");
+        let motion = smeared.shake.as_ref().expect("shake");
+        let h = horizon_row(&still);
+        let n = smeared.frame_count();
+        let mut apart = 0.0f64;
+        for k in n - 6..n {
+            let (img0, img) = (still.render_frame(k), smeared.render_frame(k));
+            let f = &smeared.truth().frames[k];
+            let t = f.t + m.timing.halt_time;
+            let offsets = smeared.exposure_offsets();
+            assert_eq!(offsets.len(), 4);
+            let mean = offsets
+                .iter()
+                .map(|dt| motion.at(t + dt).dy_px)
+                .sum::<f64>()
+                / offsets.len() as f64;
+            let mid = f.camera_shake.expect("shake").dy_px;
+            assert_eq!(mid, motion.at(t).dy_px);
+            apart = apart.max((mean - mid).abs());
+            let f0 = |j: i64| intensity(&img0, 8, j as u32);
+            let fs = |j: i64| intensity(&img, 8, j as u32);
+            let c = h.round() as i64;
+            let got = measured_shift(&f0, &fs, c - 10, c + 10, mean.round() as i64).expect("flat");
+            assert!(
+                (got - mean).abs() < 0.05,
+                "frame {k}: {got:.4} px vs the exposure's mean {mean:.4} (mid {mid:.4})"
+            );
+        }
+        // The test tells the exposure's mean from its middle.
+        assert!(apart > 0.15, "{apart}");
+    }
+
+    /// Power of `x` (its mean removed, a Hann window) at the DFT's frequencies
+    /// k·fps/N \[Hz\].
+    fn spectrum(x: &[f64], fps: f64) -> Vec<(f64, f64)> {
+        let n = x.len();
+        let mean = x.iter().sum::<f64>() / n as f64;
+        let xw: Vec<f64> = x
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (v - mean) * (PI * i as f64 / n as f64).sin().powi(2))
+            .collect();
+        (1..n / 2)
+            .map(|k| {
+                let (mut re, mut im) = (0.0, 0.0);
+                for (i, v) in xw.iter().enumerate() {
+                    let a = 2.0 * PI * (k * i) as f64 / n as f64;
+                    re += v * a.cos();
+                    im -= v * a.sin();
+                }
+                (k as f64 * fps / n as f64, re * re + im * im)
+            })
+            .collect()
+    }
+
+    /// The mean interval between the upward and downward zero crossings of `x`
+    /// sampled every `dt` \[s\] (linear interpolation): half the period.
+    fn half_period(x: &[f64], dt: f64) -> f64 {
+        let crossings: Vec<f64> = x
+            .windows(2)
+            .enumerate()
+            .filter(|(_, w)| (w[0] < 0.0) != (w[1] < 0.0))
+            .map(|(i, w)| (i as f64 + w[0] / (w[0] - w[1])) * dt)
+            .collect();
+        assert!(crossings.len() >= 3, "{} crossings", crossings.len());
+        (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64
+    }
+
+    /// The truth's shake series have what was asked for, over 1.5 s at 480 fps: the
+    /// vibration's RMS on each axis within 10 % of the asked RMS and ≥ 97 % of its
+    /// power within the band (±2 Hz, the window's spread), a band of one frequency
+    /// one spectral peak there; the sway's and the roll's peaks within 1 % and their
+    /// half-period 1/(2 f) within 1 %. The same seed draws the same shake, another
+    /// seed another.
+    #[test]
+    fn shake_truth_has_the_asked_amplitudes_and_frequencies() {
+        let fps = 480.0;
+        let m = test_motion(fps, 1.0, 0.5);
+        let series = |shake: Shake, seed: u64| {
+            let mut spec = small_spec(Plate::Dark, false);
+            (spec.width, spec.height) = (160, 96);
+            spec.effects.shake = Some(shake);
+            spec.effects.seed = seed;
+            let r = Renderer::new(&spec, &m).expect("renderer");
+            let s: Vec<ShakeOffset> = r
+                .truth()
+                .frames
+                .iter()
+                .map(|f| f.camera_shake.expect("shake"))
+                .collect();
+            s
+        };
+        let rms = |x: &[f64]| (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt();
+        let vibration = Shake {
+            vibration_rms_px: 1.5,
+            vibration_band_hz: [20.0, 80.0],
+            ..Shake::default()
+        };
+        let s = series(vibration, 7);
+        assert!(s.iter().all(|o| o.roll_deg == 0.0));
+        let dx: Vec<f64> = s.iter().map(|o| o.dx_px).collect();
+        let dy: Vec<f64> = s.iter().map(|o| o.dy_px).collect();
+        assert_ne!(dx, dy);
+        for (axis, x) in [("dx", &dx), ("dy", &dy)] {
+            let got = rms(x);
+            assert!((got / 1.5 - 1.0).abs() < 0.1, "{axis}: RMS {got}");
+            let power = spectrum(x, fps);
+            let total: f64 = power.iter().map(|p| p.1).sum();
+            let inside: f64 = power
+                .iter()
+                .filter(|p| (18.0..=82.0).contains(&p.0))
+                .map(|p| p.1)
+                .sum();
+            assert!(inside / total > 0.97, "{axis}: {} in band", inside / total);
+        }
+        // One frequency: one peak, at 50 Hz.
+        let tone = series(
+            Shake {
+                vibration_band_hz: [50.0, 50.0],
+                ..vibration
+            },
+            7,
+        );
+        let dx: Vec<f64> = tone.iter().map(|o| o.dx_px).collect();
+        assert!((rms(&dx) / 1.5 - 1.0).abs() < 0.1, "RMS {}", rms(&dx));
+        let peak = spectrum(&dx, fps)
+            .into_iter()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .expect("spectrum");
+        assert!((peak.0 - 50.0).abs() < 1.0, "peak at {} Hz", peak.0);
+        // Sway and roll.
+        let sway = Shake {
+            sway_px: 3.0,
+            sway_hz: 2.0,
+            roll_deg: 0.8,
+            ..Shake::default()
+        };
+        let s = series(sway, 7);
+        for (name, x, peak) in [
+            ("dx", s.iter().map(|o| o.dx_px).collect::<Vec<_>>(), 3.0),
+            ("dy", s.iter().map(|o| o.dy_px).collect(), 3.0),
+            ("roll", s.iter().map(|o| o.roll_deg).collect(), 0.8),
+        ] {
+            let top = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            assert!((top / peak - 1.0).abs() < 0.01, "{name}: peak {top}");
+            let half = half_period(&x, 1.0 / fps);
+            assert!(
+                (half * 2.0 * 2.0 - 1.0).abs() < 0.01,
+                "{name}: half-period {half} s"
+            );
+        }
+        assert_eq!(series(sway, 7), s);
+        assert_ne!(series(sway, 8), s);
+    }
+
+    /// A shake that does not move renders as no shake, byte for byte; its truth
+    /// records zero shifts.
+    #[test]
+    fn a_still_shake_renders_as_no_shake() {
+        let m = test_motion(480.0, 0.05, 0.02);
+        let mut spec = small_spec(Plate::Dark, false);
+        (spec.width, spec.height) = (160, 96);
+        spec.scenery.reflection_blur_px = 1.0;
+        let plain = Renderer::new(&spec, &m).expect("plain");
+        assert!(
+            plain
+                .truth()
+                .frames
+                .iter()
+                .all(|f| f.camera_shake.is_none())
+        );
+        assert_eq!(plain.truth().camera_shake_centre_px, None);
+        spec.effects.shake = Some(Shake::default());
+        let still = Renderer::new(&spec, &m).expect("still shake");
+        for k in [0, 20, still.frame_count() - 1] {
+            assert_eq!(still.render_frame(k), plain.render_frame(k), "frame {k}");
+            let zero = ShakeOffset {
+                dx_px: 0.0,
+                dy_px: 0.0,
+                roll_deg: 0.0,
+            };
+            assert_eq!(still.truth().frames[k].camera_shake, Some(zero));
         }
     }
 }
