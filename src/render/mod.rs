@@ -125,7 +125,11 @@
 //! capture index and true time); duplicated frames (a written frame that repeats the
 //! previous one's bytes, as a phone that misses a capture does) and interpolated
 //! frames (the rounded mean of the previous and next frames, as a phone inserts to
-//! reach 240 or 960 fps): the truth keeps their true pose and lists them. The motion
+//! reach 240 or 960 fps): the truth keeps their true pose and lists them. Camera
+//! shake ([`shake`]: a vibration, a slow sway and a roll, seeded) moves each view's
+//! principal point and turns its rays' image coordinates, at each pose of the
+//! exposure; a shaken frame's background is rendered anew, and the truth records
+//! each frame's shake at its capture time ([`FrameTruth::camera_shake`]). The motion
 //! may carry a nutation about stationary
 //! rolling ([`Nutation`]). Pixels are anti-aliased:
 //! rays are cast at the corners of 2 × 2 pixel blocks, then at the pixel corners of
