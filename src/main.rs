@@ -20,8 +20,8 @@ use eulerdisk::output::OutputLock;
 use eulerdisk::overlay::{OverlaySpec, write_model_overlay};
 use eulerdisk::render::{
     CaptureJitter, ClipEncoding, DEFAULT_CRF, Effects, HdrTransfer, Motion, Nutation, Plate,
-    PostFlatSpin, PowerLaw, RenderSpec, Renderer, SampleStorage, Scenery, SlowedSection, Timing,
-    add_nutation, power_law_motion, trajectory_motion, write_clip,
+    PostFlatSpin, PowerLaw, RenderSpec, Renderer, SampleStorage, Scenery, Shake, SlowedSection,
+    Timing, add_nutation, power_law_motion, trajectory_motion, write_clip,
 };
 use eulerdisk::report::compare::{comparison_dir, write_comparison};
 use eulerdisk::report::experiment::write_experiment;
@@ -198,6 +198,17 @@ fn parse_slowed_section(text: &str) -> Result<SlowedSection, String> {
         end_s: number(end)?,
         factor: number(factor)?,
     })
+}
+
+/// A band of frequencies `LOW:HIGH` [Hz] (`--shake-band`).
+fn parse_band(text: &str) -> Result<[f64; 2], String> {
+    let parsed = text.split_once(':').and_then(|(lo, hi)| {
+        Some([
+            lo.trim().parse::<f64>().ok()?,
+            hi.trim().parse::<f64>().ok()?,
+        ])
+    });
+    parsed.ok_or_else(|| format!("`{text}`: give LOW:HIGH in Hz, e.g. 20:80"))
 }
 
 #[derive(Args)]
@@ -421,6 +432,24 @@ struct RenderArgs {
         value_name = "PX_PER_S"
     )]
     drift: f64,
+    /// Camera shake: RMS of a vibration of the picture along each image axis [px],
+    /// sinusoids in --shake-band drawn from --seed (a tripod's or a hand's).
+    #[arg(long, default_value_t = 0.0, value_name = "PX")]
+    shake_vibration: f64,
+    /// Band of the shake's vibration LOW:HIGH [Hz]; LOW = HIGH: one sinusoid.
+    #[arg(long, default_value = "20:80", value_name = "LOW:HIGH", value_parser = parse_band)]
+    shake_band: [f64; 2],
+    /// Camera shake: peak amplitude of a slow sway of the picture along each image
+    /// axis [px].
+    #[arg(long, default_value_t = 0.0, value_name = "PX")]
+    shake_sway: f64,
+    /// Frequency of the sway and the roll [Hz].
+    #[arg(long, default_value_t = 1.0, value_name = "HZ")]
+    shake_sway_hz: f64,
+    /// Camera shake: peak roll of the picture about the optical axis [deg], at the
+    /// sway's frequency.
+    #[arg(long, default_value_t = 0.0, value_name = "DEG")]
+    shake_roll: f64,
     /// Capture indices (0-based) of frames to drop, e.g. 10,57.
     #[arg(long, value_delimiter = ',')]
     drop: Vec<usize>,
@@ -1122,6 +1151,14 @@ fn render_spec(args: &RenderArgs) -> Result<RenderSpec> {
             1
         },
         drift_px_per_s: args.drift,
+        shake: (args.shake_vibration != 0.0 || args.shake_sway != 0.0 || args.shake_roll != 0.0)
+            .then_some(Shake {
+                vibration_rms_px: args.shake_vibration,
+                vibration_band_hz: args.shake_band,
+                sway_px: args.shake_sway,
+                sway_hz: args.shake_sway_hz,
+                roll_deg: args.shake_roll,
+            }),
         seed: args.seed,
     };
     spec.dropped = args.drop.clone();

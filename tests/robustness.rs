@@ -41,7 +41,7 @@ use eulerdisk::config::ExperimentConfig;
 use eulerdisk::model::params::Preset;
 use eulerdisk::render::{
     ClipEncoding, Effects, GroundTruth, Nutation, Plate, PostFlatSpin, PowerLaw, RenderSpec,
-    Renderer, Scenery, Timing, add_nutation, power_law_motion, write_clip,
+    Renderer, Scenery, Shake, Timing, add_nutation, power_law_motion, write_clip,
 };
 use eulerdisk::rng::SplitMix64;
 use rayon::prelude::*;
@@ -73,6 +73,8 @@ const WINDOW_S: f64 = 0.5;
 #[derive(Debug, Clone)]
 struct SceneSpec {
     name: String,
+    /// The picture; camera shake, if any, is its `effects.shake` ([`shaken`]; the
+    /// default draw has none).
     spec: RenderSpec,
     n: f64,
     nutation: Option<Nutation>,
@@ -123,6 +125,9 @@ impl SceneSpec {
         }
         if fx.drift_px_per_s != 0.0 {
             c.push(format!("drift {:.1} px/s", fx.drift_px_per_s));
+        }
+        if let Some(shake) = fx.shake.filter(|s| !s.is_still()) {
+            c.push(shake_conditions(&shake));
         }
         if fx.exposure_s > 0.0 {
             c.push("smear".into());
@@ -859,6 +864,72 @@ fn a_face_thinner_than_its_blur_is_read_where_the_disk_leans() {
         scene.name,
         leaning.reading.frames,
         leaning.rest_z_t - truth.calibration.z_t - HALF
+    );
+}
+
+/// The camera shake, for the table: e.g. "shake 1.0 px rms 20–80 Hz, sway 3.0 px
+/// 1.0 Hz, roll 0.30°" (the parts that move).
+fn shake_conditions(shake: &Shake) -> String {
+    let mut parts = Vec::new();
+    if shake.vibration_rms_px > 0.0 {
+        let [lo, hi] = shake.vibration_band_hz;
+        parts.push(format!(
+            "{:.1} px rms {lo:.0}–{hi:.0} Hz",
+            shake.vibration_rms_px
+        ));
+    }
+    if shake.sway_px > 0.0 {
+        parts.push(format!(
+            "sway {:.1} px {:.1} Hz",
+            shake.sway_px, shake.sway_hz
+        ));
+    }
+    if shake.roll_deg > 0.0 {
+        parts.push(format!("roll {:.2}°", shake.roll_deg));
+    }
+    format!("shake {}", parts.join(", "))
+}
+
+/// The scene filmed by a shaken camera (its name marked, so that it is measured and
+/// kept apart from the scene itself).
+fn shaken(scene: &SceneSpec, shake: Shake) -> SceneSpec {
+    let mut spec = scene.spec.clone();
+    spec.effects.shake = Some(shake);
+    SceneSpec {
+        name: format!("{}~shake", scene.name),
+        spec,
+        ..scene.clone()
+    }
+}
+
+/// The gate's draw has no camera shake (its scenes and verdicts are as they were
+/// before shake could be drawn); a scene given one says so in its conditions.
+#[test]
+fn drawn_scenes_carry_shake_only_when_given() {
+    let scenes = draw_scenes_of(SEED);
+    assert!(scenes.iter().all(|s| s.spec.effects.shake.is_none()));
+    assert!(scenes.iter().all(|s| !s.conditions().contains("shake")));
+    let scene = shaken(
+        &scenes[3],
+        Shake {
+            vibration_rms_px: 0.5,
+            sway_px: 2.0,
+            roll_deg: 0.3,
+            ..Shake::default()
+        },
+    );
+    assert_eq!(scene.name, "s03~shake");
+    let conditions = scene.conditions();
+    assert!(
+        conditions.contains("shake 0.5 px rms 20–80 Hz, sway 2.0 px 1.0 Hz, roll 0.30°"),
+        "{conditions}"
+    );
+    assert_eq!(
+        conditions.replace(
+            ", shake 0.5 px rms 20–80 Hz, sway 2.0 px 1.0 Hz, roll 0.30°",
+            ""
+        ),
+        scenes[3].conditions()
     );
 }
 

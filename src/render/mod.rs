@@ -125,7 +125,11 @@
 //! capture index and true time); duplicated frames (a written frame that repeats the
 //! previous one's bytes, as a phone that misses a capture does) and interpolated
 //! frames (the rounded mean of the previous and next frames, as a phone inserts to
-//! reach 240 or 960 fps): the truth keeps their true pose and lists them. The motion
+//! reach 240 or 960 fps): the truth keeps their true pose and lists them. Camera
+//! shake ([`shake`]: a vibration, a slow sway and a roll, seeded) moves each view's
+//! principal point and turns its rays' image coordinates, at each pose of the
+//! exposure; a shaken frame's background is rendered anew, and the truth records
+//! each frame's shake at its capture time ([`FrameTruth::camera_shake`]). The motion
 //! may carry a nutation about stationary
 //! rolling ([`Nutation`]). Pixels are anti-aliased:
 //! rays are cast at the corners of 2 × 2 pixel blocks, then at the pixel corners of
@@ -138,6 +142,7 @@
 
 pub mod motion;
 pub mod scene;
+pub mod shake;
 pub mod write;
 
 use crate::rng::SplitMix64;
@@ -158,6 +163,8 @@ use scene::{
     Camera, Channels, DiskShape, Look, PLATE_CLASSES, Pinhole, Pose, Prepared, Sample, Scene,
     Surface, View,
 };
+use shake::Roll;
+pub use shake::{Shake, ShakeMotion, ShakeOffset};
 use std::f64::consts::PI;
 pub use write::{
     ChromaFilter, ClipEncoding, ClipFormat, DEFAULT_CRF, DEFAULT_ENCODING, H264Settings,
@@ -224,7 +231,10 @@ pub struct Effects {
     /// Lateral drift of the disk [px/s] before the halt (it arrives at rest there);
     /// px at the disk's centre.
     pub drift_px_per_s: f64,
-    /// Seed of the noise generator and of the plate's texture.
+    /// Camera shake ([`shake`]); `None`: a still camera.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shake: Option<Shake>,
+    /// Seed of the noise generator, of the plate's texture and of the shake.
     pub seed: u64,
 }
 
@@ -245,6 +255,7 @@ impl Default for Effects {
             exposure_s: 0.0,
             exposure_samples: 1,
             drift_px_per_s: 0.0,
+            shake: None,
             seed: 1,
         }
     }
@@ -456,6 +467,14 @@ pub struct FrameTruth {
     /// absent, and an MP4 stamps written frame k at k / fps.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub container_time_s: Option<f64>,
+    /// The camera's shake at the capture time (mid-exposure) when the clip is
+    /// shaken ([`Effects::shake`]): dx_px > 0 moves the picture right, dy_px > 0 down,
+    /// roll_deg > 0 turns it counter-clockwise as displayed about
+    /// [`GroundTruth::camera_shake_centre_px`] ([`shake`]). A duplicated frame's
+    /// entry is its capture's, which its picture does not show. φ, ψ, z_rim and the
+    /// rest are the still camera's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_shake: Option<ShakeOffset>,
 }
 
 fn unit_gain() -> f64 {
@@ -584,6 +603,12 @@ pub struct GroundTruth {
     /// frame (with a jitter or a slowed section; dropped frames then leave a gap).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub stamped: bool,
+    /// With camera shake: the point c its roll turns the picture about \[px\], the
+    /// side view's principal point (the image of the world origin) of the still
+    /// camera; a shaken frame shows the still picture's point p0 at
+    /// c + (dx, dy) + R(roll) (p0 − c) ([`FrameTruth::camera_shake`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_shake_centre_px: Option<[f64; 2]>,
     /// One entry per written frame, in output order.
     pub frames: Vec<FrameTruth>,
 }
@@ -650,6 +675,8 @@ pub struct Renderer {
     truth: GroundTruth,
     /// Capture index of each written frame.
     written: Vec<usize>,
+    /// The camera's shake drawn from the seed, if the spec asks for one.
+    shake: Option<ShakeMotion>,
 }
 
 /// Supersampling patterns: rank-1 lattices (i/n, g·i/n mod 1), centred, so that
@@ -701,7 +728,8 @@ impl Renderer {
         let written: Vec<usize> = (0..motion.states.len())
             .filter(|k| !spec.dropped.contains(k))
             .collect();
-        let truth = ground_truth(spec, motion, split, scale, delta, camera, calibration);
+        let mut truth = ground_truth(spec, motion, split, scale, delta, camera, calibration);
+        truth.camera_shake_centre_px = spec.effects.shake.map(|_| [side.cx, side.cy]);
         let mut renderer = Renderer {
             spec: spec.clone(),
             motion: motion.clone(),
@@ -711,8 +739,12 @@ impl Renderer {
             background_mirror: Vec::new(),
             truth,
             written,
+            shake: spec
+                .effects
+                .shake
+                .map(|s| ShakeMotion::new(&s, spec.effects.seed)),
         };
-        renderer.background = renderer.render_background();
+        renderer.background = renderer.render_background(&renderer.cameras, None);
         if renderer.scene.look.separate_mirror {
             renderer.background_mirror = renderer.blurred_background_mirror();
         }
@@ -772,15 +804,14 @@ impl Renderer {
     /// Between frames ψ and θ follow cubic Hermite polynomials with their rates, φ and
     /// the centre straight lines.
     fn exposure_poses(&self, index: usize) -> Vec<Pose> {
-        let fx = &self.spec.effects;
-        let m = fx.exposure_samples.max(1);
-        if m == 1 || fx.exposure_s <= 0.0 {
+        let offsets = self.exposure_offsets();
+        if let [_] = offsets.as_slice() {
             return vec![self.pose(index)];
         }
         let states = &self.motion.states;
-        (0..m)
-            .map(|j| {
-                let dt = fx.exposure_s * ((j as f64 + 0.5) / m as f64 - 0.5);
+        offsets
+            .into_iter()
+            .map(|dt| {
                 let s = &states[index];
                 let t = s.t + dt;
                 let pair = if dt >= 0.0 {
@@ -803,6 +834,45 @@ impl Renderer {
                 self.pose_of(psi, lerp(a.phi, b.phi).max(0.0), theta, centre, t)
             })
             .collect()
+    }
+
+    /// The times of the poses a frame's exposure averages, from the capture time
+    /// \[s\]: `exposure_samples` evenly spread over `exposure_s` (one, 0, without
+    /// smear).
+    fn exposure_offsets(&self) -> Vec<f64> {
+        let fx = &self.spec.effects;
+        let m = fx.exposure_samples.max(1);
+        if m == 1 || fx.exposure_s <= 0.0 {
+            return vec![0.0];
+        }
+        (0..m)
+            .map(|j| fx.exposure_s * ((j as f64 + 0.5) / m as f64 - 0.5))
+            .collect()
+    }
+
+    /// The shake, if it moves the picture.
+    fn moving_shake(&self) -> Option<&ShakeMotion> {
+        self.shake
+            .as_ref()
+            .filter(|_| self.spec.effects.shake.is_some_and(|s| !s.is_still()))
+    }
+
+    /// The cameras shaken by `offset`: each view's principal point shifted by
+    /// (dx, dy), and the roll that turns the rays' image coordinates about the side
+    /// view's shifted principal point ([`shake`]).
+    fn shaken_cameras(&self, offset: &ShakeOffset) -> (Vec<Camera>, Option<Roll>) {
+        let cameras = self
+            .cameras
+            .iter()
+            .map(|c| Camera {
+                cx: c.cx + offset.dx_px,
+                cy: c.cy + offset.dy_px,
+                ..*c
+            })
+            .collect();
+        let side = &self.cameras[0];
+        let centre = (side.cx + offset.dx_px, side.cy + offset.dy_px);
+        (cameras, Roll::new(centre, offset.roll_deg))
     }
 
     fn drift_px(&self, t: f64) -> f64 {
@@ -835,6 +905,10 @@ impl Renderer {
                 .effects
                 .light_gain(index as f64 / self.motion.timing.fps),
             container_time_s: None,
+            camera_shake: self
+                .shake
+                .as_ref()
+                .map(|m| m.at(s.t + self.motion.timing.halt_time)),
         }
     }
 
@@ -849,30 +923,32 @@ impl Renderer {
         )
     }
 
-    fn render_background(&self) -> Vec<Channels> {
+    /// The frame without the disk through `cameras` (rolled by `roll`).
+    fn render_background(&self, cameras: &[Camera], roll: Option<&Roll>) -> Vec<Channels> {
         let (w, h) = (self.spec.width as usize, self.spec.height as usize);
         let mut buf = vec![[0.0f32; 7]; w * h];
-        for cam in &self.cameras {
+        for cam in cameras {
             let rect = Rect {
                 x0: 0,
                 x1: w,
                 y0: cam.row_start as usize,
                 y1: cam.row_end as usize,
             };
-            self.render_rect(&mut buf, cam, None, rect);
+            self.render_rect(&mut buf, cam, None, rect, roll);
         }
         buf
     }
 
     /// The background's mirror image and plate coverage, blurred view by view.
     fn blurred_background_mirror(&self) -> Vec<[f32; 4]> {
+        self.blurred_mirror_channels(&self.background)
+    }
+
+    /// A frame's mirror image and plate coverage, blurred view by view.
+    fn blurred_mirror_channels(&self, buf: &[Channels]) -> Vec<[f32; 4]> {
         let w = self.spec.width as usize;
         let sigma = self.spec.scenery.reflection_blur_px;
-        let mut mirror: Vec<[f32; 4]> = self
-            .background
-            .iter()
-            .map(|p| [p[3], p[4], p[5], p[6]])
-            .collect();
+        let mut mirror: Vec<[f32; 4]> = buf.iter().map(|p| [p[3], p[4], p[5], p[6]]).collect();
         for cam in &self.cameras {
             let (y0, y1) = (cam.row_start as usize, cam.row_end as usize);
             gaussian_blur(&mut mirror[y0 * w..y1 * w], w, y1 - y0, sigma);
@@ -911,28 +987,44 @@ impl Renderer {
     fn render_capture(&self, file_index: usize) -> RgbImage {
         let index = self.written[file_index];
         let poses = self.exposure_poses(index);
+        // With shake, each pose's cameras, shaken at its time.
+        let shaken: Option<Vec<(Vec<Camera>, Option<Roll>)>> = self.moving_shake().map(|m| {
+            let t = self.motion.states[index].t + self.motion.timing.halt_time;
+            self.exposure_offsets()
+                .iter()
+                .map(|dt| self.shaken_cameras(&m.at(t + dt)))
+                .collect()
+        });
         let (w, h) = (self.spec.width as usize, self.spec.height as usize);
         // The pixels each view's disk, mirror image and shadow may touch.
         let mut touched: Vec<Option<Rect>> = vec![None; self.cameras.len()];
-        let mut render_poses = |buf: &mut Vec<Channels>, pose: &Pose| {
-            for (c, cam) in self.cameras.iter().enumerate() {
-                if let Some(rect) = self.disk_rect(cam, pose) {
-                    self.render_rect(buf, cam, Some(pose), rect);
+        // Pose j on its background: the still one, or the shaken cameras' own.
+        let mut render_pose = |j: usize| -> Vec<Channels> {
+            let pose = &poses[j];
+            let (cameras, roll, mut buf) = match &shaken {
+                None => (self.cameras.as_slice(), None, self.background.clone()),
+                Some(views) => {
+                    let (cameras, roll) = &views[j];
+                    let buf = self.render_background(cameras, roll.as_ref());
+                    (cameras.as_slice(), roll.as_ref(), buf)
+                }
+            };
+            for (c, cam) in cameras.iter().enumerate() {
+                if let Some(rect) = self.disk_rect(cam, pose, roll) {
+                    self.render_rect(&mut buf, cam, Some(pose), rect, roll);
                     touched[c] = Some(touched[c].map_or(rect, |t| t.union(&rect)));
                 }
             }
-        };
-        let buf = if let [pose] = poses.as_slice() {
-            let mut buf = self.background.clone();
-            render_poses(&mut buf, pose);
             buf
+        };
+        let buf = if poses.len() == 1 {
+            render_pose(0)
         } else {
             // Motion smear: the mean of the exposure's poses.
             let k = 1.0 / poses.len() as f32;
             let mut sum = vec![[0.0f32; 7]; w * h];
-            for pose in &poses {
-                let mut one = self.background.clone();
-                render_poses(&mut one, pose);
+            for j in 0..poses.len() {
+                let one = render_pose(j);
                 sum.par_iter_mut().zip(&one).for_each(|(s, o)| {
                     for (a, b) in s.iter_mut().zip(o) {
                         *a += k * b;
@@ -942,7 +1034,12 @@ impl Renderer {
             sum
         };
         let mut rgb: Vec<[f32; 3]> = if self.scene.look.separate_mirror {
-            let mirror = self.blurred_mirror(&buf, &touched);
+            let mirror = if shaken.is_some() {
+                // The background moved too: the whole mirror image is blurred.
+                seen_mirror(&buf, &self.blurred_mirror_channels(&buf))
+            } else {
+                self.blurred_mirror(&buf, &touched)
+            };
             buf.iter()
                 .zip(&mirror)
                 .map(|(p, m)| [p[0] + m[0], p[1] + m[1], p[2] + m[2]])
@@ -1027,17 +1124,7 @@ impl Renderer {
                 }
             }
         }
-        buf.par_iter()
-            .zip(&blurred)
-            .map(|(p, b)| {
-                if p[6] > 0.0 && b[3] > 1e-6 {
-                    let k = p[6] / b[3];
-                    [k * b[0], k * b[1], k * b[2]]
-                } else {
-                    [0.0; 3]
-                }
-            })
-            .collect()
+        seen_mirror(buf, &blurred)
     }
 
     /// Pixel rectangle of a view that the disk, its mirror image and its shadow can
@@ -1046,7 +1133,7 @@ impl Renderer {
     /// disk's bounding box, of its mirror image and of its shadow, which enclose
     /// them). With a textured plate it starts on the background's 2 × 2 block grid,
     /// so the plate's texture is interpolated alike inside and outside it.
-    fn disk_rect(&self, cam: &Camera, pose: &Pose) -> Option<Rect> {
+    fn disk_rect(&self, cam: &Camera, pose: &Pose, roll: Option<&Roll>) -> Option<Rect> {
         let disk = &self.scene.disk;
         let key = self.scene.look.key_light;
         let reflects = self.scene.look.reflectivity > 0.0 && cam.view == View::Side;
@@ -1095,6 +1182,22 @@ impl Renderer {
                 cam.cy - u0 / s,
             )
         };
+        // A rolled picture: the box around the turned box.
+        let (xa, xb, ua, ub) = match roll {
+            None => (xa, xb, ua, ub),
+            Some(roll) => [(xa, ua), (xb, ua), (xa, ub), (xb, ub)]
+                .map(|(x, row)| roll.apply(x, row))
+                .iter()
+                .fold(
+                    (
+                        f64::INFINITY,
+                        f64::NEG_INFINITY,
+                        f64::INFINITY,
+                        f64::NEG_INFINITY,
+                    ),
+                    |(xa, xb, ua, ub), &(x, row)| (xa.min(x), xb.max(x), ua.min(row), ub.max(row)),
+                ),
+        };
         let w = f64::from(self.spec.width);
         let (r0, r1) = (f64::from(cam.row_start), f64::from(cam.row_end));
         let mut rect = Rect {
@@ -1114,10 +1217,18 @@ impl Renderer {
     /// pixel blocks; a block whose four corner rays see the same class is filled by
     /// bilinear interpolation, otherwise its pixel corners are cast, and a pixel whose
     /// corners disagree gets 16 rays.
-    fn render_rect(&self, buf: &mut [Channels], cam: &Camera, pose: Option<&Pose>, rect: Rect) {
+    fn render_rect(
+        &self,
+        buf: &mut [Channels],
+        cam: &Camera,
+        pose: Option<&Pose>,
+        rect: Rect,
+        roll: Option<&Roll>,
+    ) {
         let w = self.spec.width as usize;
         let prepared = Prepared::new(&self.scene, pose, cam);
         let trace = |x: f64, y: f64| -> Sample {
+            let (x, y) = roll.map_or((x, y), |r| r.undo(x, y));
             let (o, d) = cam.ray(x, y);
             self.scene.trace(&prepared, cam, o, d)
         };
@@ -1343,6 +1454,7 @@ fn ground_truth(
         vfr_jitter: motion.timing.jitter,
         slowed_sections: spec.slowed_sections.clone(),
         stamped: motion.timing.jitter.is_some() || !spec.slowed_sections.is_empty(),
+        camera_shake_centre_px: None,
         frames: Vec::new(),
     }
 }
@@ -1520,6 +1632,22 @@ impl Rect {
             y1: self.y1.max(other.y1),
         }
     }
+}
+
+/// The mirror image seen where the plate is, from the frame `buf` and its blurred
+/// mirror image and plate coverage: coverage × blur(mirror)/blur(coverage).
+fn seen_mirror(buf: &[Channels], blurred: &[[f32; 4]]) -> Vec<[f32; 3]> {
+    buf.par_iter()
+        .zip(blurred)
+        .map(|(p, b)| {
+            if p[6] > 0.0 && b[3] > 1e-6 {
+                let k = p[6] / b[3];
+                [k * b[0], k * b[1], k * b[2]]
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect()
 }
 
 fn average<const N: usize>(colours: impl Iterator<Item = [f32; N]>, n: usize) -> [f32; N] {
@@ -1703,6 +1831,47 @@ fn validate_effects(fx: &Effects, fps: f64) -> Result<(), RenderError> {
     if !fx.drift_px_per_s.is_finite() {
         return fail("the drift [px/s] must be finite".into());
     }
+    match &fx.shake {
+        Some(shake) => validate_shake(shake),
+        None => Ok(()),
+    }
+}
+
+/// The camera shake: amplitudes within [0, [`MAX_SHAKE_PX`]] px and a roll within
+/// [0, [`MAX_SHAKE_ROLL_DEG`]]°, a band of positive frequencies low to high and a
+/// positive sway frequency.
+fn validate_shake(shake: &Shake) -> Result<(), RenderError> {
+    let fail = |m: String| Err(RenderError::Invalid(m));
+    for (name, v, max) in [
+        (
+            "the shake's vibration RMS [px]",
+            shake.vibration_rms_px,
+            MAX_SHAKE_PX,
+        ),
+        (
+            "the shake's sway amplitude [px]",
+            shake.sway_px,
+            MAX_SHAKE_PX,
+        ),
+        ("the shake's roll [deg]", shake.roll_deg, MAX_SHAKE_ROLL_DEG),
+    ] {
+        if !(v.is_finite() && (0.0..=max).contains(&v)) {
+            return fail(format!("{name} must lie in [0, {max}], got {v}"));
+        }
+    }
+    let [lo, hi] = shake.vibration_band_hz;
+    if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi) {
+        return fail(format!(
+            "the shake's vibration band must be LOW:HIGH with 0 < LOW ≤ HIGH [Hz], got \
+             {lo}:{hi}"
+        ));
+    }
+    if !(shake.sway_hz.is_finite() && shake.sway_hz > 0.0) {
+        return fail(format!(
+            "the shake's sway frequency must be positive [Hz], got {}",
+            shake.sway_hz
+        ));
+    }
     Ok(())
 }
 
@@ -1817,6 +1986,12 @@ pub const MAX_SLOWING: f64 = 960.0;
 
 /// Most poses one frame's exposure averages.
 pub const MAX_EXPOSURE_SAMPLES: usize = 16;
+
+/// The largest vibration RMS and sway amplitude of a camera shake \[px\].
+pub const MAX_SHAKE_PX: f64 = 50.0;
+
+/// The largest roll of a camera shake \[deg\].
+pub const MAX_SHAKE_ROLL_DEG: f64 = 10.0;
 
 /// Separable Gaussian blur with clamped borders.
 fn gaussian_blur<const N: usize>(buf: &mut [[f32; N]], w: usize, h: usize, sigma: f64) {
@@ -2651,6 +2826,45 @@ mod tests {
         check(&|s| s.effects.exposure_s = 0.01, " s");
         check(&|s| s.effects.flicker_50hz_amplitude = 1.2, "50 Hz");
         check(&|s| s.effects.shot_noise = f64::NAN, "grey levels");
+        for (shake, unit) in [
+            (
+                Shake {
+                    vibration_rms_px: -1.0,
+                    ..Shake::default()
+                },
+                "vibration RMS [px]",
+            ),
+            (
+                Shake {
+                    sway_px: 80.0,
+                    ..Shake::default()
+                },
+                "sway amplitude [px]",
+            ),
+            (
+                Shake {
+                    roll_deg: 20.0,
+                    ..Shake::default()
+                },
+                "roll [deg]",
+            ),
+            (
+                Shake {
+                    vibration_band_hz: [80.0, 20.0],
+                    ..Shake::default()
+                },
+                "Hz",
+            ),
+            (
+                Shake {
+                    sway_hz: 0.0,
+                    ..Shake::default()
+                },
+                "sway frequency",
+            ),
+        ] {
+            check(&|s| s.effects.shake = Some(shake), unit);
+        }
     }
 
     /// A slowed section stretches the container's clock over the frame intervals
@@ -2702,6 +2916,431 @@ mod tests {
                 .collect();
             let err = Renderer::new(&spec, &m).err().expect("refused").to_string();
             assert!(err.contains(why), "{err}");
+        }
+    }
+
+    /// The shift of the picture along a line of pixels, from the still frame's
+    /// profile `f0` to the shaken frame's `fs`, given its whole part `n` (the truth's,
+    /// rounded): n plus the area between fs(j + n) and f0(j) over [a, b] over the step
+    /// between f0's levels at the window's ends. A box-filtered picture moved by r
+    /// changes that area by exactly r × the step when the picture is flat at the
+    /// window's ends; `None` where it is not (a slope of more than 4 grey levels a
+    /// pixel there). The supersampling's 16 coverage levels leave ±1/32 px in each
+    /// profile.
+    fn measured_shift(
+        f0: &dyn Fn(i64) -> f64,
+        fs: &dyn Fn(i64) -> f64,
+        a: i64,
+        b: i64,
+        n: i64,
+    ) -> Option<f64> {
+        let flat = |k: i64| (f0(k - 1) - f0(k)).abs() <= 4.0 && (f0(k + 1) - f0(k)).abs() <= 4.0;
+        let step = f0(a) - f0(b);
+        if !(flat(a) && flat(b) && step.abs() > 50.0) {
+            return None;
+        }
+        let area: f64 = (a..=b).map(|j| fs(j + n) - f0(j)).sum();
+        Some(n as f64 + area / step)
+    }
+
+    /// A shake of every kind but roll, up to about 5 px.
+    fn test_shake() -> Shake {
+        Shake {
+            vibration_rms_px: 1.0,
+            sway_px: 3.0,
+            ..Shake::default()
+        }
+    }
+
+    /// The still camera's image of the plate's far edge (the horizon) \[row\].
+    fn horizon_row(r: &Renderer) -> f64 {
+        r.cameras[0].project([0.0, r.scene.plate_back, 0.0]).1
+    }
+
+    /// Camera shake moves the picture by the truth's (dx, dy). On rest frames
+    /// rendered with and without shake, the shift is measured across edges that are
+    /// straight where they are crossed, with nothing else near (the strip is not): the
+    /// horizon on columns beside the disk (light plate), the disk's bottom rim on the
+    /// centre column and its ends on a row through its side (dark plate), and in a
+    /// two-view frame the plan view's disk at the top, bottom, left and right of its
+    /// circle (those the strip does not reach).
+    /// The supersampling's 16 coverage levels leave up to 1/16 px in each measured
+    /// shift (1/32 in each profile): each is within 0.07 px of the truth's, the
+    /// mean of a frame's shifts along each axis within 0.05 px. The rest of the
+    /// truth is the still camera's.
+    #[test]
+    fn shake_moves_the_picture_by_the_truth() {
+        let m = test_motion(480.0, 0.02, 0.1);
+        for (plate, two_view) in [
+            (Plate::Light, false),
+            (Plate::Dark, false),
+            (Plate::Dark, true),
+        ] {
+            let mut spec = small_spec(plate, two_view);
+            let still = Renderer::new(&spec, &m).expect("still");
+            spec.effects.shake = Some(test_shake());
+            let shaken = Renderer::new(&spec, &m).expect("shaken");
+            let truth = shaken.truth();
+            let unshaken: Vec<FrameTruth> = truth
+                .frames
+                .iter()
+                .map(|f| FrameTruth {
+                    camera_shake: None,
+                    ..*f
+                })
+                .collect();
+            assert_eq!(unshaken, still.truth().frames, "{plate:?}");
+            assert_eq!(truth.calibration, still.truth().calibration);
+            let side = still.cameras[0];
+            assert_eq!(truth.camera_shake_centre_px, Some([side.cx, side.cy]));
+            let cal = truth.calibration;
+            let r_px = m.params.radius / truth.metres_per_px_image;
+            // (what, along a column?, the line's fixed coordinate, the edge's position
+            // on it in the still frame).
+            let mut lines: Vec<(&str, bool, i64, f64)> = Vec::new();
+            if plate == Plate::Light {
+                // The horizon; the disk's edges here are shaded too steeply for this
+                // measure (its shading is sampled, not averaged, over a pixel).
+                let h = horizon_row(&still);
+                lines.push(("horizon, left", true, 8, h));
+                lines.push(("horizon, right", true, i64::from(spec.width) - 9, h));
+            } else {
+                let (x, y) = (
+                    cal.x_centre.round() as i64,
+                    (0.5 * (cal.z_base + cal.z_t)).round() as i64,
+                );
+                lines.push(("bottom rim", true, x, cal.z_base));
+                lines.push(("left end", false, y, cal.x_l));
+                lines.push(("right end", false, y, cal.x_r));
+            }
+            if two_view {
+                let plan = still.cameras[1];
+                let (x, y) = (plan.cx.round() as i64, plan.cy.round() as i64);
+                lines.push(("plan top", true, x, plan.cy - r_px));
+                lines.push(("plan bottom", true, x, plan.cy + r_px));
+                lines.push(("plan left", false, y, plan.cx - r_px));
+                lines.push(("plan right", false, y, plan.cx + r_px));
+            }
+            let n = shaken.frame_count();
+            let mut largest = (0.0f64, 0.0f64);
+            let mut seen: Vec<&str> = Vec::new();
+            for k in n - 8..n {
+                let (img0, img) = (still.render_frame(k), shaken.render_frame(k));
+                let d = truth.frames[k].camera_shake.expect("shaken frame");
+                assert_eq!(d.roll_deg, 0.0);
+                largest = (largest.0.max(d.dx_px.abs()), largest.1.max(d.dy_px.abs()));
+                // Each axis's errors, measured less true shift.
+                let mut errors = (Vec::new(), Vec::new());
+                for &(what, along_column, at, edge) in &lines {
+                    let (shift, other) = if along_column {
+                        (d.dy_px, d.dx_px)
+                    } else {
+                        (d.dx_px, d.dy_px)
+                    };
+                    // The shaken line: the still one moved by the other shift, rounded
+                    // (the edges are straight across it).
+                    let at_s = at + other.round() as i64;
+                    let level = |img: &RgbImage, along: i64, across: i64| {
+                        if along_column {
+                            intensity(img, across as u32, along as u32)
+                        } else {
+                            intensity(img, along as u32, across as u32)
+                        }
+                    };
+                    let f0 = |j: i64| level(&img0, j, at);
+                    let fs = |j: i64| level(&img, j, at_s);
+                    let c = edge.round() as i64;
+                    let Some(got) = measured_shift(&f0, &fs, c - 10, c + 10, shift.round() as i64)
+                    else {
+                        continue;
+                    };
+                    assert!(
+                        (got - shift).abs() < 0.07,
+                        "{plate:?} two-view {two_view}, frame {k}, {what}: moved by {got:.4} \
+                         px, the truth says {shift:.4}"
+                    );
+                    if !seen.contains(&what) {
+                        seen.push(what);
+                    }
+                    if along_column {
+                        errors.1.push(got - shift);
+                    } else {
+                        errors.0.push(got - shift);
+                    }
+                }
+                // The light plate's frames are measured along y only.
+                let axes = if plate == Plate::Light {
+                    vec![("dy", &errors.1)]
+                } else {
+                    vec![("dx", &errors.0), ("dy", &errors.1)]
+                };
+                for (axis, e) in axes {
+                    assert!(!e.is_empty(), "{plate:?}, frame {k}: no {axis} measured");
+                    let mean = e.iter().sum::<f64>() / e.len() as f64;
+                    assert!(
+                        mean.abs() < 0.05,
+                        "{plate:?} two-view {two_view}, frame {k}: {axis} off by {mean:+.4} \
+                         px on average ({e:?})"
+                    );
+                }
+            }
+            // The frames were moved by whole and fractional pixels, both ways, and
+            // the edges that must be flat at their windows' ends were.
+            assert!(largest.0 > 1.5 && largest.1 > 1.5, "{largest:?}");
+            let must: &[&str] = match plate {
+                Plate::Light => &["horizon, left", "horizon, right"],
+                Plate::Dark => &["bottom rim", "left end", "right end"],
+            };
+            for what in must {
+                assert!(seen.contains(what), "{plate:?}: {what} never measured");
+            }
+            if two_view {
+                assert!(
+                    seen.iter().filter(|w| w.starts_with("plan")).count() >= 2,
+                    "{seen:?}"
+                );
+            }
+        }
+    }
+
+    /// A rolled picture turns about the truth's centre: the horizon (light plate)
+    /// crosses the frame's outer columns where c + R(ρ)(p0 − c) puts it, within
+    /// 0.05 px (ρ > 0 raises the right side).
+    #[test]
+    fn shake_roll_turns_the_picture_about_its_centre() {
+        let m = test_motion(480.0, 0.02, 0.05);
+        let mut spec = small_spec(Plate::Light, false);
+        let still = Renderer::new(&spec, &m).expect("still");
+        spec.effects.shake = Some(Shake {
+            roll_deg: 1.0,
+            ..Shake::default()
+        });
+        let rolled = Renderer::new(&spec, &m).expect("rolled");
+        let truth = rolled.truth();
+        let [cx, cy] = truth.camera_shake_centre_px.expect("centre");
+        let h = horizon_row(&still);
+        let n = rolled.frame_count();
+        let w = i64::from(spec.width);
+        for k in [n - 1, n - 9] {
+            let (img0, img) = (still.render_frame(k), rolled.render_frame(k));
+            let d = truth.frames[k].camera_shake.expect("shake");
+            assert!(d.roll_deg.abs() > 0.5 && d.dx_px == 0.0 && d.dy_px == 0.0);
+            let rho = d.roll_deg.to_radians();
+            for x in [8, w - 9] {
+                // The turned horizon: row(x) = cy + (h − cy)/cos ρ − (x − cx) tan ρ.
+                let want = cy + (h - cy) / rho.cos() - (x as f64 - cx) * rho.tan() - h;
+                let f0 = |j: i64| intensity(&img0, x as u32, j as u32);
+                let fs = |j: i64| intensity(&img, x as u32, j as u32);
+                let c = h.round() as i64;
+                let got =
+                    measured_shift(&f0, &fs, c - 10, c + 10, want.round() as i64).expect("flat");
+                assert!(
+                    (got - want).abs() < 0.05,
+                    "frame {k}, column {x}: {got:.4} px vs {want:.4} (roll {:.3}°)",
+                    d.roll_deg
+                );
+            }
+        }
+    }
+
+    /// With an exposure, each of its poses is seen through the camera shaken at its
+    /// own time: a rest frame's horizon moves by the mean of the exposure's shifts
+    /// (a 120 Hz vibration over a quarter of its period), not the mid-exposure shift
+    /// the truth records.
+    #[test]
+    fn shake_is_sampled_over_the_exposure() {
+        let m = test_motion(480.0, 0.02, 0.05);
+        let mut spec = small_spec(Plate::Light, false);
+        let still = Renderer::new(&spec, &m).expect("still");
+        spec.effects.exposure_s = 1.0 / 480.0;
+        spec.effects.exposure_samples = 4;
+        spec.effects.shake = Some(Shake {
+            vibration_rms_px: 2.0,
+            vibration_band_hz: [120.0, 120.0],
+            ..Shake::default()
+        });
+        let smeared = Renderer::new(&spec, &m).expect("smeared");
+        let motion = smeared.shake.as_ref().expect("shake");
+        let h = horizon_row(&still);
+        let n = smeared.frame_count();
+        let mut apart = 0.0f64;
+        for k in n - 6..n {
+            let (img0, img) = (still.render_frame(k), smeared.render_frame(k));
+            let f = &smeared.truth().frames[k];
+            let t = f.t + m.timing.halt_time;
+            let offsets = smeared.exposure_offsets();
+            assert_eq!(offsets.len(), 4);
+            let mean = offsets
+                .iter()
+                .map(|dt| motion.at(t + dt).dy_px)
+                .sum::<f64>()
+                / offsets.len() as f64;
+            let mid = f.camera_shake.expect("shake").dy_px;
+            assert_eq!(mid, motion.at(t).dy_px);
+            apart = apart.max((mean - mid).abs());
+            let f0 = |j: i64| intensity(&img0, 8, j as u32);
+            let fs = |j: i64| intensity(&img, 8, j as u32);
+            let c = h.round() as i64;
+            let got = measured_shift(&f0, &fs, c - 10, c + 10, mean.round() as i64).expect("flat");
+            assert!(
+                (got - mean).abs() < 0.05,
+                "frame {k}: {got:.4} px vs the exposure's mean {mean:.4} (mid {mid:.4})"
+            );
+        }
+        // The test tells the exposure's mean from its middle.
+        assert!(apart > 0.15, "{apart}");
+    }
+
+    /// Power of `x` (its mean removed, a Hann window) at the DFT's frequencies
+    /// k·fps/N \[Hz\].
+    fn spectrum(x: &[f64], fps: f64) -> Vec<(f64, f64)> {
+        let n = x.len();
+        let mean = x.iter().sum::<f64>() / n as f64;
+        let xw: Vec<f64> = x
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (v - mean) * (PI * i as f64 / n as f64).sin().powi(2))
+            .collect();
+        (1..n / 2)
+            .map(|k| {
+                let (mut re, mut im) = (0.0, 0.0);
+                for (i, v) in xw.iter().enumerate() {
+                    let a = 2.0 * PI * (k * i) as f64 / n as f64;
+                    re += v * a.cos();
+                    im -= v * a.sin();
+                }
+                (k as f64 * fps / n as f64, re * re + im * im)
+            })
+            .collect()
+    }
+
+    /// The mean interval between the upward and downward zero crossings of `x`
+    /// sampled every `dt` \[s\] (linear interpolation): half the period.
+    fn half_period(x: &[f64], dt: f64) -> f64 {
+        let crossings: Vec<f64> = x
+            .windows(2)
+            .enumerate()
+            .filter(|(_, w)| (w[0] < 0.0) != (w[1] < 0.0))
+            .map(|(i, w)| (i as f64 + w[0] / (w[0] - w[1])) * dt)
+            .collect();
+        assert!(crossings.len() >= 3, "{} crossings", crossings.len());
+        (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64
+    }
+
+    /// The truth's shake series have what was asked for, over 1.5 s at 480 fps: the
+    /// vibration's RMS on each axis within 10 % of the asked RMS and ≥ 97 % of its
+    /// power within the band (±2 Hz, the window's spread), a band of one frequency
+    /// one spectral peak there; the sway's and the roll's peaks within 1 % and their
+    /// half-period 1/(2 f) within 1 %. The same seed draws the same shake, another
+    /// seed another.
+    #[test]
+    fn shake_truth_has_the_asked_amplitudes_and_frequencies() {
+        let fps = 480.0;
+        let m = test_motion(fps, 1.0, 0.5);
+        let series = |shake: Shake, seed: u64| {
+            let mut spec = small_spec(Plate::Dark, false);
+            (spec.width, spec.height) = (160, 96);
+            spec.effects.shake = Some(shake);
+            spec.effects.seed = seed;
+            let r = Renderer::new(&spec, &m).expect("renderer");
+            let s: Vec<ShakeOffset> = r
+                .truth()
+                .frames
+                .iter()
+                .map(|f| f.camera_shake.expect("shake"))
+                .collect();
+            s
+        };
+        let rms = |x: &[f64]| (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt();
+        let vibration = Shake {
+            vibration_rms_px: 1.5,
+            vibration_band_hz: [20.0, 80.0],
+            ..Shake::default()
+        };
+        let s = series(vibration, 7);
+        assert!(s.iter().all(|o| o.roll_deg == 0.0));
+        let dx: Vec<f64> = s.iter().map(|o| o.dx_px).collect();
+        let dy: Vec<f64> = s.iter().map(|o| o.dy_px).collect();
+        assert_ne!(dx, dy);
+        for (axis, x) in [("dx", &dx), ("dy", &dy)] {
+            let got = rms(x);
+            assert!((got / 1.5 - 1.0).abs() < 0.1, "{axis}: RMS {got}");
+            let power = spectrum(x, fps);
+            let total: f64 = power.iter().map(|p| p.1).sum();
+            let inside: f64 = power
+                .iter()
+                .filter(|p| (18.0..=82.0).contains(&p.0))
+                .map(|p| p.1)
+                .sum();
+            assert!(inside / total > 0.97, "{axis}: {} in band", inside / total);
+        }
+        // One frequency: one peak, at 50 Hz.
+        let tone = series(
+            Shake {
+                vibration_band_hz: [50.0, 50.0],
+                ..vibration
+            },
+            7,
+        );
+        let dx: Vec<f64> = tone.iter().map(|o| o.dx_px).collect();
+        assert!((rms(&dx) / 1.5 - 1.0).abs() < 0.1, "RMS {}", rms(&dx));
+        let peak = spectrum(&dx, fps)
+            .into_iter()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .expect("spectrum");
+        assert!((peak.0 - 50.0).abs() < 1.0, "peak at {} Hz", peak.0);
+        // Sway and roll.
+        let sway = Shake {
+            sway_px: 3.0,
+            sway_hz: 2.0,
+            roll_deg: 0.8,
+            ..Shake::default()
+        };
+        let s = series(sway, 7);
+        for (name, x, peak) in [
+            ("dx", s.iter().map(|o| o.dx_px).collect::<Vec<_>>(), 3.0),
+            ("dy", s.iter().map(|o| o.dy_px).collect(), 3.0),
+            ("roll", s.iter().map(|o| o.roll_deg).collect(), 0.8),
+        ] {
+            let top = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            assert!((top / peak - 1.0).abs() < 0.01, "{name}: peak {top}");
+            let half = half_period(&x, 1.0 / fps);
+            assert!(
+                (half * 2.0 * 2.0 - 1.0).abs() < 0.01,
+                "{name}: half-period {half} s"
+            );
+        }
+        assert_eq!(series(sway, 7), s);
+        assert_ne!(series(sway, 8), s);
+    }
+
+    /// A shake that does not move renders as no shake, byte for byte; its truth
+    /// records zero shifts.
+    #[test]
+    fn a_still_shake_renders_as_no_shake() {
+        let m = test_motion(480.0, 0.05, 0.02);
+        let mut spec = small_spec(Plate::Dark, false);
+        (spec.width, spec.height) = (160, 96);
+        spec.scenery.reflection_blur_px = 1.0;
+        let plain = Renderer::new(&spec, &m).expect("plain");
+        assert!(
+            plain
+                .truth()
+                .frames
+                .iter()
+                .all(|f| f.camera_shake.is_none())
+        );
+        assert_eq!(plain.truth().camera_shake_centre_px, None);
+        spec.effects.shake = Some(Shake::default());
+        let still = Renderer::new(&spec, &m).expect("still shake");
+        for k in [0, 20, still.frame_count() - 1] {
+            assert_eq!(still.render_frame(k), plain.render_frame(k), "frame {k}");
+            let zero = ShakeOffset {
+                dx_px: 0.0,
+                dy_px: 0.0,
+                roll_deg: 0.0,
+            };
+            assert_eq!(still.truth().frames[k].camera_shake, Some(zero));
         }
     }
 }
