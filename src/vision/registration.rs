@@ -274,11 +274,12 @@ struct Strip<'a> {
 }
 
 /// One frame's fit on a strip: the shift, its standard error, and each row's
-/// misfit (over the strip's rows).
+/// misfit (over the strip's rows; single precision, as it is kept for every
+/// frame of a clip until the rows' weights are known).
 struct ShiftFit {
     shift: f64,
     se: f64,
-    misfit: Vec<f64>,
+    misfit: Vec<f32>,
 }
 
 impl<'a> Strip<'a> {
@@ -300,11 +301,13 @@ impl<'a> Strip<'a> {
             .map(|p| self.fit(p, None, &equal))
             .collect();
         let weights = self.row_weights(&first);
+        let starts: Vec<Option<f64>> = first.iter().map(|f| f.as_ref().map(|f| f.shift)).collect();
+        drop(first);
         profiles
             .par_iter()
-            .zip(&first)
-            .map(|(p, f)| {
-                let fit = self.fit(p, f.as_ref().map(|f| f.shift), &weights)?;
+            .zip(&starts)
+            .map(|(p, start)| {
+                let fit = self.fit(p, *start, &weights)?;
                 Some((fit.shift, fit.se))
             })
             .collect()
@@ -315,7 +318,11 @@ impl<'a> Strip<'a> {
     fn row_weights(&self, fits: &[Option<ShiftFit>]) -> Vec<f64> {
         let mut weights = vec![0.0; self.reference.len()];
         for (i, y) in self.rows.clone().enumerate() {
-            let misfits: Vec<f64> = fits.iter().flatten().map(|f| f.misfit[i]).collect();
+            let misfits: Vec<f64> = fits
+                .iter()
+                .flatten()
+                .map(|f| f64::from(f.misfit[i]))
+                .collect();
             if misfits.is_empty() {
                 continue;
             }
@@ -345,13 +352,13 @@ impl<'a> Strip<'a> {
                 .rows
                 .clone()
                 .zip(&first.misfit)
-                .map(|(y, r)| r * weights[y].sqrt())
+                .map(|(y, &r)| f64::from(r) * weights[y].sqrt())
                 .collect();
             mad_sigma(&z, 0.0).max(1e-9)
         };
         let mut kept = weights.to_vec();
-        for (y, r) in self.rows.clone().zip(&first.misfit) {
-            if (r * weights[y].sqrt()).abs() > OUTLIER_SIGMAS * scale.max(1.0) {
+        for (y, &r) in self.rows.clone().zip(&first.misfit) {
+            if (f64::from(r) * weights[y].sqrt()).abs() > OUTLIER_SIGMAS * scale.max(1.0) {
                 kept[y] = 0.0;
             }
         }
@@ -398,10 +405,10 @@ impl<'a> Strip<'a> {
             .clone()
             .map(|y| (sample(self.reference, y as f64 - d).0, p[y], w[y]));
         let (a, b, ssr) = line_fit(pairs)?;
-        let misfit: Vec<f64> = self
+        let misfit: Vec<f32> = self
             .rows
             .clone()
-            .map(|y| p[y] - a * sample(self.reference, y as f64 - d).0 - b)
+            .map(|y| (p[y] - a * sample(self.reference, y as f64 - d).0 - b) as f32)
             .collect();
         let used = self.rows.clone().filter(|&y| w[y] > 0.0).count();
         let s2 = ssr / used.saturating_sub(3).max(1) as f64;
