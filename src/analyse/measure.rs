@@ -31,8 +31,10 @@ use crate::vision::{
 /// frames' to find duplicated and interpolated frames (footage::RepeatGauge).
 const REPEAT_SAMPLE_STEP: usize = 2;
 
-/// The camera's RMS motion above which the report warns \[px\].
+/// The camera's RMS motion above which the report warns, and above which the clip
+/// is refused \[px\].
 const SHAKY_CAMERA_PX: f64 = 1.0;
+const HAND_HELD_PX: f64 = 2.0;
 
 /// A frame's rim height \[px\] and its edge's row \[px\].
 type RimCrest = (f64, f64);
@@ -118,6 +120,12 @@ pub(super) fn measure_frames<K: FrameKeeping>(
     let mut warnings = Vec::new();
     let registration = rim_heights::register(&mut frames, &mut windows, &scene, rest, fps.fps);
     drop(scene);
+    if let Some(reason) = registration.as_ref().and_then(camera_motion_refusal) {
+        return Err(AnalyseError::Clip {
+            path: clip.to_path_buf(),
+            reason,
+        });
+    }
     warnings.extend(registration.as_ref().and_then(camera_motion_warning));
     if let Some(gauge) = &rest.gauges.gap {
         warnings.extend(rim_heights::resolve_gap(&mut frames, gauge, &gaps));
@@ -289,6 +297,22 @@ fn read_scene(
             .sum::<f32>()
             / columns.len() as f32
     }))
+}
+
+/// Why a clip is refused whose camera moved by more than [`HAND_HELD_PX`] RMS: the
+/// heights are corrected for the picture's vertical shift, but the band of columns
+/// moves along the rim as far, and the rest frames, which give the heights' zero,
+/// move too.
+fn camera_motion_refusal(registration: &Registration) -> Option<String> {
+    (registration.applied && registration.rms_px > HAND_HELD_PX).then(|| {
+        format!(
+            "the camera moves by {:.1} px RMS ({:.1} px at most) against the scene beside \
+             the disk, more than the {HAND_HELD_PX} px the rim's band can follow (a camera \
+             held by hand?): film from a tripod that does not stand on the table the disk \
+             spins on",
+            registration.rms_px, registration.peak_px
+        )
+    })
 }
 
 /// A warning when the camera moved by more than [`SHAKY_CAMERA_PX`] RMS: the

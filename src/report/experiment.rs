@@ -232,8 +232,9 @@ fn flag_records(e: &Experiment) -> Vec<FlagRow> {
         .collect()
 }
 
-/// `series.svg`/`.png`: the rim height per frame and, for two-view clips, the strip
-/// angle and its rate.
+/// `series.svg`/`.png`: the rim height per frame, the camera's shift where the
+/// heights were corrected for it, and, for two-view clips, the strip angle and its
+/// rate.
 fn write_series_plot(dir: &Path, e: &Experiment) -> Result<(), ReportError> {
     let strip = e.series.strip.as_ref().map(|s| &s.series);
     let t: Vec<f64> = e.frames.iter().map(|f| f.t).collect();
@@ -242,11 +243,23 @@ fn write_series_plot(dir: &Path, e: &Experiment) -> Result<(), ReportError> {
         .iter()
         .map(|f| f.z_rim_m.map_or(f64::NAN, |z| z * 1e3))
         .collect();
+    let shift: Vec<f64> = e
+        .frames
+        .iter()
+        .map(|f| f.camera_shift_px.unwrap_or(f64::NAN))
+        .collect();
     let mut panels = vec![Panel {
         label: "z_rim [mm]",
         values: &z_mm,
         log_y: false,
     }];
+    if e.plan.registration.as_ref().is_some_and(|r| r.applied) {
+        panels.push(Panel {
+            label: "camera shift [px]",
+            values: &shift,
+            log_y: false,
+        });
+    }
     if let Some(s) = strip {
         panels.push(Panel {
             label: "β [rad]",
@@ -821,7 +834,8 @@ fn near_top_rim_text(plan: &ExperimentPlan) -> String {
             format!(
                 "{:.2} ± {:.2} px from {} frames{} in which the disk leans towards \
                  the camera (the face up to {:.1} px tall there); the rest frames, \
-                 which saw no face, took the far top rim, {:.2} px",
+                 which saw no face or one under {:.0} px tall above a sharp edge, \
+                 read {:.2} px",
                 l.reading.z_t,
                 l.reading.se,
                 l.reading.frames,
@@ -831,6 +845,7 @@ fn near_top_rim_text(plan: &ExperimentPlan) -> String {
                     ""
                 },
                 l.reading.tallest_face_px,
+                crate::vision::THIN_AT_REST_PX,
                 l.rest_z_t
             )
         },

@@ -353,10 +353,9 @@ pub fn calibrate_at_rest(
             (given.apply(d), Some((d, face)))
         }
     };
-    // A z_t the config gives is read, by the user.
     let top_face = match detected {
         Some((_, face)) if !given_flags[2] => face,
-        _ => TopFace::Read,
+        _ => TopFace::Given,
     };
     calibration.validate(reference.width, reference.height)?;
     // A light plate's rim is told from its shadow by a level of its own.

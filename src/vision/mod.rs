@@ -63,7 +63,7 @@ pub use calibration::{
 };
 pub use error::VisionError;
 pub use gap::{GapGauge, GapSample};
-pub use leaning_face::{LeanGauge, LeaningTopRim, near_top_rim_leaning};
+pub use leaning_face::{LeanGauge, LeaningTopRim, THIN_AT_REST_PX, near_top_rim_leaning};
 pub use mirror_edge::{
     EdgeTemplate, MirrorEdgeModel, SHARP_RIM_PX, remeasure as remeasure_dark_rim,
 };

@@ -21,10 +21,10 @@
 //!    and the fit's rim replaces it.
 //!
 //! When none sees a face the silhouette's top (the far top rim) stands for z_t
-//! ([`TopFace::Unseen`]). Such a face, and a thin one above a sharp edge
-//! ([`TopFace::Thin`]), is read again, in the frames in which the rolling disk
-//! leans towards the camera and shows it several pixels tall
-//! ([`super::leaning_face`]), and `analyse` takes that reading.
+//! ([`TopFace::Unseen`]). A face under [`super::leaning_face::THIN_AT_REST_PX`] is
+//! read again, in the frames in which the rolling disk leans towards the camera
+//! and shows it several pixels tall ([`super::leaning_face`]), and `analyse` takes
+//! that reading. [`TopFace`] records which reading the rest frame took.
 
 use std::ops::RangeInclusive;
 
@@ -43,21 +43,25 @@ use crate::numeric::{mad_sigma, median, upper_median};
 /// 72 px tall.
 const ACROSS_SPAN: f64 = 0.4;
 
-/// How well a rest frame saw the top face: its near rim read, read within the
-/// blur, or not seen (the silhouette's top, the far top rim, standing in).
+/// How a rest frame saw the top face: its near rim read between plateaus, ended
+/// by a rounded rim's band, read within the blur, or not seen (the silhouette's
+/// top, the far top rim, standing in).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum TopFace {
-    /// Read: between the plateaus either side of the near rim, or where the band
-    /// of a rounded rim ends the thin face's fit.
-    Read,
+    /// Read between the plateaus either side of the near rim.
+    Plateaus,
+    /// A face thinner than the plateaus reach, ended by the band of a rounded rim
+    /// below it: the thin face's fit places its end by the band's.
+    Banded,
     /// A face thinner than the plateaus reach above a sharp edge: the thin face's
-    /// fit ends it within about σ of the blur, and the frames in which the disk
-    /// leans towards the camera, showing it taller, read it better.
+    /// fit ends it within about σ of the blur.
     Thin,
-    /// Not seen: z_t is the far top rim, for the leaning frames to read again.
+    /// Not seen: z_t is the far top rim.
     #[default]
     Unseen,
+    /// Not read: the config gives z_t.
+    Given,
 }
 
 /// The face's place on the centre band, as the calibration found it (frame rows
@@ -412,9 +416,11 @@ fn near_top_rim_on_profile(
     match plateaus {
         Some(edge) => thin()
             .filter(|face| face.band_ends_at(p, edge))
-            .map_or((edge, TopFace::Read), |face| (face.near, TopFace::Read)),
+            .map_or((edge, TopFace::Plateaus), |face| {
+                (face.near, TopFace::Banded)
+            }),
         None => match thin() {
-            Some(face) if face.band > 0.0 => (face.near, TopFace::Read),
+            Some(face) if face.band > 0.0 => (face.near, TopFace::Banded),
             Some(face) if face.resolved => (face.near, TopFace::Thin),
             _ => (centre.far, TopFace::Unseen),
         },
@@ -674,14 +680,14 @@ mod tests {
         );
         let (z_t, face) = near_top_rim_on_profile(&p, &centre_band(far, 135.0), None, true);
         assert!((z_t - near).abs() < 0.4, "rim at {near}, read {z_t}");
-        assert_eq!(face, TopFace::Read);
+        assert_eq!(face, TopFace::Banded);
     }
 
     /// Above a sharp edge, blurred by σ = 0.8 px: a face 0.3 px tall shows nothing
     /// to read, so the far rim stands in (`Unseen`); a face 2.5 px tall is fitted
-    /// and ended within σ (`Thin`). Both are left for the leaning frames to read.
+    /// and ended within σ (`Thin`).
     #[test]
-    fn a_thin_face_above_a_sharp_edge_is_left_to_the_leaning_frames() {
+    fn a_thin_face_above_a_sharp_edge_is_read_within_the_blur() {
         let far = 40.7;
         let p = profile(far, far + 0.3, 0.0, [25.0, 200.0, 160.0, 160.0]);
         let (z_t, face) = near_top_rim_on_profile(&p, &centre_band(far, 135.0), None, true);
@@ -710,7 +716,7 @@ mod tests {
             let p = profile(far, split, side - split, levels);
             let (z_t, face) = near_top_rim_on_profile(&p, &centre_band(far, contrast), None, true);
             assert!((z_t - rim).abs() < 0.3, "rim at {rim}, read {z_t}");
-            assert_eq!(face, TopFace::Read);
+            assert_eq!(face, TopFace::Plateaus);
         }
     }
 
