@@ -22,7 +22,9 @@
 //! with a gain a and an offset b for flicker and exposure: d first on whole rows
 //! (least squares over ±[`MAX_SHIFT_PX`]), then by Gauss–Newton on R interpolated
 //! (cubic), and once more without the rows whose misfit exceeds
-//! [`OUTLIER_SIGMAS`] robust σ (a moving shadow, a passing reflection). The shift
+//! [`OUTLIER_SIGMAS`] robust σ (a moving shadow, a passing reflection). A second
+//! pass weights each row by the inverse of its misfit's variance over the clip,
+//! so rows whose content changes as the disk moves count less. The shift
 //! at the centre line is interpolated between the two strips' centres, so a roll
 //! of the camera is followed too; with one strip, it is that strip's.
 //!
@@ -31,6 +33,10 @@
 //! error. The heights are corrected only when the camera's motion stands out of
 //! that error ([`SIGNIFICANT_MOTION`]): a still camera's registration is error
 //! alone, and a featureless scene (a uniform backdrop and plate) gives no shift.
+//!
+//! On lossless frames the shift follows a render's truth within 0.02 px a frame;
+//! on H.264 of a shaking picture within 0.2 px, as the coder moves the still
+//! background by its own motion vectors (docs/limits.md).
 
 use std::ops::Range;
 
