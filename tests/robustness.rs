@@ -949,7 +949,8 @@ fn a_vibrating_tripod_is_registered_to_the_scene() {
             Some((f.camera_shift_px?, frame.camera_shake.as_ref()?.dy_px))
         })
         .collect();
-    let correlation = correlation(&pairs);
+    let line = StraightLine::through(&pairs);
+    let correlation = line.slope.signum() * line.r_squared.sqrt();
     assert!(
         pairs.len() > 100 && correlation > 0.85,
         "{} frames, correlation {correlation:.3}",
@@ -968,22 +969,6 @@ fn a_vibrating_tripod_is_registered_to_the_scene() {
         "n {} outside {lo:.4}…{hi:.4}",
         scene.n
     );
-}
-
-/// Pearson's correlation of the pairs (x, y).
-fn correlation(pairs: &[(f64, f64)]) -> f64 {
-    let n = pairs.len() as f64;
-    let (mx, my) = pairs
-        .iter()
-        .fold((0.0, 0.0), |(a, b), &(x, y)| (a + x / n, b + y / n));
-    let (sxy, sxx, syy) = pairs.iter().fold((0.0, 0.0, 0.0), |(a, b, c), &(x, y)| {
-        (
-            a + (x - mx) * (y - my),
-            b + (x - mx).powi(2),
-            c + (y - my).powi(2),
-        )
-    });
-    sxy / (sxx * syy).sqrt()
 }
 
 /// The gate's draw has no camera shake (its scenes and verdicts are as they were

@@ -34,15 +34,11 @@
 //! the frames, the disk leaning away or the face lit like the side, are left out,
 //! and so are B pictures when enough others count ([`near_top_rim_leaning`]).
 //! `analyse` reads z_t so only when the rest frame's face is under
-//! [`THIN_AT_REST_PX`]: a face the rest frame resolves is read there, still. Even a
+//! [`THIN_AT_REST_PX`]: a face the rest frame resolves is read there, still. A
 //! face the rest frame ends by a rounded rim's band (`TopFace::Banded`) is read
-//! again: on footage-open-2 the rest frames read such faces closer than the
-//! leaning ones, but on a sharp-rimmed light two-view render the "band" was the
-//! face's own shading and the rest frame read z_t 4.3 px off, which the leaning
-//! frames put right (`tests/robustness.rs`, light two-view 1). On footage-open-2's rounded rims the rest
-//! frames read closer than the leaning ones; on a sharp rim's 0.9 px face under a
-//! 1 px blur, coded at crf 28, the rest frame reads 0.47 px low and the leaning
-//! frames 0.14 px high.
+//! again too: from the rest profile alone such a band cannot be told from the
+//! face's own shading, and where it is shading the rest frame's z_t is pixels off
+//! while the leaning frames are not.
 
 use std::ops::Range;
 

@@ -63,9 +63,9 @@ const OUTLIER_SIGMAS: f64 = 4.0;
 /// blurred edge misses by about this much, which is no sign of a moving scene.
 const MIN_MISFIT_SIGMA: f64 = 1.0;
 /// The heights are corrected only when the shift's RMS exceeds its error σ this
-/// many times: a still camera's registration is its error alone, which, kept
-/// from frame to frame by the codec, would move n (+0.01 on footage-open-2's
-/// s01, σ 0.07 px).
+/// many times: a still camera's registration is its error alone, and that error,
+/// kept from frame to frame by the codec, is slow enough to move the peaks'
+/// heights together and with them n.
 pub const SIGNIFICANT_MOTION: f64 = 3.0;
 /// With one strip, σ is the fit's own standard error times this: on the open
 /// footage, with two strips to tell, the shift's error is 3–4 times the one the
