@@ -75,7 +75,7 @@ pub struct PrecessionSample {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PeakSeries {
     /// Analysis window (start, end), halt at t = 0 \[s\]: the `window_s` up to the halt's
-    /// last frame of motion.
+    /// last frame of motion, and a quarter turn before it ([`find_peaks`]).
     pub window: (f64, f64),
     /// Peaks in the window, in time order.
     pub peaks: Vec<Peak>,
@@ -90,7 +90,9 @@ pub struct PeakSeries {
 /// Finds the peaks of z_rim in the window of [`SignalConfig::window_s`] seconds
 /// that ends at the halt's last frame of motion (t_φ, unless [`SignalConfig::halt_at`]
 /// places the halt elsewhere: the window stays where the motion was seen, as the
-/// energy fits' window ends at their last sample), interpolates them between frames,
+/// energy fits' window ends at their last sample), reaching back a quarter turn
+/// further ([`window_margin`]; the energy fits take their own `window_s` from their
+/// last sample), interpolates them between frames,
 /// and derives φ at each peak (eq. 3.9) and ψ, ψ̇ (eq. 3.11 and central differences).
 ///
 /// Peaks are local maxima (a plateau counts once, at its middle) of z_rim − rest
@@ -119,8 +121,12 @@ pub fn find_peaks(
     super::check_series(t, z_rim, "z_rim")?;
     config.validate()?;
     let seen = halt.last_motion_seen();
-    let window = (seen - config.window_s, seen);
-    let (peaks, troughs) = extrema(t, z_rim, halt, model, config, window.0);
+    let nominal = (seen - config.window_s, seen);
+    let (mut peaks, mut troughs) = extrema(t, z_rim, halt, model, config, nominal.0);
+    let window = (nominal.0 - window_margin(&peaks), seen);
+    if window.0 < nominal.0 {
+        (peaks, troughs) = extrema(t, z_rim, halt, model, config, window.0);
+    }
     if peaks.len() < 3 {
         return Err(SignalError::TooFewPeaks {
             found: peaks.len(),
@@ -143,6 +149,22 @@ pub fn find_peaks(
         peaks,
         troughs,
     })
+}
+
+/// Turns at the window's start whose quarter reaches the window back ([`find_peaks`]).
+const WINDOW_MARGIN_TURNS: f64 = 0.25;
+
+/// How far the window reaches back before its nominal start \[s\]: a quarter of the
+/// turn there (the interval between the first two peaks found from the nominal start),
+/// 0 with fewer than two. The window ends at the last frame of motion seen, which the
+/// codec or the sampling can put a frame or two after the true halt; the nominal start
+/// moves with it, and a crest within that of the start would be counted or not by
+/// chance. A quarter turn keeps such a crest, and reaches no turn beyond it.
+fn window_margin(peaks: &[Peak]) -> f64 {
+    match peaks {
+        [first, second, ..] => WINDOW_MARGIN_TURNS * (second.t - first.t),
+        _ => 0.0,
+    }
 }
 
 /// ψ advanced by `step` per turn between the sorted `times`, zero at the last, with
