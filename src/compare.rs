@@ -22,6 +22,11 @@
 //! * **Time.** The experiment's axis has the halt t_φ at 0; the simulation starts at
 //!   the experiment's t = −lead, so model time τ = t + lead, and a model that halts at
 //!   the measured halt ends at τ = lead (the thesis: eq. 4.43 is 0.5 s before the halt).
+//! * **Lead.** The initial state must lie where the footage measured the motion: no
+//!   earlier than half a turn before the first peak. Without `--lead`, a 0.5 s that
+//!   reaches further back gives way to the first peak's lead, with a warning naming
+//!   it; a `--lead` given that reaches further back is refused, naming the longest
+//!   that fits.
 //! * **Signs.** One side view gives |ψ̇| only (the signal stage reports ψ̇ > 0). We use
 //!   the sense of eq. (4.43): ψ̇ < 0, θ̇ > 0. The strip's β̇ is taken in the same sense
 //!   (β̇ → ψ̇ at the discontinuity set, §4.7.1, so β̇ < 0 near the halt); if the plan view
@@ -164,10 +169,10 @@ pub struct CompareOptions {
     pub method: EtaMethod,
     /// Time of the initial state before the halt \[s\].
     pub lead_s: f64,
-    /// When the state `lead_s` before the halt lies before the first measured peak,
-    /// start from the earliest measured state instead, with a warning (the default
-    /// lead's behaviour: the fit window can be shorter than eq. 4.43's 0.5 s); else
-    /// such a lead is refused.
+    /// When the state `lead_s` before the halt lies before the measurement, start
+    /// from the earliest measured state instead, with a warning (the default lead's
+    /// behaviour: the fit window can be shorter than eq. 4.43's 0.5 s); else such a
+    /// lead is refused, naming the longest that fits.
     pub lead_falls_back: bool,
     /// Exponent p of augmented contour friction (start value of the fit).
     pub augmented_exponent: f64,
@@ -435,31 +440,74 @@ fn local_value(points: &[(f64, f64)], t0: f64) -> Option<(f64, usize)> {
     }
 }
 
-/// `options` with a lead whose initial state the measurement reaches: the given one,
-/// or, when it lies before the first measured peak and `lead_falls_back`, the first
-/// peak's (the earliest measured state), with a warning that says so.
+/// `options` with a lead whose initial state the measurement reaches (module docs:
+/// the lead). A lead that reaches further back gives way, when `lead_falls_back`,
+/// to the first peak's, the earliest measured state, with a warning naming the lead
+/// used: eq. 4.43's 0.5 s is a convention, which a clip whose measured motion is
+/// shorter should not fail on. A lead the user chose is refused instead: starting
+/// elsewhere would compare another state than the one asked for.
+///
+/// # Errors
+/// [`CompareError::Options`] for a lead out of reach without `lead_falls_back`,
+/// naming the longest lead that fits.
 fn lead_that_fits(
     experiment: &Experiment,
+    dir: &Path,
     options: &CompareOptions,
     warnings: &mut Vec<String>,
-) -> CompareOptions {
+) -> Result<CompareOptions, CompareError> {
     let peaks = &experiment.series.peaks;
-    let Some(first) = peaks.peaks.first().map(|p| -p.t) else {
-        return *options;
+    // Without peaks there is no state to start from: estimate_initial_state says so.
+    let (Some(first), Some(longest)) = (peaks.peaks.first(), longest_lead(peaks)) else {
+        return Ok(*options);
     };
-    if !options.lead_falls_back || options.lead_s <= first + half_turn_before_first(peaks) {
-        return *options;
+    if options.lead_s <= longest {
+        return Ok(*options);
     }
+    if !options.lead_falls_back {
+        return Err(CompareError::Options {
+            dir: dir.to_path_buf(),
+            reason: lead_out_of_reach(options.lead_s, peaks),
+        });
+    }
+    let lead_s = -first.t;
     warnings.push(format!(
-        "the state {} s before the halt lies before the first measured peak: the \
-         comparison starts from the earliest measured state, {first:.4} s before the halt \
-         (give --lead to choose another)",
-        options.lead_s
+        "the state {} s before the halt lies before the measurement (first peak at t = \
+         {:.4} s): the comparison starts from the earliest measured state, the first peak, \
+         with a lead of {lead_s:.4} s (--lead chooses another, up to {:.3} s)",
+        options.lead_s,
+        first.t,
+        floor_ms(longest)
     ));
-    CompareOptions {
-        lead_s: first,
-        ..*options
-    }
+    Ok(CompareOptions { lead_s, ..*options })
+}
+
+/// The longest lead whose initial state the measurement reaches \[s\]: half a turn
+/// before the first peak ([`half_turn_before_first`]); `None` without peaks.
+fn longest_lead(peaks: &crate::signal::PeakSeries) -> Option<f64> {
+    let first = peaks.peaks.first()?;
+    Some(-first.t + half_turn_before_first(peaks))
+}
+
+/// Why a lead of `lead_s` cannot start the comparison, naming the longest lead that
+/// can, rounded down to the millisecond so that the value named is itself accepted.
+fn lead_out_of_reach(lead_s: f64, peaks: &crate::signal::PeakSeries) -> String {
+    let (Some(first), Some(longest)) = (peaks.peaks.first(), longest_lead(peaks)) else {
+        return "no peak was measured: there is no state to start the model from".into();
+    };
+    format!(
+        "the initial state {lead_s} s before the halt lies before the measurement (first \
+         peak at t = {:.4} s): the longest lead that fits is {:.3} s; give --lead {:.3} or \
+         shorter",
+        first.t,
+        floor_ms(longest),
+        floor_ms(longest)
+    )
+}
+
+/// `s` rounded down to the millisecond.
+fn floor_ms(s: f64) -> f64 {
+    (s * 1e3).floor() / 1e3
 }
 
 /// Half a turn at the first peak's precession rate \[s\] (0 without one): the peaks
@@ -479,7 +527,8 @@ fn half_turn_before_first(peaks: &crate::signal::PeakSeries) -> f64 {
 /// turn); θ̇ from eq. (3.22) with the strip's β̇, or eq. (3.7) without a strip.
 ///
 /// # Errors
-/// [`CompareError::Data`] when the measured series do not reach back to −lead.
+/// [`CompareError::Data`] when the measured series do not reach back to −lead (half a
+/// turn before the first peak), naming the longest lead that fits.
 pub fn estimate_initial_state(
     experiment: &Experiment,
     dir: &Path,
@@ -491,12 +540,8 @@ pub fn estimate_initial_state(
     };
     let series = &experiment.series;
     let t0 = -lead_s;
-    let first = series.peaks.peaks.first().map_or(f64::INFINITY, |p| p.t);
-    if t0 < first - half_turn_before_first(&series.peaks) {
-        return Err(data(format!(
-            "the initial state {lead_s} s before the halt lies before the first measured \
-             peak (t = {first:.4} s); give a shorter --lead"
-        )));
+    if longest_lead(&series.peaks).is_none_or(|longest| lead_s > longest) {
+        return Err(data(lead_out_of_reach(lead_s, &series.peaks)));
     }
     let states: Vec<&crate::signal::FrameState> = series.states.iter().collect();
     let state_phi: Vec<(f64, f64)> = states.iter().map(|s| (s.t, s.phi)).collect();
@@ -1049,7 +1094,8 @@ fn nelder_mead_2d(
 /// in errors and in the result.
 ///
 /// # Errors
-/// Missing data, a failed simulation or tuning, or a fit with no finite misfit.
+/// Missing data, a lead out of reach that may not fall back ([`lead_that_fits`]), a
+/// failed simulation or tuning, or a fit with no finite misfit.
 pub fn compare(
     experiment: &Experiment,
     dir: &Path,
@@ -1057,7 +1103,7 @@ pub fn compare(
 ) -> Result<Comparison, CompareError> {
     check_options(experiment, dir, options)?;
     let mut warnings = Vec::new();
-    let options = &lead_that_fits(experiment, options, &mut warnings);
+    let options = &lead_that_fits(experiment, dir, options, &mut warnings)?;
     let lead = options.lead_s;
     let initial = estimate_initial_state(experiment, dir, lead)?;
     let measured = measured_window(experiment, dir, lead, &mut warnings)?;

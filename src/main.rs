@@ -276,7 +276,9 @@ struct CompareArgs {
     #[arg(long)]
     all_models: bool,
     /// Time of the initial state before the halt [s] (default 0.5, eq. 4.43; when the
-    /// measurement does not reach back that far, the earliest measured state).
+    /// measurement does not reach back that far, the earliest measured state, with a
+    /// warning naming the lead used). A value given that the measurement does not
+    /// reach is refused, naming the longest lead that fits.
     #[arg(long)]
     lead: Option<f64>,
     /// Exponent p of augmented contour friction (start value with --fit).

@@ -274,3 +274,55 @@ fn closed_loop(setup: &Setup) {
     assert_eq!(comparison.residual.end_reason, EndReason::DiscontinuitySet);
     assert!(comparison.residual.psi_dot.abs() < 1.0);
 }
+
+/// The lead of the initial state (issue 72 §6). The two-view fixture's peaks begin
+/// within 0.5 s of the halt. Without a lead given (`lead_falls_back`), the comparison
+/// starts from the earliest measured state, the first peak, and its warning names the
+/// lead used; the same 0.5 s given is refused, naming the longest lead that fits, and
+/// the lead named is accepted.
+#[test]
+fn compare_default_lead_falls_back_to_the_first_peak_and_a_given_one_is_refused() {
+    let experiment = crate::util::analysed("two-view-n045.mp4", "fps = 480\ntwo_view = true\n");
+    let dir = Path::new("two-view-n045");
+    let first_lead = -experiment.series.peaks.peaks[0].t;
+    assert!(
+        first_lead < compare::DEFAULT_LEAD_S,
+        "first peak {first_lead} s before"
+    );
+    let default = CompareOptions::new(ModelKind::AugmentedContour);
+
+    let c = compare::compare(experiment, dir, &default).expect("the default lead");
+    assert_eq!(c.options.lead_s, first_lead);
+    let said = format!("earliest measured state, the first peak, with a lead of {first_lead:.4} s");
+    assert!(
+        c.warnings.iter().any(|w| w.contains(&said)),
+        "{:?}",
+        c.warnings
+    );
+
+    let given = CompareOptions {
+        lead_falls_back: false,
+        ..default
+    };
+    let refused = compare::compare(experiment, dir, &given)
+        .expect_err("a given lead out of reach")
+        .to_string();
+    let longest: f64 = refused
+        .split_once("the longest lead that fits is ")
+        .and_then(|(_, rest)| rest.split_once(" s")?.0.parse().ok())
+        .unwrap_or_else(|| panic!("no longest lead named: {refused}"));
+    assert!(
+        (first_lead..compare::DEFAULT_LEAD_S).contains(&longest),
+        "{refused}"
+    );
+    let longest = CompareOptions {
+        lead_s: longest,
+        ..given
+    };
+    let c = compare::compare(experiment, dir, &longest).expect("the longest lead named");
+    assert!(
+        c.warnings
+            .iter()
+            .all(|w| !w.contains("earliest measured state"))
+    );
+}

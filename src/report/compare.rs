@@ -347,7 +347,7 @@ fn comparison_body(
         p class="note" {
             "Experiment " code { (c.experiment.display()) } " (clip " code { (c.clip.display()) }
             "), eulerdisk " (c.eulerdisk_version) ". Model: " (c.equation) ", η "
-            (method_name(c.options.method)) ". Initial state " (c.options.lead_s)
+            (method_name(c.options.method)) ". Initial state " (format!("{:.4}", c.options.lead_s))
             " s before the measured halt (eq. 4.43 convention: ψ̇ < 0, θ̇ > 0; the side view gives |ψ̇|)."
         }
         @if !c.warnings.is_empty() {
