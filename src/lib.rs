@@ -29,6 +29,7 @@ pub mod demo;
 pub mod energy;
 pub mod footage;
 pub mod model;
+pub mod motion_fit;
 pub mod numeric;
 pub mod output;
 pub mod overlay;
@@ -45,7 +46,7 @@ pub mod turn_timing;
 pub mod vision;
 
 /// The top-level modules, bottom layer first: each may name only those before it.
-pub const LAYERS: [&str; 21] = [
+pub const LAYERS: [&str; 22] = [
     "numeric",
     "rng",
     "output",
@@ -56,6 +57,7 @@ pub const LAYERS: [&str; 21] = [
     "signal",
     "vision",
     "turn_timing",
+    "motion_fit",
     "precession",
     "stats",
     "render",

@@ -38,6 +38,7 @@ pub(super) fn experiment(
         halt_placement,
         skips_in_window,
         precession,
+        motion,
         zero_px,
     } = fitted;
     let mut measured = span.measured;
@@ -68,6 +69,7 @@ pub(super) fn experiment(
         skips_in_window,
         precession,
         turn_timing: Some(fits.turns),
+        motion_fit: motion,
         halt_placement,
         warnings,
         diagnostics,

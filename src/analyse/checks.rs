@@ -12,6 +12,7 @@ use super::{EnergyFit, HaltPlacement};
 use crate::config::ExperimentConfig;
 use crate::energy::HaltTime;
 use crate::model::params::DiskParams;
+use crate::motion_fit::{self, MotionFit};
 use crate::precession::{self, PrecessionCheck};
 use crate::signal::{self, StateSeries};
 use crate::turn_timing::TurnTimingFit;
@@ -25,6 +26,8 @@ pub(super) struct Fitted {
     pub(super) halt_placement: Option<HaltPlacement>,
     pub(super) skips_in_window: usize,
     pub(super) precession: Option<PrecessionCheck>,
+    /// The motion fitted to every frame of the window.
+    pub(super) motion: Option<MotionFit>,
     /// 1σ uncertainty of the zero of z_rim \[px\], carried into n's intervals.
     pub(super) zero_px: f64,
 }
@@ -60,6 +63,7 @@ pub(super) fn finish_fits(
         span.series.peaks.window,
         signal_config(plan.window_s, span.measured.metres_per_px).state_window_periods,
     );
+    let motion = motion(&span, params, &fits, plan.window_s);
     let warnings = &mut span.measured.warnings;
     warnings.extend(halt_sighting);
     warnings.extend(flagged_in_window(&skips));
@@ -74,8 +78,40 @@ pub(super) fn finish_fits(
         halt_placement,
         skips_in_window,
         precession,
+        motion,
         zero_px,
     }
+}
+
+/// The motion fitted to every frame of the window ([`crate::motion_fit`]), started
+/// from the turns' timing law and the peaks fit; reported beside the fits.
+fn motion(
+    span: &MeasuredSpan,
+    params: &DiskParams,
+    fits: &Fits,
+    window_s: f64,
+) -> Option<MotionFit> {
+    let timing = fits.turns.as_ref().ok()?;
+    let (t, z): (Vec<f64>, Vec<f64>) = (span.measured.frames.iter())
+        .map(|f| (f.t, f.z_rim_px.unwrap_or(f64::NAN)))
+        .unzip();
+    let peaks: Vec<(f64, f64)> = (span.series.peaks.peaks.iter())
+        .map(|p| (p.t, p.phi))
+        .collect();
+    let model = rim_model(&span.measured.scale, params);
+    let heights = motion_fit::Heights {
+        t: &t,
+        z_px: &z,
+        metres_per_px: span.measured.metres_per_px,
+    };
+    motion_fit::fit_motion(
+        &heights,
+        model.as_ref(),
+        timing,
+        &peaks,
+        fits.peaks.fit.n,
+        window_s,
+    )
 }
 
 /// 1σ uncertainty of the zero of z_rim \[px\]: the config's, else the motion's

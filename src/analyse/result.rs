@@ -267,6 +267,11 @@ pub struct Experiment {
     /// or why it could not be fitted; `None` in results written before it was recorded.
     #[serde(default)]
     pub turn_timing: Option<Result<TurnTimingFit, String>>,
+    /// The motion fitted to every frame of the window ([`crate::motion_fit`]): n and
+    /// the halt t0 from every height at once, for information; `None` when it could
+    /// not be fitted, and in results written before it was recorded.
+    #[serde(default)]
+    pub motion_fit: Option<crate::motion_fit::MotionFit>,
     /// Where t_φ was placed by the laws ([`law_halt`](super::halt::law_halt)); `None` when it is the last
     /// frame of motion seen (`halt = "measured"`, or the placement failed) and in
     /// results written before it was recorded.
