@@ -73,6 +73,52 @@ pub struct MotionFit {
     pub frames: usize,
     /// The model's crests in the window, in time order, halt at t = 0 \[s\].
     pub crests: Vec<f64>,
+    /// The crests after the last one the frames resolved that rise above the halt's
+    /// motion threshold ([`MotionFit::unresolved_crests`]); empty in results written
+    /// before they were recorded.
+    #[serde(default)]
+    pub unresolved_crests: Vec<PlacedCrest>,
+}
+
+/// A crest of z_rim the fitted motion places where the frames resolve none.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PlacedCrest {
+    /// Its time, halt at t = 0 \[s\].
+    pub t: f64,
+    /// φ there, Φ τ^n \[rad\].
+    pub phi: f64,
+    /// Its height above the zero, z_rim(φ, 0) \[m\].
+    pub z_m: f64,
+}
+
+impl MotionFit {
+    /// The model's crests after `after` and before t0 whose height at their top,
+    /// z_rim(Φ τ^n, 0) for the profile `model`, exceeds `threshold_m`: the motion the
+    /// halt detector takes for motion when it sees it. The last turns last a few frames
+    /// and end at the halt, so the frames can straddle a final crest or the codec can
+    /// shave it below the prominence the peaks need; where the motion fitted to every
+    /// frame puts one high enough to be seen, it is a crest of the motion. One lower
+    /// is not claimed, nor one after t0 within its error: its height falls to 0 there.
+    pub fn unresolved_crests(
+        &self,
+        after: f64,
+        model: &dyn RimModel,
+        threshold_m: f64,
+    ) -> Vec<PlacedCrest> {
+        self.crests
+            .iter()
+            .filter(|&&t| t > after && t < self.t0)
+            .map(|&t| {
+                let phi = self.phi_scale * (self.t0 - t).powf(self.n);
+                PlacedCrest {
+                    t,
+                    phi,
+                    z_m: model.z_rim(phi, 0.0),
+                }
+            })
+            .filter(|c| c.z_m > threshold_m)
+            .collect()
+    }
 }
 
 /// The parameters in the fit's own scale: p = (ln Φ, n, t0, ln c, q, ψ_end, z0).
@@ -216,6 +262,7 @@ pub fn fit_motion(
         residual_rms_px: (fit.ssr / times.len() as f64).sqrt(),
         frames: times.len(),
         crests: motion.crests(from),
+        unresolved_crests: Vec::new(),
     })
 }
 
@@ -321,6 +368,42 @@ mod tests {
             points: 50,
             residual_rms_s: 1e-4,
         }
+    }
+
+    /// The last crest, less than two frames before the halt, is placed after the one
+    /// before it when it rises above the threshold at its top, and not when it does
+    /// not; none is placed after the halt.
+    #[test]
+    fn a_final_crest_is_placed_only_above_the_threshold() {
+        let (t, z, truth) = clip(0.5, 4);
+        let crests = truth.crests(-0.5);
+        let (before, last) = (crests[crests.len() - 2], crests[crests.len() - 1]);
+        let model = ThesisRim { radius: 0.0381 };
+        let peaks: Vec<(f64, f64)> = crests
+            .iter()
+            .map(|&tk| (tk, truth.phi_scale * (truth.t0 - tk).powf(0.5)))
+            .collect();
+        let heights = Heights {
+            t: &t,
+            z_px: &z,
+            metres_per_px: METRES_PER_PX,
+        };
+        let fit =
+            fit_motion(&heights, &model, &timing_start(&truth), &peaks, 0.5, 0.5).expect("fit");
+        let top = model.z_rim(truth.phi_scale * (truth.t0 - last).powf(0.5), 0.0);
+        let placed = fit.unresolved_crests(before + 1e-3, &model, 0.5 * top);
+        assert_eq!(placed.len(), 1, "{placed:?}");
+        assert!((placed[0].t - last).abs() < 0.1 * FRAME);
+        assert!(
+            (placed[0].z_m / top - 1.0).abs() < 0.2,
+            "{} vs {top}",
+            placed[0].z_m
+        );
+        assert!(
+            fit.unresolved_crests(before + 1e-3, &model, 2.0 * top)
+                .is_empty()
+        );
+        assert!(fit.unresolved_crests(fit.t0, &model, 0.0).is_empty());
     }
 
     /// Started from a timing law 1.5 ms late and the peaks' tilt, the fit recovers n

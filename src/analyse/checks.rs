@@ -104,14 +104,37 @@ fn motion(
         z_px: &z,
         metres_per_px: span.measured.metres_per_px,
     };
-    motion_fit::fit_motion(
+    let fit = motion_fit::fit_motion(
         &heights,
         model.as_ref(),
         timing,
         &peaks,
         fits.peaks.fit.n,
         window_s,
-    )
+    )?;
+    let unresolved = fit.unresolved_crests(
+        last_crest_reach(&peaks),
+        model.as_ref(),
+        span.series.halt.threshold,
+    );
+    Some(MotionFit {
+        unresolved_crests: unresolved,
+        ..fit
+    })
+}
+
+/// Fraction of the last turn after the last crest found within which a crest the
+/// motion places is that one, not another.
+const SAME_CREST_TURNS: f64 = 0.25;
+
+/// The time after which a crest the motion places is not the last crest found: a
+/// quarter of the last turn after it \[s\].
+fn last_crest_reach(peaks: &[(f64, f64)]) -> f64 {
+    match peaks {
+        [.., (before, _), (last, _)] => last + SAME_CREST_TURNS * (last - before),
+        [(last, _)] => *last,
+        [] => f64::NEG_INFINITY,
+    }
 }
 
 /// 1σ uncertainty of the zero of z_rim \[px\]: the config's, else the motion's

@@ -56,6 +56,9 @@ struct PeakRow {
     psi_dot_eq_3_11_rad_s: Option<f64>,
     psi_dot_central_rad_s: Option<f64>,
     energy_eq_3_8_j: Option<f64>,
+    /// `frames` for a crest found in the heights, `motion fit` for one the motion
+    /// fitted to every frame places after the last of them.
+    source: &'static str,
 }
 
 #[derive(Serialize, Default)]
@@ -172,10 +175,7 @@ fn frame_rows(e: &Experiment) -> Vec<FrameRow> {
 /// The rows of `peaks.csv`: each peak's height, tilt and precession, and the energy
 /// eq. (3.8) fitted there.
 fn peak_rows(e: &Experiment) -> Vec<PeakRow> {
-    e.series
-        .peaks
-        .peaks
-        .iter()
+    let found = (e.series.peaks.peaks.iter())
         .zip(&e.series.peaks.precession)
         .map(|(p, q)| PeakRow {
             t_s: p.t,
@@ -191,8 +191,24 @@ fn peak_rows(e: &Experiment) -> Vec<PeakRow> {
                 .iter()
                 .find(|s| s.t == p.t)
                 .map(|s| s.energy),
-        })
-        .collect()
+            source: "frames",
+        });
+    let last_psi = e.series.peaks.precession.last().map_or(0.0, |q| q.psi);
+    let placed = (e.motion_fit.iter())
+        .flat_map(|m| &m.unresolved_crests)
+        .enumerate()
+        .map(|(k, c)| PeakRow {
+            t_s: c.t,
+            z_rim_m: c.z_m,
+            phi_rad: c.phi,
+            sigma_phi_rad: None,
+            psi_rad: last_psi + std::f64::consts::TAU * (k + 1) as f64,
+            psi_dot_eq_3_11_rad_s: None,
+            psi_dot_central_rad_s: None,
+            energy_eq_3_8_j: None,
+            source: "motion fit",
+        });
+    found.chain(placed).collect()
 }
 
 /// The rows of `states.csv`: the per-frame states of the local fits.
