@@ -416,6 +416,9 @@ struct Measured {
     /// `turn_timing.Ok`: n from the turns' timing alone and its 95 % interval
     /// (eulerdisk::turn_timing).
     turn_timing: Option<(f64, (f64, f64))>,
+    /// `motion_fit`: n and t0 (on the halt's clock) of the motion fitted to every
+    /// frame (eulerdisk::motion_fit).
+    motion_fit: Option<(f64, f64)>,
 }
 
 fn read_csv(path: &Path) -> Result<Vec<BTreeMap<String, String>>, String> {
@@ -496,6 +499,10 @@ impl Measured {
                     _ => None,
                 }
             },
+            motion_fit: {
+                let m = &result["motion_fit"];
+                m["n"].as_f64().zip(m["t0"].as_f64())
+            },
             precession_agreement: {
                 let p = &result["precession"];
                 match (
@@ -571,6 +578,9 @@ struct Score {
     precession_err: Option<f64>,
     /// n from the turns' timing alone against the truth (information).
     n_turn_timing: Option<NScore>,
+    /// The motion fitted to every frame: its n − the truth's, and its t0's error \[ms\]
+    /// (information).
+    motion_fit_err: Option<(f64, f64)>,
     /// Targets missed, by short name (see the legend).
     failed: Vec<&'static str>,
 }
@@ -641,6 +651,9 @@ fn score(clip: &str, truth: &Truth, m: Option<&Measured>, error: Option<String>)
     };
     s.precession_err = m.precession_agreement.map(|a| a - 1.0);
     s.n_turn_timing = score_n(m.turn_timing, truth);
+    s.motion_fit_err = m
+        .motion_fit
+        .map(|(n, t0)| (n - truth.n, (cap(m.t_phi + t0) - truth.t0) * 1e3));
     s.peaks = Some(pm);
     // Two-view: t_β − t_φ within 2 frames.
     if let Some(truth_gap) = truth.t_beta_minus_t_phi {
@@ -777,7 +790,7 @@ fn row(s: &Score) -> String {
 const HEADER: &str = "| clip | measured | n peaks fit (Δ, CI) | n per-frame fit (Δ, CI) | t0 err ms | tφ err frames | z_rim RMS px | peaks found/true, spurious | φ med err % | tβ−tφ err frames | drops flagged/true, false | verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|";
 
 /// The information table: what the targets rest on, not scored.
-const INFO_HEADER: &str = "| clip | heights' offset a px | heights' gain b % | ε at the near rim, err ° | φ at the peaks, signed median err % | precession check: φ heights/precession − 1, % | codec smoothing α P / B, frame² | n from the turns' timing (Δ, CI) |\n|---|---|---|---|---|---|---|---|";
+const INFO_HEADER: &str = "| clip | heights' offset a px | heights' gain b % | ε at the near rim, err ° | φ at the peaks, signed median err % | precession check: φ heights/precession − 1, % | codec smoothing α P / B, frame² | n from the turns' timing (Δ, CI) | motion fit: n Δ, t0 err ms |\n|---|---|---|---|---|---|---|---|---|";
 
 fn info_row(s: &Score) -> String {
     let show = |x: Option<f64>, scale: f64, digits: usize| {
@@ -791,8 +804,11 @@ fn info_row(s: &Score) -> String {
             if x.covers { "covers" } else { "misses" }
         )
     });
+    let motion = s
+        .motion_fit_err
+        .map_or("–".into(), |(dn, dt0)| format!("{dn:+.3}, {dt0:+.2}"));
     format!(
-        "| {} | {} | {} | {} | {} | {} | {} / {} | {timing} |",
+        "| {} | {} | {} | {} | {} | {} | {} / {} | {timing} | {motion} |",
         s.clip,
         show(s.height_offset_px, 1.0, 3),
         show(s.height_gain, 100.0, 2),
@@ -831,7 +847,9 @@ frame, e = a + α z″, one α for the P and one for the B pictures (frames.csv 
 temporal low-pass of variance 2α frame² that reads the peaks low and the troughs high. And n from
 the turns' timing alone (result.json turn_timing: the times of the peaks and troughs at their
 counted ψ, no height, scale or zero), with its 95 % interval; the truth's eq. 2.29 as printed
-reads it about 0.005 high (0.0047–0.0056 fitted to the true peaks' times).";
+reads it about 0.005 high (0.0047–0.0056 fitted to the true peaks' times). Last, the motion
+fitted to every frame of the window (result.json motion_fit): its n against the truth's and its t0
+(the end of the motion) against the truth's t0, on the capture clock.";
 
 const LEGEND: &str = "\
 Targets (issue 12 §5), per clip, no config: measured; n within ±0.02 of the truth (±0.03 when the
@@ -981,7 +999,7 @@ fn run() -> Result<bool, String> {
         println!("{}", info_row(s));
     }
     println!(
-        "| over the clips | offset {} px | | ε err {} ° | | {} % | | Δ {}, {} of {} cover |\n\n{INFO_LEGEND}",
+        "| over the clips | offset {} px | | ε err {} ° | | {} % | | Δ {}, {} of {} cover | Δn {}, t0 {} ms |\n\n{INFO_LEGEND}",
         rms_and_largest(scores.iter().map(|s| s.height_offset_px)),
         rms_and_largest(scores.iter().map(|s| s.elevation_err_deg)),
         rms_and_largest(scores.iter().map(|s| s.precession_err.map(|x| 100.0 * x))),
@@ -994,7 +1012,9 @@ fn run() -> Result<bool, String> {
             .iter()
             .filter(|s| s.n_turn_timing.as_ref().is_some_and(|x| x.covers))
             .count(),
-        scores.iter().filter(|s| s.n_turn_timing.is_some()).count()
+        scores.iter().filter(|s| s.n_turn_timing.is_some()).count(),
+        rms_and_largest(scores.iter().map(|s| s.motion_fit_err.map(|e| e.0))),
+        rms_and_largest(scores.iter().map(|s| s.motion_fit_err.map(|e| e.1))),
     );
     let measured = scores.iter().filter(|s| s.measured).count();
     let passed = scores.iter().filter(|s| s.failed.is_empty()).count();

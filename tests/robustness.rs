@@ -500,6 +500,28 @@ fn error_budget(errors: &[SceneErrors]) -> String {
     )
 }
 
+/// Every crest the analysis reports, as (frame, φ): the peaks of the heights, and
+/// the crests the motion fitted to every frame places after them, at the frame
+/// nearest their time.
+fn crests(e: &Experiment) -> Vec<(usize, f64)> {
+    let nearest_frame = |t: f64| {
+        (0..e.frames.len())
+            .min_by(|&a, &b| {
+                (e.frames[a].t - t)
+                    .abs()
+                    .total_cmp(&(e.frames[b].t - t).abs())
+            })
+            .expect("frames")
+    };
+    let placed = (e.motion_fit.iter())
+        .flat_map(|m| &m.unresolved_crests)
+        .map(|c| (nearest_frame(c.t), c.phi));
+    (e.series.peaks.peaks.iter())
+        .map(|p| (p.index, p.phi))
+        .chain(placed)
+        .collect()
+}
+
 fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<&Experiment, &str>) -> Score {
     let mut failures = Vec::new();
     let e = match result {
@@ -633,9 +655,10 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<&Experiment, &st
             "z_rim RMS {rms:.3} px (≤ {Z_RIM_RMS_PX}), {missing} frames without an edge"
         ));
     }
-    // Peaks: matched by frame (±1) to the truth's local maxima.
+    // Peaks: matched by frame (±1) to the truth's local maxima; those of the heights
+    // and the crests the motion fit places after them (peaks.csv lists both).
     let peaks = true_peaks(truth);
-    let measured = &e.series.peaks.peaks;
+    let measured = crests(e);
     let near_true = |index: usize| {
         peaks
             .iter()
@@ -645,12 +668,12 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<&Experiment, &st
     let detectable: Vec<&TruePeak> = peaks.iter().filter(|p| p.z_px >= DETECTABLE_PX).collect();
     let found = detectable
         .iter()
-        .filter(|p| measured.iter().any(|m| m.index.abs_diff(p.index) <= 1))
+        .filter(|p| measured.iter().any(|m| m.0.abs_diff(p.index) <= 1))
         .count();
     let window_start = truth.halt_time - WINDOW_S;
     let spurious = measured
         .iter()
-        .filter(|m| e.frames[m.index].t_capture >= window_start && near_true(m.index).is_none())
+        .filter(|m| e.frames[m.0].t_capture >= window_start && near_true(m.0).is_none())
         .count();
     if found < detectable.len() || spurious > 0 {
         failures.push(format!(
@@ -662,7 +685,7 @@ fn score(scene: &SceneSpec, truth: &GroundTruth, result: Result<&Experiment, &st
     // signed error.
     let mut signed: Vec<f64> = measured
         .iter()
-        .filter_map(|m| near_true(m.index).map(|p| m.phi / p.phi - 1.0))
+        .filter_map(|m| near_true(m.0).map(|p| m.1 / p.phi - 1.0))
         .collect();
     let median = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);

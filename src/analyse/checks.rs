@@ -103,6 +103,7 @@ fn motion(
         t: &t,
         z_px: &z,
         metres_per_px: span.measured.metres_per_px,
+        frame_s: 1.0 / span.measured.fps.fps,
     };
     let fit = motion_fit::fit_motion(
         &heights,

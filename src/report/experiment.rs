@@ -25,6 +25,7 @@ use super::html::{page, png_figure, svg_figure, table, video_figure};
 use super::plot::{Panel, time_panels};
 use crate::analyse::{EnergyFit, Experiment, ExperimentPlan};
 use crate::energy::{self, SightingUse};
+use crate::motion_fit::MotionFit;
 use crate::output::{write_atomic, write_csv, write_json};
 use crate::overlay::{KeptFrames, OverlayIndex, OverlaySpec, write_measurement_overlays};
 use crate::precession;
@@ -452,6 +453,33 @@ fn turn_timing_sentence(
     }
 }
 
+/// The motion fitted to every frame beside the peaks fit (crate::motion_fit).
+fn motion_fit_sentence(m: &MotionFit, peaks: &energy::PowerLawFit) -> String {
+    let placed = match m.unresolved_crests.len() {
+        0 => String::new(),
+        k => format!(
+            " It places {k} crest(s) after the last peak found, above the motion threshold, \
+             which peaks.csv lists as its own."
+        ),
+    };
+    format!(
+        "Fitted to every height of the window at once (φ = Φ τ^n, the turns' timing law, \
+         the camera's profile and the codec's smoothing over time; no peak, threshold or \
+         halt rule enters it): n = {:.3} ({:+.3} from the energies at the peaks), the motion \
+         ending {:+.2} ms from t_φ (the peaks fit's t0: {:+.2} ms), the codec smoothing \
+         α = {:.3} frame²; the heights lie {:.3} px RMS about it over {} frames. Its \
+         standard errors take the frames as independent, too small for an interval: a \
+         check, not combined with the fits.{placed}",
+        m.n,
+        m.n - peaks.n,
+        1e3 * m.t0,
+        1e3 * peaks.t0,
+        m.codec_smoothing.unwrap_or(f64::NAN),
+        m.residual_rms_px,
+        m.frames,
+    )
+}
+
 /// Where t_φ lies: placed by the laws (`analyse::law_halt`), or the last frame of
 /// motion seen.
 fn halt_sentence(e: &Experiment) -> String {
@@ -613,6 +641,9 @@ fn power_law_section(e: &Experiment, energy_svg: &str, timing_svg: Option<&str>)
         }
         @if let Some(svg) = timing_svg {
             (svg_figure(svg, "The times of z_rim's peaks and troughs against the turns still to go (log–log), with the turns' timing law: its slope is q = 1/(1 − n/2)."))
+        }
+        @if let Some(motion) = &e.motion_fit {
+            p { (motion_fit_sentence(motion, &e.peaks_fit.fit)) }
         }
         @if let Some(spin) = e.full_state_fit.as_ref().and(carried_spin_energy(e)) {
             p { (format!("Eq. 3.6 keeps the spin the disk carries into the flat: with β̇ = {:.2} rad/s at t_φ, \
