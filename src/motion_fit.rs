@@ -198,7 +198,7 @@ impl Motion {
         model.z_rim(phi, chi) / metres_per_px + self.zero_px
     }
 
-    /// The crests (ψ ≡ 0 mod 2π) with t in [`from`, t0).
+    /// The crests (ψ ≡ 0 mod 2π) from `from` up to t0, in time order.
     fn crests(&self, from: f64) -> Vec<f64> {
         let mut crests = Vec::new();
         let mut k = (self.psi_end / TAU).floor();
@@ -240,6 +240,36 @@ pub struct Heights<'a> {
     pub frame_s: f64,
 }
 
+impl Heights<'_> {
+    /// The times and heights read from `from` to `to` \[s\].
+    fn between(&self, from: f64, to: f64) -> (Vec<f64>, Vec<f64>) {
+        (self.t.iter().zip(self.z_px))
+            .filter(|&(&x, z)| x >= from && x <= to && z.is_finite())
+            .map(|(&x, &z)| (x, z))
+            .unzip()
+    }
+}
+
+/// ∂r/∂p by central differences of `residuals` at `p`, steps [`STEPS`], into `jac`.
+fn central_differences(
+    residuals: &impl Fn(&[f64], &mut [f64]),
+    p: &[f64],
+    jac: &mut nalgebra::DMatrix<f64>,
+) {
+    let count = jac.nrows();
+    let (mut plus, mut minus) = (vec![0.0; count], vec![0.0; count]);
+    for (j, h) in STEPS.iter().enumerate().take(p.len()) {
+        let mut q = p.to_vec();
+        q[j] = p[j] + h;
+        residuals(&q, &mut plus);
+        q[j] = p[j] - h;
+        residuals(&q, &mut minus);
+        for i in 0..count {
+            jac[(i, j)] = (plus[i] - minus[i]) / (2.0 * h);
+        }
+    }
+}
+
 /// The motion fitted to the `heights` over the `window_s` before the timing law's end
 /// and [`REST_AFTER_S`] after it, with the camera's profile `model`. Started from the
 /// turns' timing law `timing` (t0, c, q, ψ_end) and the peaks' tilt `peaks` ((t, φ)
@@ -253,16 +283,10 @@ pub fn fit_motion(
     n0: f64,
     window_s: f64,
 ) -> Option<MotionFit> {
-    let (t, z_px, metres_per_px) = (heights.t, heights.z_px, heights.metres_per_px);
-    let frame_s = heights.frame_s;
+    let (metres_per_px, frame_s) = (heights.metres_per_px, heights.frame_s);
     let start = starting_motion(timing, peaks, n0)?;
-    let (from, to) = (start.t0 - window_s, start.t0 + REST_AFTER_S);
-    let (times, heights): (Vec<f64>, Vec<f64>) = t
-        .iter()
-        .zip(z_px)
-        .filter(|&(&x, z)| x >= from && x <= to && z.is_finite())
-        .map(|(&x, &z)| (x, z))
-        .unzip();
+    let from = start.t0 - window_s;
+    let (times, heights) = heights.between(from, start.t0 + REST_AFTER_S);
     if times.len() < MIN_FRAMES {
         return None;
     }
@@ -273,17 +297,7 @@ pub fn fit_motion(
         }
     };
     let jacobian = |p: &[f64], jac: &mut nalgebra::DMatrix<f64>| {
-        let (mut plus, mut minus) = (vec![0.0; times.len()], vec![0.0; times.len()]);
-        for (j, h) in STEPS.iter().enumerate().take(p.len()) {
-            let mut q = p.to_vec();
-            q[j] = p[j] + h;
-            residuals(&q, &mut plus);
-            q[j] = p[j] - h;
-            residuals(&q, &mut minus);
-            for i in 0..times.len() {
-                jac[(i, j)] = (plus[i] - minus[i]) / (2.0 * h);
-            }
-        }
+        central_differences(&residuals, p, jac);
     };
     // The motion first, then with the codec's smoothing from there: α and a steeper
     // decay of φ are told apart only near the motion's own optimum.
