@@ -462,19 +462,23 @@ fn motion_fit_sentence(m: &MotionFit, peaks: &energy::PowerLawFit) -> String {
              which peaks.csv lists as its own."
         ),
     };
+    let smoothing = m
+        .codec_smoothing
+        .map_or("the codec's smoothing not fitted".to_string(), |alpha| {
+            format!("the codec's smoothing α = {alpha:.3} frame²")
+        });
     format!(
         "Fitted to every height of the window at once (φ = Φ τ^n, the turns' timing law, \
          the camera's profile and the codec's smoothing over time; no peak, threshold or \
          halt rule enters it): n = {:.3} ({:+.3} from the energies at the peaks), the motion \
-         ending {:+.2} ms from t_φ (the peaks fit's t0: {:+.2} ms), the codec smoothing \
-         α = {:.3} frame²; the heights lie {:.3} px RMS about it over {} frames. Its \
+         ending {:+.2} ms from t_φ (the peaks fit's t0: {:+.2} ms), {smoothing}; the \
+         heights lie {:.3} px RMS about it over {} frames. Its \
          standard errors take the frames as independent, too small for an interval: a \
          check, not combined with the fits.{placed}",
         m.n,
         m.n - peaks.n,
         1e3 * m.t0,
         1e3 * peaks.t0,
-        m.codec_smoothing.unwrap_or(f64::NAN),
         m.residual_rms_px,
         m.frames,
     )

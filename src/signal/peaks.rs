@@ -151,7 +151,8 @@ pub fn find_peaks(
     })
 }
 
-/// Turns at the window's start whose quarter reaches the window back ([`find_peaks`]).
+/// The fraction of the turn at the window's start by which the window reaches back
+/// before its nominal start ([`window_margin`]).
 const WINDOW_MARGIN_TURNS: f64 = 0.25;
 
 /// How far the window reaches back before its nominal start \[s\]: a quarter of the
