@@ -6,7 +6,7 @@
 //! | `result.json` | everything: plan (provenance), per-frame and per-peak series, fits |
 //! | `plan.json` | the resolved plan alone: fps and its source, γ, calibration, window |
 //! | `frames.csv` | per frame: t, z_rim [px, m], β raw/unwrapped/smoothed, β̇ |
-//! | `peaks.csv` | per peak: t, z, φ (eq. 3.9), ψ, ψ̇ (eq. 3.11 and central), E (eq. 3.8) |
+//! | `peaks.csv` | per peak: t, z, φ (eq. 3.9), ψ, ψ̇ (eq. 3.11 and central), E (eq. 3.8); then the crests the motion fit places after them (`source`) |
 //! | `states.csv` | per frame in the window: φ, ψ, ψ̇ with standard errors, E |
 //! | `flags.csv` | flagged frames (skips, jumps) with reasons |
 //! | `series.svg/.png`, `states.svg/.png`, `energy.svg`, `timing.svg` | plots |
@@ -174,7 +174,9 @@ fn frame_rows(e: &Experiment) -> Vec<FrameRow> {
 }
 
 /// The rows of `peaks.csv`: each peak's height, tilt and precession, and the energy
-/// eq. (3.8) fitted there.
+/// eq. (3.8) fitted there; then each crest the motion fit places after the last peak
+/// (`crate::motion_fit::MotionFit::unresolved_crests`), one turn of ψ apart, with the
+/// model's height and tilt and no rate or energy.
 fn peak_rows(e: &Experiment) -> Vec<PeakRow> {
     let found = (e.series.peaks.peaks.iter())
         .zip(&e.series.peaks.precession)
